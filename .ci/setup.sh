@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 PACKAGES=(
   build-essential cmake pkg-config git
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libpcap-dev libyaml-cpp-dev libtbb-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev
   libmujoco-dev libembree-dev libosmesa6-dev libgl-dev
 )
 

@@ -1,1 +1,50 @@
-int main() { return 0; }
+// rotolidar: the command-line entry point. Subcommands are thin wrappers around library functions.
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "bench/cli/commands.hpp"
+#include "core/util/log.hpp"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* summary;
+};
+
+const Command kCommands[] = {
+    {"demo", rotolidar::bench::CmdDemo, "simulate the rig, run SLAM, report the error vs truth (no arguments needed)"},
+    {"sim", rotolidar::bench::CmdSim, "simulate the rig and write a recording folder"},
+    {"slam", rotolidar::bench::CmdSlam, "run the SLAM core on a recording folder"},
+    {"eval", rotolidar::bench::CmdEval, "compare trajectories (APE/RPE, evo's definitions)"},
+    {"decode", rotolidar::bench::CmdDecode, "decode VLP-16 packets (pcap or raw) to CSV and PLY points"},
+};
+
+void PrintUsage(std::ostream& os) {
+  os << "usage: rotolidar <command> [options]   (rotolidar <command> --help for its options)\n\ncommands:\n";
+  for (const Command& c : kCommands) os << "  " << c.name << std::string(10 - std::strlen(c.name), ' ') << c.summary << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+    PrintUsage(std::cout);
+    return argc < 2 ? 2 : 0;
+  }
+  for (const Command& c : kCommands) {
+    if (argv[1] == std::string(c.name)) {
+      try {
+        return c.run(argc - 2, argv + 2);
+      } catch (const std::exception& e) {
+        std::cerr << "internal error: " << e.what() << "\n";
+        return 3;
+      }
+    }
+  }
+  std::cerr << "error: unknown command '" << argv[1] << "'\n";
+  PrintUsage(std::cerr);
+  return 2;
+}

@@ -1,0 +1,106 @@
+#include "bench/run/slam_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "core/io/config_yaml.hpp"
+#include "core/io/csv.hpp"
+#include "core/io/point_cloud_io.hpp"
+#include "core/io/recording.hpp"
+#include "core/io/trajectory_io.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+/// Feeds every message to the estimator in time order (packets by capture time), as a live rig would.
+void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
+              const std::function<void(double)>& progress) {
+  size_t i_imu = 0, i_enc = 0;
+  const size_t n = rec.lidar_packets.size();
+  size_t next_report = n / 10;
+  for (size_t i = 0; i < n; ++i) {
+    const LidarPacket& packet = rec.lidar_packets[i];
+    while (i_enc < rec.encoder.size() && rec.encoder[i_enc].t_s <= packet.t_capture_s)
+      estimator->Feed(rec.encoder[i_enc++]);
+    while (i_imu < rec.imu.size() && rec.imu[i_imu].t_s <= packet.t_capture_s) estimator->Feed(rec.imu[i_imu++]);
+    if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << i << ": " << s.message);
+    for (auto& r : estimator->Process()) result->scans.push_back(r);
+    if (progress && i >= next_report) {
+      progress(double(i) / double(n));
+      next_report += n / 10;
+    }
+  }
+  while (i_enc < rec.encoder.size()) estimator->Feed(rec.encoder[i_enc++]);
+  while (i_imu < rec.imu.size()) estimator->Feed(rec.imu[i_imu++]);
+  for (auto& r : estimator->Finish()) result->scans.push_back(r);
+}
+
+Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& scans) {
+  CsvWriter csv;
+  if (Status s = csv.Open(path, {"t_start_s", "t_end_s", "num_points", "num_registered", "num_rotor_fallback",
+                                 "converged", "iterations", "num_inliers", "rmse_m", "process_time_ms"});
+      !s)
+    return s;
+  for (const ScanReport& r : scans)
+    csv.Row({r.t_start_s, r.t_end_s, double(r.num_points), double(r.num_registered), double(r.num_rotor_fallback),
+             double(r.registration.converged), double(r.registration.iterations),
+             double(r.registration.num_inliers), r.registration.rmse_m, r.process_time_ms});
+  return csv.Close();
+}
+
+Status WriteOutputs(const std::string& out_dir, const EstimatorConfig& config, const Estimator& estimator,
+                    const SlamRunResult& result) {
+  const Trajectory& traj = estimator.trajectory();
+  if (Status s = WriteTrajectory(out_dir + "/trajectory.tum", TrajectoryFormat::kTum, traj); !s) return s;
+  if (Status s = WriteTrajectory(out_dir + "/trajectory.kitti", TrajectoryFormat::kKitti, traj); !s) return s;
+  if (Status s = WriteKittiTimes(out_dir + "/trajectory_times.txt", traj); !s) return s;
+  const std::vector<Eigen::Vector3d> map = estimator.map().Points();
+  if (Status s = SavePointCloud(out_dir + "/map.ply", map); !s) return s;
+  if (Status s = SavePointCloud(out_dir + "/map.pcd", map); !s) return s;
+  if (Status s = WriteScanTable(out_dir + "/scans.csv", result.scans); !s) return s;
+  YAML::Emitter out;
+  EmitEstimatorConfig(out, config);
+  std::ofstream file(out_dir + "/slam_config.yaml");
+  file << "# Resolved estimator configuration of this run (rotolidar slam).\n" << out.c_str() << "\n";
+  return file ? Status::Ok() : Status::Error(out_dir + "/slam_config.yaml: write failed");
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
+               SlamRunResult* result, const std::function<void(double)>& progress) {
+  std::string why;
+  if (!config.Validate(&why)) return Status::Error("slam config: " + why);
+  Recording rec;
+  if (Status s = LoadRecording(recording_dir, &rec); !s) return s;
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) return Status::Error(out_dir + ": cannot create folder: " + ec.message());
+
+  *result = SlamRunResult{};
+  Estimator estimator(rec.calib, config);
+  const auto t0 = std::chrono::steady_clock::now();
+  Playback(rec, &estimator, result, progress);
+  result->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result->trajectory = estimator.trajectory();
+  result->map_points = estimator.map().NumPoints();
+  result->bad_packets = estimator.bad_packets();
+  if (!result->scans.empty()) result->data_duration_s = result->scans.back().t_end_s - result->scans.front().t_start_s;
+  std::vector<double> times;
+  for (const auto& r : result->scans) times.push_back(r.process_time_ms);
+  result->median_scan_ms = Median(times);
+  if (result->trajectory.empty()) return Status::Error(recording_dir + ": no complete LiDAR revolution in the data");
+  return WriteOutputs(out_dir, config, estimator, *result);
+}
+
+}  // namespace rotolidar::bench

@@ -1,0 +1,49 @@
+// Revolution splitting of decoded VLP-16 points (contract in scan_splitter.hpp).
+#include "core/io/scan_splitter.hpp"
+
+#include <cmath>
+
+namespace rotolidar {
+
+RevolutionSplitter::RevolutionSplitter(double cut_azimuth_deg) {
+  cut_deg_ = std::fmod(cut_azimuth_deg, 360.0);
+  if (cut_deg_ < 0.0) cut_deg_ += 360.0;
+}
+
+double RevolutionSplitter::RelativeAzimuth(float azimuth_deg) const {
+  double rel = std::fmod(static_cast<double>(azimuth_deg) - cut_deg_, 360.0);
+  if (rel < 0.0) rel += 360.0;
+  return rel;
+}
+
+std::optional<LidarScan> RevolutionSplitter::Add(const LidarPoint& point) {
+  const double rel = RelativeAzimuth(point.azimuth_deg);
+  std::optional<LidarScan> finished;
+  if (last_rel_deg_ >= 0.0 && last_rel_deg_ - rel > 180.0 && !current_.points.empty()) {
+    ++crossings_;
+    finished = std::move(current_);
+    current_ = LidarScan();
+  }
+  last_rel_deg_ = rel;
+  if (current_.points.empty()) current_.t_start_s = point.t_s;
+  current_.t_end_s = point.t_s;
+  current_.points.push_back(point);
+  return finished;
+}
+
+void RevolutionSplitter::Add(const std::vector<LidarPoint>& points, std::vector<LidarScan>* finished) {
+  for (const LidarPoint& p : points) {
+    std::optional<LidarScan> scan = Add(p);
+    if (scan) finished->push_back(std::move(*scan));
+  }
+}
+
+std::optional<LidarScan> RevolutionSplitter::Flush() {
+  last_rel_deg_ = -1.0;
+  if (current_.points.empty()) return std::nullopt;
+  LidarScan scan = std::move(current_);
+  current_ = LidarScan();
+  return scan;
+}
+
+}  // namespace rotolidar

@@ -1,0 +1,47 @@
+#include "core/types/calib.hpp"
+
+#include <cmath>
+
+namespace rotolidar {
+namespace {
+
+bool Fail(std::string* error, const std::string& msg) {
+  if (error) *error = msg;
+  return false;
+}
+
+bool IsRotation(const Pose3& T) {
+  const Eigen::Matrix3d R = T.linear();
+  return (R * R.transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-6 && std::abs(R.determinant() - 1.0) < 1e-6;
+}
+
+}  // namespace
+
+bool RigCalib::Validate(std::string* error) const {
+  if (format_version != 1) return Fail(error, "format_version: expected 1, got " + std::to_string(format_version));
+  const std::pair<const char*, const Pose3*> poses[] = {
+      {"T_base_motor", &T_base_motor}, {"T_rotor_lidar", &T_rotor_lidar},
+      {"T_base_imu", &T_base_imu}, {"T_base_cam", &T_base_cam}};
+  for (const auto& [name, T] : poses) {
+    if (!T->matrix().allFinite() || !IsRotation(*T)) return Fail(error, std::string(name) + ": not a rigid transform");
+  }
+  if (!std::isfinite(motor_speed_radps)) return Fail(error, "motor_speed_radps: not finite");
+  if (lidar.min_range_m < 0 || lidar.max_range_m <= lidar.min_range_m)
+    return Fail(error, "lidar: need 0 <= min_range_m < max_range_m");
+  if (imu.rate_hz <= 0) return Fail(error, "imu.rate_hz: must be > 0");
+  if (imu.gyro_noise_density < 0 || imu.accel_noise_density < 0 || imu.gyro_random_walk < 0 ||
+      imu.accel_random_walk < 0)
+    return Fail(error, "imu: noise densities must be >= 0");
+  if (camera.width_px <= 0 || camera.height_px <= 0 || camera.fx_px <= 0 || camera.fy_px <= 0)
+    return Fail(error, "camera: width, height, fx, fy must be > 0");
+  if (encoder.counts_per_rev < 4) return Fail(error, "encoder.counts_per_rev: must be >= 4");
+  return true;
+}
+
+double RigCalib::EncoderAngle(uint32_t count) const {
+  // The centre of the count's bin: an encoder reports floor(angle / step), so the centre is unbiased.
+  return 2.0 * M_PI * (static_cast<double>(count) + 0.5) / static_cast<double>(encoder.counts_per_rev) -
+         encoder.zero_offset_rad;
+}
+
+}  // namespace rotolidar

@@ -43,7 +43,7 @@ struct CameraIntrinsics {
 /// Motor shaft encoder.
 struct EncoderCalib {
   uint32_t counts_per_rev = 4096;  ///< 4096 = 12-bit, 16384 = 14-bit
-  double zero_offset_rad = 0.0;    ///< theta = 2*pi*count/counts_per_rev - zero_offset_rad
+  double zero_offset_rad = 0.0;    ///< theta = 2*pi*(count + 0.5)/counts_per_rev - zero_offset_rad (bin centre)
   double rate_hz = 1000.0;         ///< nominal sample rate (informational; readers use the stamps)
 };
 
@@ -64,7 +64,7 @@ struct RigCalib {
   /// True when every field is usable; otherwise false with a message naming the field in *error.
   bool Validate(std::string* error) const;
 
-  /// Rotor angle [rad] from a raw encoder count.
+  /// Rotor angle [rad] from a raw encoder count: the centre of the count's bin, minus the zero offset.
   double EncoderAngle(uint32_t count) const;
   Pose3 T_base_rotor(double theta_rad) const { return T_base_motor * RotZ(theta_rad); }
   Pose3 T_base_lidar(double theta_rad) const { return T_base_rotor(theta_rad) * T_rotor_lidar; }

@@ -21,7 +21,7 @@ struct ImuSample {
 
 /// One motor encoder reading: the rotor angle about the motor axis, as the encoder chip reports it.
 /// `count` is the single-turn absolute reading in [0, counts_per_rev); counts_per_rev comes from calib.yaml
-/// (4096 for a 12-bit encoder). Angle = 2*pi*count/counts_per_rev - encoder zero (calib.yaml).
+/// (4096 for a 12-bit encoder). Angle = 2*pi*(count + 0.5)/counts_per_rev - encoder zero (calib.yaml).
 struct EncoderSample {
   Seconds t_s = 0.0;
   uint32_t count = 0;

@@ -1,0 +1,81 @@
+#include "sim/rig/motor.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/util/log.hpp"
+
+namespace rotolidar::sim {
+
+bool MotorConfig::Validate(std::string* error) const {
+  auto fail = [error](const std::string& m) {
+    if (error) *error = "MotorConfig: " + m;
+    return false;
+  };
+  if (!std::isfinite(speed_radps) || std::abs(speed_radps) > 200.0)
+    return fail("speed_radps must be finite with |speed_radps| <= 200 rad/s");
+  if (!std::isfinite(theta0_rad)) return fail("theta0_rad must be finite");
+  return true;
+}
+
+ConstantSpeedRotor::ConstantSpeedRotor(const MotorConfig& config) : config_(config) {
+  std::string error;
+  ROTOLIDAR_CHECK(config_.Validate(&error), error);
+}
+
+bool EncoderConfig::Validate(std::string* error) const {
+  auto fail = [error](const std::string& m) {
+    if (error) *error = "EncoderConfig: " + m;
+    return false;
+  };
+  if (counts_per_rev < 2) return fail("counts_per_rev must be >= 2");
+  if (!std::isfinite(noise_sigma_counts) || noise_sigma_counts < 0)
+    return fail("noise_sigma_counts must be finite and >= 0");
+  if (!std::isfinite(latency_s) || latency_s < 0) return fail("latency_s must be finite and >= 0");
+  if (!std::isfinite(rate_hz) || rate_hz <= 0) return fail("rate_hz must be finite and > 0");
+  if (!std::isfinite(zero_offset_rad)) return fail("zero_offset_rad must be finite");
+  return true;
+}
+
+EncoderCalib EncoderConfig::ToCalib() const {
+  EncoderCalib calib;
+  calib.counts_per_rev = counts_per_rev;
+  calib.zero_offset_rad = zero_offset_rad;
+  calib.rate_hz = rate_hz;
+  return calib;
+}
+
+EncoderModel::EncoderModel(const EncoderConfig& config, uint64_t run_seed)
+    : config_(config), noise_(run_seed, "encoder.noise") {
+  std::string error;
+  ROTOLIDAR_CHECK(config_.Validate(&error), error);
+}
+
+uint32_t EncoderModel::Quantise(double raw_angle_rad, double noise_counts) const {
+  const double cpr = static_cast<double>(config_.counts_per_rev);
+  // Reduce the angle to one turn first so large unwrapped angles keep their sub-count precision.
+  const double turn = raw_angle_rad / (2.0 * M_PI);
+  const double frac = turn - std::floor(turn);  // [0, 1)
+  const double counts = std::floor(frac * cpr + noise_counts);
+  double wrapped = std::fmod(counts, cpr);
+  if (wrapped < 0) wrapped += cpr;
+  return static_cast<uint32_t>(wrapped) % config_.counts_per_rev;
+}
+
+EncoderSample EncoderModel::Sample(const RotorMotion& rotor, Seconds t) {
+  const double raw = rotor.AngleAt(t - config_.latency_s) + config_.zero_offset_rad;
+  const double noise = config_.noise_sigma_counts > 0 ? config_.noise_sigma_counts * noise_.Normal() : 0.0;
+  return EncoderSample{t, Quantise(raw, noise)};
+}
+
+std::vector<EncoderSample> EncoderModel::SampleRange(const RotorMotion& rotor, Seconds t0, Seconds t1) {
+  ROTOLIDAR_CHECK(t1 >= t0, "t0 " << t0 << " > t1 " << t1);
+  const double dt = 1.0 / config_.rate_hz;
+  const auto n = static_cast<long>(std::floor((t1 - t0) / dt + 1e-9));
+  std::vector<EncoderSample> out;
+  out.reserve(static_cast<size_t>(n + 1));
+  for (long i = 0; i <= n; ++i) out.push_back(Sample(rotor, t0 + static_cast<double>(i) * dt));
+  return out;
+}
+
+}  // namespace rotolidar::sim

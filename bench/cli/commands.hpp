@@ -1,0 +1,12 @@
+#pragma once
+// The `rotolidar` subcommands. Each takes the arguments after its name and returns a process exit code
+// (0 ok, 1 failure, 2 usage error); messages go to stderr, results to stdout.
+namespace rotolidar::bench {
+
+int CmdDemo(int argc, char** argv);
+int CmdSim(int argc, char** argv);
+int CmdSlam(int argc, char** argv);
+int CmdEval(int argc, char** argv);
+int CmdDecode(int argc, char** argv);
+
+}  // namespace rotolidar::bench

@@ -1,0 +1,68 @@
+// eval and decode: the measurement commands.
+#include <cstdio>
+#include <iostream>
+
+#include "bench/cli/commands.hpp"
+#include "bench/cli/options.hpp"
+#include "bench/decode/decode.hpp"
+#include "bench/run/eval_run.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+int Usage(const std::string& message) {
+  std::cerr << "error: " << message << "\n";
+  return 2;
+}
+
+Status ParseEvalOptions(const OptionParser& p, EvalOptions* o) {
+  o->ref_path = p.Get("REF");
+  o->est_path = p.Get("EST");
+  if (!ParseTrajectoryFormat(p.Get("format"), &o->format)) return Status::Error("eval: --format: tum, kitti or euroc");
+  if (!ParseAlignment(p.Get("align"), &o->align)) return Status::Error("eval: --align: none, se3, sim3 or posyaw");
+  if (!ParseEvalMetric(p.Get("metric"), &o->metric)) return Status::Error("eval: --metric: ape or rpe");
+  if (!ParsePoseRelation(p.Get("relation"), &o->pose_relation))
+    return Status::Error("eval: --relation: trans_part, angle_deg, angle_rad, full, rot_part");
+  if (!ParseDeltaUnit(p.Get("delta-unit"), &o->delta_unit)) return Status::Error("eval: --delta-unit: frames or m");
+  if (Status s = p.GetDouble("delta", &o->delta); !s) return s;
+  if (Status s = p.GetDouble("max-diff", &o->max_diff_s); !s) return s;
+  o->all_pairs = p.Flag("all-pairs");
+  o->json_path = p.Get("json");
+  std::string why;
+  if (!o->Validate(&why)) return Status::Error("eval: " + why);
+  return Status::Ok();
+}
+
+}  // namespace
+
+int CmdEval(int argc, char** argv) {
+  OptionParser p("eval", "Compare an estimated trajectory with a reference: APE or RPE statistics, evo's "
+                         "definitions (max, mean, median, min, rmse, sse, std).");
+  p.AddPositional("REF", "reference trajectory file");
+  p.AddPositional("EST", "estimated trajectory file");
+  p.Add("format", "tum", "-", "tum | kitti | euroc");
+  p.Add("align", "none", "-", "none | se3 | sim3 | posyaw (Umeyama)");
+  p.Add("metric", "ape", "-", "ape | rpe");
+  p.Add("relation", "trans_part", "-", "trans_part | angle_deg | angle_rad | full | rot_part");
+  p.Add("delta", "1", "frames|m", "RPE pair distance");
+  p.Add("delta-unit", "frames", "-", "frames | m");
+  p.AddFlag("all-pairs", "RPE: use all pairs, not consecutive non-overlapping ones");
+  p.Add("max-diff", "0.01", "s", "timestamp association tolerance (tum, euroc)");
+  p.Add("json", "", "-", "write the statistics as JSON to this file");
+  if (Status s = p.Parse(argc, argv); !s) return Usage(s.message);
+  if (p.help_requested()) {
+    p.PrintHelp(std::cout);
+    return 0;
+  }
+  EvalOptions options;
+  if (Status s = ParseEvalOptions(p, &options); !s) return Usage(s.message);
+  EvalResult result;
+  if (Status s = RunEval(options, &result); !s) {
+    std::cerr << "error: " << s.message << "\n";
+    return 1;
+  }
+  PrintEvalStats(result, std::cout);
+  return 0;
+}
+
+}  // namespace rotolidar::bench

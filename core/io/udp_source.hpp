@@ -1,0 +1,88 @@
+#pragma once
+// Live VLP-16 packets over UDP: a receiver with a bounded queue (the estimator's input from a real sensor) and a
+// sender that replays LidarPackets (a fake sensor for tests and demos). IPv4 only.
+#include <atomic>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/types/messages.hpp"
+#include "core/util/log.hpp"
+
+namespace rotolidar {
+
+struct UdpSourceConfig {
+  std::string bind_address = "0.0.0.0";  ///< "127.0.0.1" for loopback only
+  uint16_t port = 2368;                  ///< 0 = any free port (see UdpPacketSource::port())
+  std::size_t queue_capacity = 4096;     ///< packets; ~5 s of single-return data
+  double rig_time_at_start_s = 0.0;      ///< t_capture_s of a packet = this + seconds since Start (steady clock)
+  bool Validate(std::string* error) const;
+};
+
+/// Receives datagrams on one port in a background thread into a bounded FIFO. When the queue is full the NEW
+/// datagram is dropped and counted (the queue keeps its order). Datagrams of 1206 bytes become data packets
+/// (udp_port 2368), of 512 bytes position packets (8308), whatever port they came to; other sizes are counted as
+/// rejected. Pop/Stop/counters are thread-safe; Start once per object.
+class UdpPacketSource {
+ public:
+  UdpPacketSource() = default;
+  ~UdpPacketSource();
+  UdpPacketSource(const UdpPacketSource&) = delete;
+  UdpPacketSource& operator=(const UdpPacketSource&) = delete;
+
+  /// Binds and starts the receiver thread. Fails (message names address and port) on a bad config, an
+  /// unparsable address or a bind error.
+  Status Start(const UdpSourceConfig& config);
+  /// Waits up to timeout_s for a packet; false when none came (or the source is stopped and empty).
+  bool Pop(LidarPacket* packet, double timeout_s);
+  /// Stops and joins the receiver; queued packets stay poppable. Idempotent.
+  void Stop();
+
+  uint16_t port() const { return bound_port_; }  ///< the bound port (useful with config.port = 0)
+  std::size_t received() const { return received_; }  ///< datagrams accepted into the queue
+  std::size_t dropped() const { return dropped_; }    ///< datagrams lost to a full queue
+  std::size_t rejected() const { return rejected_; }  ///< datagrams of the wrong size
+
+ private:
+  void ReceiveLoop();
+
+  UdpSourceConfig config_;
+  int fd_ = -1;
+  uint16_t bound_port_ = 0;
+  std::thread thread_;
+  std::atomic<bool> running_{false};
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<LidarPacket> queue_;
+  std::atomic<std::size_t> received_{0}, dropped_{0}, rejected_{0};
+  double start_steady_s_ = 0.0;
+};
+
+/// Sends LidarPackets' payloads as UDP datagrams to host:port. Not thread-safe.
+class UdpPacketSender {
+ public:
+  UdpPacketSender() = default;
+  ~UdpPacketSender();
+  UdpPacketSender(const UdpPacketSender&) = delete;
+  UdpPacketSender& operator=(const UdpPacketSender&) = delete;
+
+  /// host: a dotted IPv4 address ("127.0.0.1", "255.255.255.255" enables broadcast).
+  Status Open(const std::string& host, uint16_t port);
+  Status Send(const LidarPacket& packet);
+  /// Sends all packets, paced so that packet i leaves at (t_capture_s[i] - t_capture_s[0]) / speed after the
+  /// first; speed <= 0 sends as fast as possible. Stops at the first send error.
+  Status SendAll(const std::vector<LidarPacket>& packets, double speed);
+  void Close();
+
+ private:
+  int fd_ = -1;
+  std::string host_;
+  uint16_t port_ = 0;
+};
+
+}  // namespace rotolidar

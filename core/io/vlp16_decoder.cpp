@@ -1,0 +1,141 @@
+// VLP-16 decoder: data packets -> timed points in the lidar frame (contract in vlp16.hpp).
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/io/vlp16.hpp"
+
+namespace rotolidar {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kMaxPlausibleStepCentideg = 1000.0;  // 10 deg per block (pair): 1200 rpm moves ~0.8 deg
+constexpr int64_t kHourUs = static_cast<int64_t>(kVlp16MicrosPerHour);
+
+uint8_t ReturnTypeOf(Vlp16ReturnMode mode, int block) {
+  if (mode == Vlp16ReturnMode::kDual) return block % 2 == 0 ? 1 : 0;  // even = last, odd = strongest
+  return mode == Vlp16ReturnMode::kLast ? 1 : 0;
+}
+
+bool Keep(Vlp16ReturnFilter filter, uint8_t return_type) {
+  if (filter == Vlp16ReturnFilter::kAll) return true;
+  return (filter == Vlp16ReturnFilter::kStrongest) == (return_type == 0);
+}
+
+}  // namespace
+
+bool Vlp16DecoderConfig::Validate(std::string* error) const {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = "Vlp16DecoderConfig: " + m;
+    return false;
+  };
+  if (!(min_range_m >= 0.0)) return fail("min_range_m must be >= 0");
+  if (!(max_range_m > min_range_m)) return fail("max_range_m must be > min_range_m");
+  if (return_filter != Vlp16ReturnFilter::kAll && return_filter != Vlp16ReturnFilter::kStrongest &&
+      return_filter != Vlp16ReturnFilter::kLast) {
+    return fail("return_filter must be all, strongest or last");
+  }
+  if (!std::isfinite(lidar_clock_offset_s)) return fail("lidar_clock_offset_s must be finite");
+  return true;
+}
+
+Vlp16Decoder::Vlp16Decoder(const LidarIntrinsics& intrinsics, const Vlp16DecoderConfig& config)
+    : intrinsics_(intrinsics), config_(config) {
+  std::string error;
+  ROTOLIDAR_CHECK(config_.Validate(&error), error);
+  std::array<int, 16> order;
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return intrinsics_.elevation_deg[a] < intrinsics_.elevation_deg[b];
+  });
+  for (int ring = 0; ring < 16; ++ring) ring_of_laser_[order[ring]] = static_cast<uint8_t>(ring);
+  for (int id = 0; id < 16; ++id) elevation_rad_[id] = intrinsics_.elevation_deg[id] * kDegToRad;
+}
+
+Seconds Vlp16Decoder::UnwrapToRigTime(uint32_t timestamp_us) {
+  int64_t unwrapped = hour_ * kHourUs + timestamp_us;
+  if (have_time_) {
+    const int64_t diff = unwrapped - last_unwrapped_us_;
+    if (diff < -kHourUs / 2) ++hour_;
+    if (diff > kHourUs / 2) --hour_;
+    unwrapped = hour_ * kHourUs + timestamp_us;
+  }
+  have_time_ = true;
+  last_unwrapped_us_ = unwrapped;
+  return static_cast<double>(unwrapped) * 1e-6 + config_.lidar_clock_offset_s;
+}
+
+std::array<double, 12> Vlp16Decoder::AzimuthSteps() const {
+  const int stride = raw_.return_mode == static_cast<uint8_t>(Vlp16ReturnMode::kDual) ? 2 : 1;
+  std::array<double, 12> steps{};
+  double last_good = -1.0;
+  for (int b = 0; b < 12; b += stride) {
+    double d = last_good;  // the last block (pair) reuses the previous difference
+    if (b + stride < 12) {
+      const int a0 = raw_.blocks[b].azimuth_centideg, a1 = raw_.blocks[b + stride].azimuth_centideg;
+      const double step = static_cast<double>((a1 - a0 + 36000) % 36000);
+      if (step <= kMaxPlausibleStepCentideg) d = last_good = step;
+    }
+    for (int k = 0; k < stride; ++k) steps[b + k] = d;
+  }
+  // Leading implausible steps (before any good one) take the first good one; none at all: no interpolation.
+  for (int b = 11; b >= 0; --b) {
+    if (steps[b] < 0.0) steps[b] = (b + 1 < 12 && steps[b + 1] >= 0.0) ? steps[b + 1] : 0.0;
+  }
+  return steps;
+}
+
+void Vlp16Decoder::DecodeChannel(int block, int ch, double d_az, double packet_t_s,
+                                 std::vector<LidarPoint>* appended) const {
+  const Vlp16RawBlock& raw_block = raw_.blocks[block];
+  const uint16_t d = raw_block.distance_2mm[ch];
+  if (d == 0) return;
+  const double range_m = d * kVlp16DistanceUnitM;
+  if (range_m < config_.min_range_m || range_m > config_.max_range_m) return;
+  const auto mode = static_cast<Vlp16ReturnMode>(raw_.return_mode);
+  const uint8_t return_type = ReturnTypeOf(mode, block);
+  if (!Keep(config_.return_filter, return_type)) return;
+  const int firing = ch / 16, laser = ch % 16;
+  const double az = std::fmod(raw_block.azimuth_centideg + d_az * (laser * 2.304 + firing * 55.296) / 110.592,
+                              36000.0);
+  const Eigen::Vector3d p = Vlp16RayOrigin(intrinsics_.vertical_offset_m[laser]) +
+                            Vlp16RayDirection(elevation_rad_[laser], az * 0.01 * kDegToRad) * range_m;
+  LidarPoint point;
+  point.x_m = static_cast<float>(p.x());
+  point.y_m = static_cast<float>(p.y());
+  point.z_m = static_cast<float>(p.z());
+  point.intensity = raw_block.reflectivity[ch];
+  point.azimuth_deg = static_cast<float>(az * 0.01);
+  if (point.azimuth_deg >= 360.f) point.azimuth_deg = 0.f;  // float rounding of 359.99999
+  point.ring = ring_of_laser_[laser];
+  point.laser_id = static_cast<uint8_t>(laser);
+  point.return_type = return_type;
+  const int seq = (mode == Vlp16ReturnMode::kDual ? block - block % 2 : 2 * block) + firing;
+  point.t_s = packet_t_s + seq * kVlp16SequencePeriodS + laser * kVlp16FiringPeriodS;
+  appended->push_back(point);
+}
+
+Status Vlp16Decoder::Decode(const LidarPacket& packet, std::vector<LidarPoint>* appended) {
+  ROTOLIDAR_CHECK(appended != nullptr, "null output");
+  if (packet.udp_port == kVlp16PositionPort || packet.payload.size() == kVlp16PositionPacketBytes) {
+    Vlp16PositionPacket position;
+    const Status s = ParseVlp16PositionPacket(packet.payload.data(), packet.payload.size(), &position);
+    if (s) last_position_ = position;
+    return s;
+  }
+  const Status s = ParseVlp16DataPacket(packet.payload.data(), packet.payload.size(), &raw_);
+  if (!s) return s;
+  const double packet_t_s = UnwrapToRigTime(raw_.timestamp_us);
+  const std::array<double, 12> steps = AzimuthSteps();
+  // Emit in firing order so that times never decrease; in dual mode a pair's two returns of one firing are
+  // adjacent (last, then strongest) and share their time.
+  const int stride = raw_.return_mode == static_cast<uint8_t>(Vlp16ReturnMode::kDual) ? 2 : 1;
+  for (int b = 0; b < 12; b += stride) {
+    for (int ch = 0; ch < 32; ++ch) {
+      for (int k = 0; k < stride; ++k) DecodeChannel(b + k, ch, steps[b + k], packet_t_s, appended);
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace rotolidar

@@ -1,0 +1,48 @@
+#pragma once
+// Helpers for parsing YAML at the edges: strict key checking and messages that name file:line and the key.
+// Only .cpp files in io/ and bench/ include this (yaml-cpp stays out of the estimator's headers).
+#include <set>
+#include <string>
+
+#include <yaml-cpp/yaml.h>
+
+#include "core/types/geometry.hpp"
+#include "core/util/log.hpp"
+
+namespace rotolidar::yaml {
+
+/// Thrown inside parsers and caught at their boundary, where it becomes a Status. Never escapes core/.
+struct ParseError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// "file:line: " for a node (yaml-cpp lines are 0-based; we print 1-based).
+std::string Where(const std::string& file, const YAML::Node& node);
+
+/// Fails on any key of `node` not in `allowed`, naming the key and its line.
+void CheckKeys(const std::string& file, const YAML::Node& node, const std::set<std::string>& allowed,
+               const std::string& context);
+
+/// Reads node[key] into *value when present (keeps the default otherwise); wrong types name the key and line.
+template <typename T>
+void Get(const std::string& file, const YAML::Node& node, const std::string& key, T* value) {
+  const YAML::Node child = node[key];
+  if (!child) return;
+  try {
+    *value = child.as<T>();
+  } catch (const YAML::Exception&) {
+    throw ParseError(Where(file, child) + "field '" + key + "': cannot read value '" +
+                     (child.IsScalar() ? child.Scalar() : std::string("<non-scalar>")) + "'");
+  }
+}
+
+/// Reads a pose {translation_m: [x,y,z], rotation_wxyz: [w,x,y,z]} (either key optional).
+void GetPose(const std::string& file, const YAML::Node& node, const std::string& key, Pose3* pose);
+
+/// Emits a pose in the same layout.
+void EmitPose(YAML::Emitter& out, const std::string& key, const Pose3& pose);
+
+/// Loads a YAML file; parse errors name file:line.
+YAML::Node LoadFile(const std::string& path);
+
+}  // namespace rotolidar::yaml

@@ -1,0 +1,50 @@
+#pragma once
+// Scan-to-map registration with PCL's Generalized-ICP (plane-to-plane). This is M1-1's first core; the
+// feature-based Ceres registration of the seed (issue M1-5) replaces it. PCL stays inside the .cpp.
+#include <memory>
+#include <vector>
+
+#include "core/types/geometry.hpp"
+
+namespace rotolidar {
+
+struct ScanMatcherConfig {
+  double max_correspondence_m = 1.0;   ///< correspondences farther than this are rejected [m]
+  int max_iterations = 30;
+  double transformation_epsilon = 1e-6;  ///< convergence: squared change of the transform between iterations
+  int k_correspondences = 20;            ///< neighbours for each point's covariance
+  bool Validate(std::string* error) const;
+};
+
+/// Outcome of one registration. T_target_source maps source points into the target frame.
+struct RegistrationResult {
+  bool converged = false;
+  int iterations = 0;
+  size_t num_inliers = 0;      ///< source points within max_correspondence_m of the target after alignment
+  double rmse_m = 0.0;         ///< RMS distance of the inliers to their nearest target point [m]
+  Pose3 T_target_source = Pose3::Identity();
+};
+
+/// Holds a target cloud (with its kd-tree and covariances) and aligns source clouds to it.
+/// Not thread-safe: one matcher per thread.
+class ScanMatcher {
+ public:
+  explicit ScanMatcher(const ScanMatcherConfig& config);
+  ~ScanMatcher();
+  ScanMatcher(const ScanMatcher&) = delete;
+  ScanMatcher& operator=(const ScanMatcher&) = delete;
+
+  /// Replaces the target (points in the target frame, e.g. world). Cost grows with its size (kd-tree + covariances).
+  void SetTarget(const std::vector<Eigen::Vector3d>& p_target);
+  /// Aligns `p_source` starting from `T_target_source_guess`. Fails (converged = false) without a target.
+  RegistrationResult Align(const std::vector<Eigen::Vector3d>& p_source, const Pose3& T_target_source_guess);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// PCL VoxelGrid downsampling (one centroid per occupied voxel of `voxel_size_m`).
+std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>& points, double voxel_size_m);
+
+}  // namespace rotolidar

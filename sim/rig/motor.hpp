@@ -1,0 +1,87 @@
+#pragma once
+// The rotor (motor shaft carrying the LiDAR) and its shaft encoder.
+//
+// Rotor angle theta [rad] is the rotation of the rotor frame about the motor z axis (core/types/calib.hpp:
+// T_base_rotor(theta) = T_base_motor * RotZ(theta)). RotorMotion is an interface: today a constant-speed rotor,
+// later a stepper model or MuJoCo dynamics.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/types/calib.hpp"
+#include "core/types/messages.hpp"
+#include "core/types/time.hpp"
+#include "core/util/rng.hpp"
+
+namespace rotolidar::sim {
+
+/// True rotor angle as a function of time. Implementations are immutable (thread-safe At/Speed calls).
+class RotorMotion {
+ public:
+  virtual ~RotorMotion() = default;
+  /// Unwrapped rotor angle [rad] at time t (continuous; not reduced to [0, 2 pi)).
+  virtual double AngleAt(Seconds t) const = 0;
+  /// Rotor angular speed d(theta)/dt [rad/s] at time t.
+  virtual double SpeedAt(Seconds t) const = 0;
+};
+
+struct MotorConfig {
+  double speed_radps = 2.6;  ///< constant rotor speed [rad/s]; may be negative (clockwise); |w| <= 200 rad/s
+  double theta0_rad = 0.0;   ///< rotor angle at t = 0
+  bool Validate(std::string* error) const;
+};
+
+/// theta(t) = theta0 + speed * t.
+class ConstantSpeedRotor final : public RotorMotion {
+ public:
+  explicit ConstantSpeedRotor(const MotorConfig& config);  ///< config must Validate (ROTOLIDAR_CHECK)
+  double AngleAt(Seconds t) const override { return config_.theta0_rad + config_.speed_radps * t; }
+  double SpeedAt(Seconds) const override { return config_.speed_radps; }
+  const MotorConfig& config() const { return config_; }
+
+ private:
+  MotorConfig config_;
+};
+
+/// An absolute single-turn shaft encoder (e.g. AS5600 12-bit, AS5048 14-bit).
+struct EncoderConfig {
+  uint32_t counts_per_rev = 4096;   ///< 4096 = 12-bit, 16384 = 14-bit; >= 2
+  double noise_sigma_counts = 0.5;  ///< white Gaussian noise before quantisation [counts]; >= 0
+  double latency_s = 0.0;           ///< a sample stamped t reports the angle at t - latency_s; >= 0
+  double rate_hz = 1000.0;          ///< sample rate for SampleRange; > 0
+  double zero_offset_rad = 0.0;     ///< encoder zero: raw angle = theta + zero_offset_rad (see EncoderCalib)
+
+  static EncoderConfig Bits12() { return EncoderConfig{}; }
+  static EncoderConfig Bits14() {
+    EncoderConfig c;
+    c.counts_per_rev = 16384;
+    return c;
+  }
+  bool Validate(std::string* error) const;
+  /// The calibration a reader needs to turn counts back into angles (counts_per_rev, zero, rate).
+  EncoderCalib ToCalib() const;
+};
+
+/// Samples a rotor's TRUE angle, adds seeded noise and quantises, producing what the encoder chip reports:
+///   raw   = (theta(t - latency) + zero_offset) / (2 pi) * counts_per_rev + sigma * N(0, 1)
+///   count = floor(raw) wrapped to [0, counts_per_rev)
+/// so EncoderCalib::EncoderAngle(count) = 2 pi count / cpr - zero_offset lies within one count below the true
+/// angle (plus noise). Noise comes from RandomStream(run_seed, "encoder.noise"). Not thread-safe (owns a stream).
+class EncoderModel {
+ public:
+  EncoderModel(const EncoderConfig& config, uint64_t run_seed);  ///< config must Validate (ROTOLIDAR_CHECK)
+
+  /// One sample stamped `t`.
+  EncoderSample Sample(const RotorMotion& rotor, Seconds t);
+  /// Samples at t0, t0 + 1/rate_hz, ... while t <= t1 (t1 >= t0).
+  std::vector<EncoderSample> SampleRange(const RotorMotion& rotor, Seconds t0, Seconds t1);
+  /// Quantises a raw encoder angle (theta + zero offset, any real value) to a count in [0, counts_per_rev).
+  uint32_t Quantise(double raw_angle_rad, double noise_counts) const;
+  const EncoderConfig& config() const { return config_; }
+
+ private:
+  EncoderConfig config_;
+  RandomStream noise_;
+};
+
+}  // namespace rotolidar::sim

@@ -1,0 +1,188 @@
+// Scene validation and tessellation into the shared triangle mesh.
+#include <cmath>
+#include <sstream>
+
+#include "sim/world/scene.hpp"
+
+namespace rotolidar::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool Fail(std::string* error, const std::string& message) {
+  if (error) *error = message;
+  return false;
+}
+
+bool ValidMaterialRef(int id, const Scene& scene, bool optional) {
+  if (optional && id == -1) return true;
+  return id >= 0 && id < static_cast<int>(scene.materials.size());
+}
+
+bool ValidatePrimitive(const Primitive& p, const Scene& scene, std::string* error) {
+  const std::string where = "primitive '" + p.name + "': ";
+  if (!p.center_m.allFinite() || !p.rpy_rad.allFinite()) return Fail(error, where + "non-finite center/rpy");
+  if (!ValidMaterialRef(p.material_id, scene, false) || !ValidMaterialRef(p.floor_material_id, scene, true) ||
+      !ValidMaterialRef(p.ceiling_material_id, scene, true)) {
+    return Fail(error, where + "unknown material");
+  }
+  switch (p.type) {
+    case PrimitiveType::kBox:
+      if (!(p.size_m.minCoeff() > 0.0)) return Fail(error, where + "size must be > 0");
+      break;
+    case PrimitiveType::kQuad:
+      if (!(p.size_m.x() > 0.0 && p.size_m.y() > 0.0)) return Fail(error, where + "size must be > 0");
+      break;
+    case PrimitiveType::kCylinder:
+      if (!(p.radius_m > 0.0)) return Fail(error, where + "radius must be > 0");
+      if (!(p.height_m > 0.0)) return Fail(error, where + "height must be > 0");
+      if (p.segments < 3 || p.segments > 1024) return Fail(error, where + "segments must be in [3, 1024]");
+      break;
+  }
+  return true;
+}
+
+void AppendQuad(const Primitive& p, int primitive_id, TriangleMesh* mesh) {
+  const Eigen::Matrix3d R = p.Rotation();
+  const Eigen::Vector3d ex = R.col(0) * (0.5 * p.size_m.x()), ey = R.col(1) * (0.5 * p.size_m.y());
+  const int base = static_cast<int>(mesh->vertices_m.size());
+  mesh->vertices_m.push_back(p.center_m - ex - ey);
+  mesh->vertices_m.push_back(p.center_m + ex - ey);
+  mesh->vertices_m.push_back(p.center_m + ex + ey);
+  mesh->vertices_m.push_back(p.center_m - ex + ey);
+  // Front side = local +z.
+  mesh->AddTriangle(base, base + 1, base + 2, p.material_id, primitive_id);
+  mesh->AddTriangle(base, base + 2, base + 3, p.material_id, primitive_id);
+}
+
+void AppendCylinder(const Primitive& p, int primitive_id, TriangleMesh* mesh) {
+  const Eigen::Matrix3d R = p.Rotation();
+  const Eigen::Vector3d half_axis = R.col(2) * (0.5 * p.height_m);
+  const int n = p.segments;
+  const int base = static_cast<int>(mesh->vertices_m.size());
+  for (int k = 0; k < n; ++k) {  // ring vertices: bottom 2k, top 2k+1
+    const double a = 2.0 * kPi * k / n;
+    const Eigen::Vector3d radial = R * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0) * p.radius_m;
+    mesh->vertices_m.push_back(p.center_m + radial - half_axis);
+    mesh->vertices_m.push_back(p.center_m + radial + half_axis);
+  }
+  const int bottom_center = base + 2 * n, top_center = base + 2 * n + 1;
+  mesh->vertices_m.push_back(p.center_m - half_axis);
+  mesh->vertices_m.push_back(p.center_m + half_axis);
+  for (int k = 0; k < n; ++k) {
+    const int b0 = base + 2 * k, t0 = b0 + 1;
+    const int b1 = base + 2 * ((k + 1) % n), t1 = b1 + 1;
+    mesh->AddTriangle(b0, b1, t1, p.material_id, primitive_id);  // side, facing outward
+    mesh->AddTriangle(b0, t1, t0, p.material_id, primitive_id);
+    mesh->AddTriangle(t0, t1, top_center, p.material_id, primitive_id);     // top cap, facing +axis
+    mesh->AddTriangle(b1, b0, bottom_center, p.material_id, primitive_id);  // bottom cap, facing -axis
+  }
+}
+
+}  // namespace
+
+Eigen::Matrix3d Primitive::Rotation() const {
+  return (Eigen::AngleAxisd(rpy_rad.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy_rad.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy_rad.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+int Scene::FindMaterial(const std::string& material_name) const {
+  for (size_t i = 0; i < materials.size(); ++i) {
+    if (materials[i].name == material_name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+bool Scene::Validate(std::string* error) const {
+  if (materials.empty()) return Fail(error, "scene has no materials");
+  for (size_t i = 0; i < materials.size(); ++i) {
+    const Material& m = materials[i];
+    if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return Fail(error, "material '" + m.name + "': albedo not in [0, 1]");
+    for (size_t j = 0; j < i; ++j) {
+      if (materials[j].name == m.name) return Fail(error, "material '" + m.name + "' defined twice");
+    }
+  }
+  if (primitives.empty()) return Fail(error, "scene has no primitives");
+  for (const Primitive& p : primitives) {
+    if (!ValidatePrimitive(p, *this, error)) return false;
+  }
+  if (bounds.isEmpty()) return Fail(error, "bounds: min must be < max");
+  for (const AnnotatedElement& e : elements) {
+    if (e.type != "door" && e.type != "window" && e.type != "column") {
+      return Fail(error, "element '" + e.name + "': type must be door, window or column");
+    }
+    if (!(e.width_m > 0.0 && e.height_m > 0.0)) return Fail(error, "element '" + e.name + "': width/height <= 0");
+  }
+  return true;
+}
+
+void TriangleMesh::AddTriangle(int a, int b, int c, int material_id, int primitive_id) {
+  triangles.emplace_back(a, b, c);
+  material_ids.push_back(material_id);
+  primitive_ids.push_back(primitive_id);
+}
+
+void AppendBox(const Eigen::Vector3d& center_m, const Eigen::Matrix3d& R_world_box, const Eigen::Vector3d& size_m,
+               bool inward, const std::array<int, 6>& face_materials, int primitive_id, TriangleMesh* mesh) {
+  // Face f has outward normal along axis f/2 with sign (f%2 ? + : -); its two in-plane axes u, v are chosen so
+  // that u x v = the outward normal (counter-clockwise seen from outside).
+  for (int f = 0; f < 6; ++f) {
+    const int axis = f / 2;
+    const double sign = (f % 2) ? 1.0 : -1.0;
+    const int u_axis = (axis + 1) % 3, v_axis = (axis + 2) % 3;
+    Eigen::Vector3d n = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+    n[axis] = sign * 0.5 * size_m[axis];
+    u[u_axis] = sign * 0.5 * size_m[u_axis];  // flipping u with the sign keeps u x v along n
+    v[v_axis] = 0.5 * size_m[v_axis];
+    const int base = static_cast<int>(mesh->vertices_m.size());
+    for (const auto& [su, sv] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
+      mesh->vertices_m.push_back(center_m + R_world_box * (n + su * u + sv * v));
+    }
+    if (inward) {
+      mesh->AddTriangle(base, base + 2, base + 1, face_materials[f], primitive_id);
+      mesh->AddTriangle(base, base + 3, base + 2, face_materials[f], primitive_id);
+    } else {
+      mesh->AddTriangle(base, base + 1, base + 2, face_materials[f], primitive_id);
+      mesh->AddTriangle(base, base + 2, base + 3, face_materials[f], primitive_id);
+    }
+  }
+}
+
+Primitive MakeRoom(const std::string& name, const Eigen::Vector3d& center_m, const Eigen::Vector3d& size_m,
+                   int material_id) {
+  Primitive p;
+  p.type = PrimitiveType::kBox;
+  p.name = name;
+  p.center_m = center_m;
+  p.size_m = size_m;
+  p.inward = true;
+  p.material_id = material_id;
+  return p;
+}
+
+TriangleMesh BuildMesh(const Scene& scene) {
+  TriangleMesh mesh;
+  mesh.materials = scene.materials;
+  for (size_t i = 0; i < scene.primitives.size(); ++i) {
+    const Primitive& p = scene.primitives[i];
+    ROTOLIDAR_CHECK(p.material_id >= 0 && p.material_id < static_cast<int>(scene.materials.size()),
+                    "primitive '" << p.name << "' has material id " << p.material_id);
+    const int id = static_cast<int>(i);
+    switch (p.type) {
+      case PrimitiveType::kBox: {
+        const int floor = p.floor_material_id >= 0 ? p.floor_material_id : p.material_id;
+        const int ceiling = p.ceiling_material_id >= 0 ? p.ceiling_material_id : p.material_id;
+        const std::array<int, 6> faces{p.material_id, p.material_id, p.material_id, p.material_id, floor, ceiling};
+        AppendBox(p.center_m, p.Rotation(), p.size_m, p.inward, faces, id, &mesh);
+        break;
+      }
+      case PrimitiveType::kQuad: AppendQuad(p, id, &mesh); break;
+      case PrimitiveType::kCylinder: AppendCylinder(p, id, &mesh); break;
+    }
+  }
+  return mesh;
+}
+
+}  // namespace rotolidar::sim

@@ -1,0 +1,112 @@
+// Reproduces evo's own numbers on real SLAM outputs (ORB-SLAM2, S-PTAM) on KITTI 00 (evo's test data,
+// $ROTOLIDAR_DATA/evo; see its README.md and PROVENANCE.md).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "bench/run/eval_run.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+std::string EvoDir() {
+  const char* root = std::getenv("ROTOLIDAR_DATA");
+  return root ? std::string(root) + "/evo" : std::string();
+}
+
+/// stats.json of one of evo's stored result zips, read with `unzip -p`; false when unzip or the file is missing.
+bool ReadZipStats(const std::string& zip, nlohmann::json* stats) {
+  if (std::system("command -v unzip > /dev/null 2>&1") != 0) return false;
+  const std::string cmd = "unzip -p '" + zip + "' stats.json 2>/dev/null";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  if (!pipe) return false;
+  std::string text;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof(buf), pipe.get())) > 0) text.append(buf, n);
+  *stats = nlohmann::json::parse(text, nullptr, false);
+  return !stats->is_discarded() && stats->is_object();
+}
+
+void ExpectStatsNear(const ErrorStatistics& s, const nlohmann::json& ref, double rel) {
+  const std::pair<const char*, double> got[] = {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
+                                                {"std", s.std},   {"min", s.min},   {"max", s.max},
+                                                {"sse", s.sse}};
+  for (const auto& [name, value] : got) {
+    const double want = ref.at(name).get<double>();
+    EXPECT_NEAR(value, want, rel * std::abs(want)) << name;
+  }
+}
+
+EvalOptions KittiOptions(const std::string& est_file) {
+  EvalOptions o;
+  o.ref_path = EvoDir() + "/KITTI_00_gt.txt";
+  o.est_path = EvoDir() + "/" + est_file;
+  o.format = TrajectoryFormat::kKitti;
+  return o;
+}
+
+class EvoRealData : public testing::Test {
+ protected:
+  void SetUp() override {
+    if (EvoDir().empty()) GTEST_SKIP() << "ROTOLIDAR_DATA is not set (expects $ROTOLIDAR_DATA/evo)";
+  }
+};
+
+// `evo_ape kitti KITTI_00_gt.txt X -a`, numbers from $ROTOLIDAR_DATA/README.md (= the stats.json in
+// res_files/*_ape.zip). Relative 1e-6: the README prints 7 significant digits; we agree far better.
+TEST_F(EvoRealData, ApeSe3MatchesEvoForOrbAndSptam) {
+  const nlohmann::json orb = {{"rmse", 1.303450}, {"mean", 1.156997}, {"median", 1.065625}, {"std", 0.600282},
+                              {"min", 0.069313},  {"max", 3.587949},  {"sse", 7715.073440}};
+  const nlohmann::json sptam = {{"rmse", 3.738488}, {"mean", 3.490977}, {"median", 3.642585}, {"std", 1.337675},
+                                {"min", 0.694787},  {"max", 7.768977},  {"sse", 63466.341223}};
+  for (const auto& [file, ref] : {std::pair{"KITTI_00_ORB.txt", orb}, std::pair{"KITTI_00_SPTAM.txt", sptam}}) {
+    EvalOptions o = KittiOptions(file);
+    o.align = Alignment::kSe3;
+    EvalResult r;
+    const Status s = RunEval(o, &r);
+    ASSERT_TRUE(s.ok) << s.message;
+    EXPECT_EQ(r.num_associated, 4541u);
+    // The README rounds to 6 decimals: allow half a unit of the last printed digit on top of 1e-6 relative.
+    const std::pair<const char*, double> got[] = {{"rmse", r.stats.rmse}, {"mean", r.stats.mean},
+                                                  {"median", r.stats.median}, {"std", r.stats.std},
+                                                  {"min", r.stats.min}, {"max", r.stats.max}, {"sse", r.stats.sse}};
+    for (const auto& [name, value] : got) {
+      const double want = ref.at(name).get<double>();
+      EXPECT_NEAR(value, want, 1e-6 * std::abs(want) + 5e-7) << file << " " << name;
+    }
+  }
+}
+
+// The full-precision stats.json from evo's zips: APE (SE(3)) and RPE (delta 10 m, consecutive, not aligned).
+TEST_F(EvoRealData, MatchesEvoStoredResultZips) {
+  const std::string res = EvoDir() + "/res_files/";
+  nlohmann::json stats;
+  if (!ReadZipStats(res + "orb_ape.zip", &stats)) GTEST_SKIP() << "cannot read evo's result zips (needs unzip)";
+  for (const std::string name : {"orb", "sptam"}) {
+    const std::string est = name == "orb" ? "KITTI_00_ORB.txt" : "KITTI_00_SPTAM.txt";
+    EvalOptions o = KittiOptions(est);
+    o.align = Alignment::kSe3;
+    EvalResult r;
+    ASSERT_TRUE(RunEval(o, &r).ok);
+    ASSERT_TRUE(ReadZipStats(res + name + "_ape.zip", &stats));
+    ExpectStatsNear(r.stats, stats, 1e-6);
+
+    o = KittiOptions(est);
+    o.metric = EvalMetric::kRpe;
+    o.delta = 10.0;
+    o.delta_unit = DeltaUnit::kMeters;
+    const Status s = RunEval(o, &r);
+    ASSERT_TRUE(s.ok) << s.message;
+    ASSERT_TRUE(ReadZipStats(res + name + "_rpe.zip", &stats));
+    ExpectStatsNear(r.stats, stats, 1e-6);
+  }
+}
+
+}  // namespace
+}  // namespace rotolidar::bench

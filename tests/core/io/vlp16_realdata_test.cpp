@@ -1,0 +1,2 @@
+// Placeholder while exploring
+#include <gtest/gtest.h>

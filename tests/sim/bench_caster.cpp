@@ -1,0 +1,83 @@
+// Caster throughput: one simulated VLP-16 second (18,084 sequences = 289,344 rays, 600 rpm) against
+// scenes/box_room.yaml on one core. `x_realtime` = simulated seconds per wall second.
+#include <benchmark/benchmark.h>
+
+#include "core/util/rng.hpp"
+#include "sim/lidar/vlp16_caster.hpp"
+#include "tests/sim/world_fixtures.hpp"
+
+namespace rotolidar::sim {
+namespace {
+
+constexpr int kSequencesPerSecond = 18084;  // 1 / 55.296 us
+
+const EmbreeScene& BoxRoom() {
+  static const std::unique_ptr<EmbreeScene> es = [] {
+    Scene scene;
+    const Status s = LoadScene(testing::BoxRoomPath(), &scene);
+    ROTOLIDAR_CHECK(s.ok, s.message);
+    return testing::MakeEmbree(scene);
+  }();
+  return *es;
+}
+
+Pose3 Moving(Seconds t) {
+  Pose3 T = Pose3::Identity();
+  T.translation() = Eigen::Vector3d(0.2 * t, 0.1, 1.4);
+  T.linear() = Eigen::AngleAxisd(0.5 * t, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  return T;
+}
+
+void BM_CasterOneSecond(benchmark::State& state) {
+  const EmbreeScene& es = BoxRoom();
+  Vlp16Caster caster(es, LidarIntrinsics{}, Vlp16CasterConfig{}, 1);
+  std::vector<Vlp16FiringSequence> seqs;
+  std::vector<LidarTruthPoint> truth;
+  for (auto _ : state) {
+    seqs.clear();
+    truth.clear();
+    caster.Fire(kSequencesPerSecond, Moving, &seqs, &truth);
+    benchmark::DoNotOptimize(seqs.data());
+  }
+  state.counters["rays_per_s"] =
+      benchmark::Counter(16.0 * kSequencesPerSecond * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["x_realtime"] = benchmark::Counter(state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_CasterOneSecond)->Unit(benchmark::kMillisecond);
+
+void RayBatch(std::vector<RayQuery>* q) {
+  RandomStream rng(1, "bench.rays");
+  for (int i = 0; i < 16 * kSequencesPerSecond; ++i) {
+    const Eigen::Vector3d d(rng.Normal(), rng.Normal(), rng.Normal());
+    q->push_back({Eigen::Vector3d(0.0, 0.1, 1.4), d.normalized(), 100.0});
+  }
+}
+
+void BM_IntersectSingle(benchmark::State& state) {
+  const EmbreeScene& es = BoxRoom();
+  std::vector<RayQuery> q;
+  RayBatch(&q);
+  for (auto _ : state) {
+    for (const RayQuery& r : q) benchmark::DoNotOptimize(es.Intersect(r.origin_world, r.dir_world, r.t_max_m));
+  }
+  state.counters["rays_per_s"] = benchmark::Counter(q.size() * state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_IntersectSingle)->Unit(benchmark::kMillisecond);
+
+void BM_IntersectBatch(benchmark::State& state) {
+  const EmbreeScene& es = BoxRoom();
+  std::vector<RayQuery> q;
+  RayBatch(&q);
+  std::vector<RayHit> hits(q.size());
+  for (auto _ : state) {
+    es.IntersectBatch(q.data(), q.size(), hits.data());
+    benchmark::DoNotOptimize(hits.data());
+  }
+  state.counters["rays_per_s"] = benchmark::Counter(q.size() * state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_IntersectBatch)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace rotolidar::sim
+
+BENCHMARK_MAIN();

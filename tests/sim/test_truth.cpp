@@ -1,0 +1,137 @@
+#include "sim/truth/truth.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "sim/rig/base_motion.hpp"
+
+namespace rotolidar::sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+class TruthTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("rotolidar_truth_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TruthLog MakeLog() {
+  const ScriptedBaseMotion motion{ScriptedBaseMotionConfig{}};
+  TruthLog log;
+  log.base = SampleTrajectory(motion, 0.0, 2.0, 0.01);
+  const Pose3 T_base_lidar = MakePose(Eigen::Vector3d(0.0, 0.0, 0.15), Eigen::Quaterniond::Identity());
+  for (const StampedPose& p : log.base) {
+    log.lidar.push_back({p.t_s, p.T_ref_body * T_base_lidar * RotZ(2.6 * p.t_s)});
+    log.rotor.push_back({p.t_s, 2.6 * p.t_s + 1.0 / 3.0});
+    log.imu_bias.push_back({p.t_s, Eigen::Vector3d(1e-3, -2e-4, 3.3e-5) * p.t_s,
+                            Eigen::Vector3d(0.02, -0.01, 1.0 / 7.0)});
+  }
+  return log;
+}
+
+void ExpectSameTrajectory(const Trajectory& a, const Trajectory& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].t_s, b[i].t_s);  // shortest round-trip form: bit-exact
+    EXPECT_EQ(a[i].T_ref_body.translation(), b[i].T_ref_body.translation());
+    // Rotation -> quaternion -> rotation loses a few ulps only.
+    EXPECT_LT((a[i].T_ref_body.linear() - b[i].T_ref_body.linear()).cwiseAbs().maxCoeff(), 1e-15 * 8);
+  }
+}
+
+TEST_F(TruthTest, RoundTripsAllFourFiles) {
+  const TruthLog log = MakeLog();
+  const Status w = WriteTruth(dir_.string(), log);
+  ASSERT_TRUE(w.ok) << w.message;
+  for (const char* name : {"base.tum", "lidar.tum", "rotor.csv", "imu_bias.csv"})
+    EXPECT_TRUE(fs::exists(dir_ / "truth" / name)) << name;
+  TruthLog back;
+  const Status r = ReadTruth(dir_.string(), &back);
+  ASSERT_TRUE(r.ok) << r.message;
+  ExpectSameTrajectory(log.base, back.base);
+  ExpectSameTrajectory(log.lidar, back.lidar);
+  ASSERT_EQ(back.rotor.size(), log.rotor.size());
+  ASSERT_EQ(back.imu_bias.size(), log.imu_bias.size());
+  for (size_t i = 0; i < log.rotor.size(); ++i) {
+    EXPECT_EQ(back.rotor[i].t_s, log.rotor[i].t_s);
+    EXPECT_EQ(back.rotor[i].theta_rad, log.rotor[i].theta_rad);
+    EXPECT_EQ(back.imu_bias[i].gyro_bias_radps, log.imu_bias[i].gyro_bias_radps);
+    EXPECT_EQ(back.imu_bias[i].accel_bias_mps2, log.imu_bias[i].accel_bias_mps2);
+  }
+}
+
+// An independent, minimal TUM parser (what evo or a script would do): 8 numbers per non-comment line.
+TEST_F(TruthTest, BaseTumReadsWithASimpleParser) {
+  const TruthLog log = MakeLog();
+  ASSERT_TRUE(WriteTruth(dir_.string(), log).ok);
+  std::ifstream in(dir_ / "truth" / "base.tum");
+  std::string line;
+  size_t i = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double t, x, y, z, qx, qy, qz, qw;
+    ASSERT_TRUE(static_cast<bool>(ss >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) << line;
+    ASSERT_LT(i, log.base.size());
+    const Pose3& T = log.base[i].T_ref_body;
+    EXPECT_EQ(t, log.base[i].t_s);
+    EXPECT_EQ(Eigen::Vector3d(x, y, z), T.translation());
+    const Eigen::Quaterniond q(qw, qx, qy, qz);
+    EXPECT_NEAR(q.norm(), 1.0, 1e-15);
+    EXPECT_LT(Eigen::Quaterniond(T.linear()).angularDistance(q), 1e-7);  // acos near 1: ~sqrt(eps)
+    ++i;
+  }
+  EXPECT_EQ(i, log.base.size());
+}
+
+TEST_F(TruthTest, ErrorsNameTheFile) {
+  // A regular file where the recording directory should be: creating truth/ must fail, naming the path.
+  fs::create_directories(dir_);
+  const fs::path blocker = dir_ / "not_a_dir";
+  std::ofstream(blocker) << "x";
+  TruthWriter w;
+  const Status s = w.Open(blocker.string());
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("not_a_dir"), std::string::npos) << s.message;
+  EXPECT_FALSE(w.WriteBase(StampedPose{}).ok);
+  EXPECT_FALSE(w.Close().ok);
+
+  TruthLog out;
+  const Status missing = ReadTruth((dir_ / "nowhere").string(), &out);
+  EXPECT_FALSE(missing.ok);
+  EXPECT_NE(missing.message.find("base.tum"), std::string::npos) << missing.message;
+}
+
+TEST_F(TruthTest, MalformedLinesReportFileLineAndField) {
+  ASSERT_TRUE(WriteTruth(dir_.string(), MakeLog()).ok);
+  const fs::path rotor = dir_ / "truth" / "rotor.csv";
+  { std::ofstream(rotor, std::ios::app) << "1.5,abc\n"; }
+  TruthLog out;
+  Status s = ReadTruth(dir_.string(), &out);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("rotor.csv:203"), std::string::npos) << s.message;  // header + 201 rows + bad
+  EXPECT_NE(s.message.find("theta_rad"), std::string::npos) << s.message;
+
+  const fs::path tum = dir_ / "bad.tum";
+  { std::ofstream(tum) << "# comment\n0 1 2 3 0 0 0 1\n1 2 3\n"; }
+  Trajectory traj;
+  s = ReadTum(tum.string(), &traj);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("bad.tum:3"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("8 fields"), std::string::npos) << s.message;
+}
+
+}  // namespace
+}  // namespace rotolidar::sim

@@ -65,4 +65,43 @@ int CmdEval(int argc, char** argv) {
   return 0;
 }
 
+int CmdDecode(int argc, char** argv) {
+  OptionParser p("decode", "Decode VLP-16 data packets into points: <out>.csv (x,y,z,intensity,ring,azimuth,return,"
+                           "time_s, one row per point) and <out>.ply.");
+  p.AddPositional("INPUT", "a .pcap/.pcapng capture, or concatenated 1206-byte payloads with --raw");
+  p.Add("out", "decoded", "-", "output prefix");
+  p.AddFlag("raw", "input is headerless concatenated 1206-byte payloads (no pcap)");
+  p.Add("return", "all", "-", "all | strongest | last");
+  p.Add("min-range", "0.4", "m", "drop closer returns");
+  p.Add("max-range", "130", "m", "drop farther returns");
+  p.Add("clock-offset", "0", "s", "rig time = VLP-16 time past the hour + this");
+  p.Add("cut-azimuth", "0", "deg", "revolutions start where the azimuth crosses this");
+  p.Add("revolution", "-1", "-", "write only this revolution (0 = first, usually partial); -1 = all points");
+  p.AddFlag("strict", "stop at the first malformed packet instead of counting it");
+  if (Status s = p.Parse(argc, argv); !s) return Usage(s.message);
+  if (p.help_requested()) {
+    p.PrintHelp(std::cout);
+    return 0;
+  }
+  DecodeOptions o;
+  o.input_path = p.Get("INPUT");
+  o.output_prefix = p.Get("out");
+  o.raw = p.Flag("raw");
+  o.strict = p.Flag("strict");
+  if (!ParseReturnFilter(p.Get("return"), &o.return_filter)) return Usage("decode: --return: all, strongest or last");
+  long revolution = -1;
+  for (const Status& s : {p.GetDouble("min-range", &o.min_range_m), p.GetDouble("max-range", &o.max_range_m),
+                          p.GetDouble("clock-offset", &o.lidar_clock_offset_s),
+                          p.GetDouble("cut-azimuth", &o.cut_azimuth_deg), p.GetInt("revolution", &revolution)})
+    if (!s) return Usage(s.message);
+  o.revolution = int(revolution);
+  DecodeSummary summary;
+  if (Status s = RunDecode(o, &summary); !s) {
+    std::cerr << "error: " << s.message << "\n";
+    return 1;
+  }
+  PrintDecodeSummary(summary, std::cout);
+  return 0;
+}
+
 }  // namespace rotolidar::bench

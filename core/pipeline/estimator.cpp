@@ -108,20 +108,41 @@ ScanReport Estimator::ProcessScan(const LidarScan& scan) {
   return report;
 }
 
-// Carrier motion during the scan, from the last two poses (constant velocity): each point is moved into the
-// base frame at the scan's start time. M1-5 replaces this with IMU preintegration.
+// Carrier motion during the scan: each point is moved into the base frame at the scan's start time. Rotation
+// comes from the integrated gyro (exact to the gyro's noise), translation from the last two poses (constant
+// velocity). M1-5 replaces the translation part with IMU preintegration.
 std::vector<Eigen::Vector3d> Estimator::DeskewToScanStart(const LidarScan& scan,
                                                           const std::vector<Eigen::Vector3d>& p_base) const {
-  if (trajectory_.size() < 2) return p_base;
-  const StampedPose& a = trajectory_[trajectory_.size() - 2];
-  const StampedPose& b = trajectory_.back();
-  const double dt = b.t_s - a.t_s;
-  if (dt <= 0) return p_base;
-  const Pose3 delta = a.T_ref_body.inverse() * b.T_ref_body;  // motion over dt, in the base frame
+  Eigen::Vector3d v_base_per_s = Eigen::Vector3d::Zero();  // translation rate in the start frame [m/s]
+  Pose3 delta = Pose3::Identity();
+  double dt = 0.0;
+  if (trajectory_.size() >= 2) {
+    const StampedPose& a = trajectory_[trajectory_.size() - 2];
+    const StampedPose& b = trajectory_.back();
+    dt = b.t_s - a.t_s;
+    if (dt > 0) {
+      delta = a.T_ref_body.inverse() * b.T_ref_body;
+      v_base_per_s = delta.translation() / dt;
+    }
+  }
+  const std::vector<std::pair<Seconds, Eigen::Matrix3d>> gyro = GyroRotations(scan.t_start_s, scan.t_end_s);
   std::vector<Eigen::Vector3d> out(p_base.size());
+  size_t k = 0;
   for (size_t i = 0; i < p_base.size(); ++i) {
-    const double s = (scan.points[i].t_s - scan.t_start_s) / dt;
-    out[i] = ScaleMotion(delta, s) * p_base[i];  // T_start_t * p_t
+    const Seconds t = scan.points[i].t_s;
+    Eigen::Matrix3d R_start_t;
+    if (!gyro.empty()) {
+      while (k + 1 < gyro.size() && gyro[k + 1].first <= t) ++k;
+      const Eigen::Matrix3d& R_k = gyro[k].second;
+      Eigen::Vector3d w_next = Eigen::Vector3d::Zero();  // rate to the next table entry [rad/s]
+      if (k + 1 < gyro.size())
+        w_next = LogSO3(R_k.transpose() * gyro[k + 1].second) / (gyro[k + 1].first - gyro[k].first);
+      R_start_t = R_k * ExpSO3(w_next * (t - gyro[k].first));
+    } else {
+      R_start_t = Eigen::Matrix3d::Identity();
+      if (dt > 0) R_start_t = ScaleMotion(delta, (t - scan.t_start_s) / dt).linear();
+    }
+    out[i] = R_start_t * p_base[i] + v_base_per_s * (t - scan.t_start_s);
   }
   return out;
 }
@@ -149,6 +170,23 @@ Pose3 Estimator::PredictPose(Seconds t_s) const {
   }
   if (const auto R_gyro = GyroRotation(b.t_s, t_s)) delta.linear() = *R_gyro;
   return b.T_ref_body * delta;
+}
+
+// R_base(t0)_base(t_k) at t0 and at each IMU sample time in (t0, t1], from the integrated gyro; empty when the
+// IMU buffer does not cover [t0, t1].
+std::vector<std::pair<Seconds, Eigen::Matrix3d>> Estimator::GyroRotations(Seconds t0_s, Seconds t1_s) const {
+  std::vector<std::pair<Seconds, Eigen::Matrix3d>> out;
+  if (imu_.size() < 2 || imu_.front().t_s > t0_s || imu_.back().t_s < t1_s) return out;
+  const Eigen::Matrix3d R_base_imu = calib_.T_base_imu.linear();
+  Eigen::Matrix3d R_imu0_imu = Eigen::Matrix3d::Identity();
+  out.emplace_back(t0_s, Eigen::Matrix3d::Identity());
+  for (size_t i = 0; i + 1 < imu_.size() && imu_[i].t_s < t1_s; ++i) {
+    const double a = std::max(imu_[i].t_s, t0_s), b = std::min(imu_[i + 1].t_s, t1_s);
+    if (b <= a) continue;
+    R_imu0_imu = R_imu0_imu * ExpSO3(0.5 * (imu_[i].gyro_radps + imu_[i + 1].gyro_radps) * (b - a));
+    out.emplace_back(b, R_base_imu * R_imu0_imu * R_base_imu.transpose());
+  }
+  return out;
 }
 
 // Rotation of the base between t0 and t1 from integrated gyro samples; identity when the IMU does not cover it.

@@ -61,6 +61,8 @@ class Estimator {
   void UpdateMap(const Pose3& T_world_base, const std::vector<Eigen::Vector3d>& p_base);
   /// R_base(t0)_base(t1) from integrated gyro samples; nullopt when the IMU buffer does not cover [t0, t1].
   std::optional<Eigen::Matrix3d> GyroRotation(Seconds t0_s, Seconds t1_s) const;
+  /// R_base(t0)_base(t) at t0 and at each IMU sample in (t0, t1]; empty when the IMU does not cover [t0, t1].
+  std::vector<std::pair<Seconds, Eigen::Matrix3d>> GyroRotations(Seconds t0_s, Seconds t1_s) const;
 
   RigCalib calib_;
   EstimatorConfig config_;

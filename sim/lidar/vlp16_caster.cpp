@@ -24,7 +24,9 @@ bool Vlp16CasterConfig::Validate(std::string* error) const {
   if (!std::isfinite(t0_s)) return Fail(error, "lidar.t0_s must be finite");
   if (!std::isfinite(azimuth0_deg)) return Fail(error, "lidar.azimuth0_deg must be finite");
   if (!(rpm > 0.0 && rpm <= 1200.0)) return Fail(error, "lidar.rpm must be in (0, 1200]");
-  if (!(rpm_jitter_frac >= 0.0 && rpm_jitter_frac < 0.5)) return Fail(error, "lidar.rpm_jitter_frac must be in [0, 0.5)");
+  if (!(rpm_jitter_frac >= 0.0 && rpm_jitter_frac < 0.5)) {
+    return Fail(error, "lidar.rpm_jitter_frac must be in [0, 0.5)");
+  }
   if (!(rpm_jitter_tau_s > 0.0)) return Fail(error, "lidar.rpm_jitter_tau_s must be > 0");
   if (!(range_noise_sigma_m >= 0.0 && range_noise_sigma_m < 1.0)) {
     return Fail(error, "lidar.range_noise_sigma_m must be in [0, 1)");

@@ -49,7 +49,7 @@ struct ScriptedBaseMotionConfig {
   double radius_x_m = 3.0, radius_y_m = 2.2;  ///< ellipse semi-axes
   double shape_harmonic_m = 0.25;             ///< 3rd-harmonic amplitude d; needs 3d < min(rx, ry)
   double height_m = 1.2;                      ///< mean height of the base origin
-  double loop_period_s = 20.0;                ///< one lap; defaults give 0.5..1.1 m/s (mean ~0.83)
+  double loop_period_s = 20.0;                ///< one lap; defaults: speed within [0.46, 1.18] m/s
   double phase0_rad = 0.0;                    ///< loop phase at t = 0
   double bounce_amplitude_m = 0.02;           ///< vertical bounce amplitude
   double bounce_hz = 2.0;                     ///< step frequency

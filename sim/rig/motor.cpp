@@ -28,7 +28,7 @@ bool EncoderConfig::Validate(std::string* error) const {
     if (error) *error = "EncoderConfig: " + m;
     return false;
   };
-  if (counts_per_rev < 2) return fail("counts_per_rev must be >= 2");
+  if (counts_per_rev < 4) return fail("counts_per_rev must be >= 4");
   if (!std::isfinite(noise_sigma_counts) || noise_sigma_counts < 0)
     return fail("noise_sigma_counts must be finite and >= 0");
   if (!std::isfinite(latency_s) || latency_s < 0) return fail("latency_s must be finite and >= 0");

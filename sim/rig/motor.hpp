@@ -45,7 +45,7 @@ class ConstantSpeedRotor final : public RotorMotion {
 
 /// An absolute single-turn shaft encoder (e.g. AS5600 12-bit, AS5048 14-bit).
 struct EncoderConfig {
-  uint32_t counts_per_rev = 4096;   ///< 4096 = 12-bit, 16384 = 14-bit; >= 2
+  uint32_t counts_per_rev = 4096;   ///< 4096 = 12-bit, 16384 = 14-bit; >= 4 (as RigCalib)
   double noise_sigma_counts = 0.5;  ///< white Gaussian noise before quantisation [counts]; >= 0
   double latency_s = 0.0;           ///< a sample stamped t reports the angle at t - latency_s; >= 0
   double rate_hz = 1000.0;          ///< sample rate for SampleRange; > 0
@@ -65,8 +65,8 @@ struct EncoderConfig {
 /// Samples a rotor's TRUE angle, adds seeded noise and quantises, producing what the encoder chip reports:
 ///   raw   = (theta(t - latency) + zero_offset) / (2 pi) * counts_per_rev + sigma * N(0, 1)
 ///   count = floor(raw) wrapped to [0, counts_per_rev)
-/// so EncoderCalib::EncoderAngle(count) = 2 pi count / cpr - zero_offset lies within one count below the true
-/// angle (plus noise). Noise comes from RandomStream(run_seed, "encoder.noise"). Not thread-safe (owns a stream).
+/// so RigCalib::EncoderAngle(count), the centre of the count's bin minus the zero offset, is within half a count
+/// of the true angle (plus noise). Noise comes from RandomStream(run_seed, "encoder.noise"). Not thread-safe.
 class EncoderModel {
  public:
   EncoderModel(const EncoderConfig& config, uint64_t run_seed);  ///< config must Validate (ROTOLIDAR_CHECK)

@@ -18,7 +18,9 @@ Status CheckMesh(const TriangleMesh& mesh) {
                          " entries for " + std::to_string(mesh.triangles.size()) + " triangles");
   }
   for (std::size_t v = 0; v < mesh.vertices_m.size(); ++v) {
-    if (!mesh.vertices_m[v].allFinite()) return Status::Error("embree scene: vertex " + std::to_string(v) + " non-finite");
+    if (!mesh.vertices_m[v].allFinite()) {
+      return Status::Error("embree scene: vertex " + std::to_string(v) + " is not finite");
+    }
   }
   const int num_vertices = static_cast<int>(mesh.vertices_m.size());
   const int num_materials = static_cast<int>(mesh.materials.size());

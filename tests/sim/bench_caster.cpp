@@ -1,5 +1,7 @@
 // Caster throughput: one simulated VLP-16 second (18,084 sequences = 289,344 rays, 600 rpm) against
 // scenes/box_room.yaml on one core. `x_realtime` = simulated seconds per wall second.
+#include <cmath>
+
 #include <benchmark/benchmark.h>
 
 #include "core/util/rng.hpp"
@@ -45,29 +47,35 @@ void BM_CasterOneSecond(benchmark::State& state) {
 }
 BENCHMARK(BM_CasterOneSecond)->Unit(benchmark::kMillisecond);
 
-void RayBatch(std::vector<RayQuery>* q) {
+/// One second of rays from a fixed origin: in VLP-16 order (arg 1, coherent fans) or random directions (arg 0).
+std::vector<RayQuery> RayBatch(bool vlp16_order) {
   RandomStream rng(1, "bench.rays");
-  for (int i = 0; i < 16 * kSequencesPerSecond; ++i) {
-    const Eigen::Vector3d d(rng.Normal(), rng.Normal(), rng.Normal());
-    q->push_back({Eigen::Vector3d(0.0, 0.1, 1.4), d.normalized(), 100.0});
+  const LidarIntrinsics intr;
+  std::vector<RayQuery> q;
+  for (int k = 0; k < kSequencesPerSecond; ++k) {
+    for (int i = 0; i < 16; ++i) {
+      const Eigen::Vector3d d =
+          vlp16_order ? Vlp16RayDirection(intr.elevation_deg[i] * M_PI / 180.0, k * 2.0 * M_PI / 1808.4)
+                      : Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()).normalized();
+      q.push_back({Eigen::Vector3d(0.0, 0.1, 1.4), d, 100.0});
+    }
   }
+  return q;
 }
 
 void BM_IntersectSingle(benchmark::State& state) {
   const EmbreeScene& es = BoxRoom();
-  std::vector<RayQuery> q;
-  RayBatch(&q);
+  const std::vector<RayQuery> q = RayBatch(state.range(0) != 0);
   for (auto _ : state) {
     for (const RayQuery& r : q) benchmark::DoNotOptimize(es.Intersect(r.origin_world, r.dir_world, r.t_max_m));
   }
   state.counters["rays_per_s"] = benchmark::Counter(q.size() * state.iterations(), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_IntersectSingle)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IntersectSingle)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_IntersectBatch(benchmark::State& state) {
   const EmbreeScene& es = BoxRoom();
-  std::vector<RayQuery> q;
-  RayBatch(&q);
+  const std::vector<RayQuery> q = RayBatch(state.range(0) != 0);
   std::vector<RayHit> hits(q.size());
   for (auto _ : state) {
     es.IntersectBatch(q.data(), q.size(), hits.data());
@@ -75,7 +83,7 @@ void BM_IntersectBatch(benchmark::State& state) {
   }
   state.counters["rays_per_s"] = benchmark::Counter(q.size() * state.iterations(), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_IntersectBatch)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IntersectBatch)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace rotolidar::sim

@@ -92,7 +92,9 @@ TEST(EmbreeScene, ConcurrentCallsMatchSerial) {
   for (int i = 0; i < 2000; ++i) q.push_back({RandomInside(scene.bounds, 0.1, &rng), RandomUnit(&rng), 50.0});
   std::vector<RayHit> serial(q.size()), a(q.size()), b(q.size());
   for (size_t i = 0; i < q.size(); ++i) serial[i] = es->Intersect(q[i].origin_world, q[i].dir_world, 50.0);
-  std::thread ta([&] { for (size_t i = 0; i < q.size(); ++i) a[i] = es->Intersect(q[i].origin_world, q[i].dir_world, 50.0); });
+  std::thread ta([&] {
+    for (size_t i = 0; i < q.size(); ++i) a[i] = es->Intersect(q[i].origin_world, q[i].dir_world, 50.0);
+  });
   std::thread tb([&] { es->IntersectBatch(q.data(), q.size(), b.data()); });
   ta.join();
   tb.join();

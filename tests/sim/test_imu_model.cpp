@@ -74,7 +74,7 @@ TEST(ImuModel, LeverArmAccelMatchesNumericSecondDerivative) {
   const double h = 1e-3;
   double max_err = 0;
   for (double t = 0.05; t < 20.0; t += 0.173) {
-    auto p = [&](double tt) { return (motion.At(tt).T_world_base * T_base_imu).translation(); };
+    auto p = [&](double tt) -> Eigen::Vector3d { return (motion.At(tt).T_world_base * T_base_imu).translation(); };
     const Eigen::Vector3d a_num = (p(t + h) - 2 * p(t) + p(t - h)) / (h * h);
     const BaseKinematics k = motion.At(t);
     const Eigen::Matrix3d R_world_imu = k.T_world_base.linear() * T_base_imu.linear();
@@ -97,7 +97,8 @@ double GyroIntegrationError(ImuModel& imu, bool noisy, bool subtract_turn_on, do
   const Eigen::Matrix3d R_imu_base = imu.T_base_imu().linear().transpose();
   auto gyro = [&](int i) {
     const BaseKinematics k = motion.At(i * dt);
-    return (noisy ? imu.Sample(k, i * dt) : imu.TrueSample(k, i * dt)).gyro_radps - b0;
+    const Eigen::Vector3d w = noisy ? imu.Sample(k, i * dt).gyro_radps : imu.TrueSample(k, i * dt).gyro_radps;
+    return Eigen::Vector3d(w - b0);
   };
   Eigen::Matrix3d R_world_imu = motion.At(0).T_world_base.linear() * R_imu_base.transpose();
   Eigen::Vector3d w_prev = gyro(0);

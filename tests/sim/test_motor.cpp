@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace rotolidar::sim {
 namespace {
@@ -37,15 +38,15 @@ TEST(EncoderConfig, PresetsAndValidation) {
   EXPECT_FALSE(c.Validate(&error));
   EXPECT_NE(error.find("latency_s"), std::string::npos) << error;
   c = {};
-  c.counts_per_rev = 1;
+  c.counts_per_rev = 3;
   EXPECT_FALSE(c.Validate(&error));
   EXPECT_NE(error.find("counts_per_rev"), std::string::npos) << error;
 }
 
-// Without noise, floor quantisation puts the decoded angle at most one count below the true angle at
-// (t - latency): the error in counts lies in [0, 1). Checked for both presets, a zero offset, latency and
-// both spin directions, over many turns (unwrapped angles up to ~500 rad).
-TEST(EncoderModel, NoiseFreeErrorIsWithinOneCount) {
+// Without noise, floor quantisation and the bin-centre decoding (RigCalib::EncoderAngle) put the decoded angle
+// within half a count of the true angle at (t - latency): the error in counts lies in [-0.5, 0.5). Checked for
+// both presets, a zero offset, latency and both spin directions, over many turns (unwrapped angles up to ~500 rad).
+TEST(EncoderModel, NoiseFreeErrorIsWithinHalfACount) {
   for (uint32_t cpr : {4096u, 16384u}) {
     for (double speed : {2.6, -7.0}) {
       EncoderConfig c;
@@ -60,16 +61,16 @@ TEST(EncoderModel, NoiseFreeErrorIsWithinOneCount) {
       for (const EncoderSample& s : samples) {
         ASSERT_LT(s.count, cpr);
         const double e = ErrorCounts(c, rotor.AngleAt(s.t_s - c.latency_s), s.count);
-        ASSERT_GE(e, -1e-6) << "t " << s.t_s;  // 1e-6 counts: double rounding of ~500 rad angles
-        ASSERT_LT(e, 1.0 + 1e-6) << "t " << s.t_s;
+        ASSERT_GE(e, -0.5 - 1e-6) << "t " << s.t_s;  // 1e-6 counts: double rounding of ~500 rad angles
+        ASSERT_LT(e, 0.5 + 1e-6) << "t " << s.t_s;
       }
     }
   }
 }
 
-// With Gaussian noise sigma (counts) added before the floor, the error is U[0,1) - sigma*N: it stays inside
-// [-5 sigma, 1 + 5 sigma] (5 sigma: P ~ 6e-7 per sample, 1e5 samples), its mean is 0.5 (floor bias) and its
-// variance is 1/12 + sigma^2. Mean standard error: sqrt((1/12 + 0.25) / 1e5) = 1.8e-3 -> bound 4x = 0.008.
+// With Gaussian noise sigma (counts) added before the floor, the error is U[-0.5,0.5) - sigma*N: it stays inside
+// [-0.5 - 5 sigma, 0.5 + 5 sigma] (5 sigma: P ~ 6e-7 per sample, 1e5 samples), its mean is 0 (bin-centre
+// decoding removes the floor's half-count bias) and its variance is 1/12 + sigma^2. Mean standard error: sqrt((1/12 + 0.25) / 1e5) = 1.8e-3 -> bound 4x = 0.008.
 TEST(EncoderModel, NoisyErrorMatchesQuantisationPlusNoise) {
   EncoderConfig c;
   c.noise_sigma_counts = 0.5;
@@ -79,13 +80,14 @@ TEST(EncoderModel, NoisyErrorMatchesQuantisationPlusNoise) {
   double sum = 0, sum2 = 0;
   for (const EncoderSample& s : samples) {
     const double e = ErrorCounts(c, rotor.AngleAt(s.t_s), s.count);
-    ASSERT_GE(e, -5 * c.noise_sigma_counts);
-    ASSERT_LT(e, 1.0 + 5 * c.noise_sigma_counts);
+    ASSERT_GE(e, -0.5 - 5 * c.noise_sigma_counts);
+    ASSERT_LT(e, 0.5 + 5 * c.noise_sigma_counts);
     sum += e, sum2 += e * e;
   }
   const double n = static_cast<double>(samples.size());
   const double mean = sum / n, var = sum2 / n - mean * mean;
-  EXPECT_NEAR(mean, 0.5, 0.008);
+  std::printf("encoder error mean %.4g counts, variance %.4g (expected 0, %.4g)\n", mean, var, 1.0 / 12 + 0.25);
+  EXPECT_NEAR(mean, 0.0, 0.008);
   EXPECT_NEAR(var, 1.0 / 12.0 + 0.25, 0.02);  // var of var estimate ~ 2 var^2 / n -> sd 1.5e-3
 }
 

@@ -83,6 +83,10 @@ TEST_F(EvoRealData, ApeSe3MatchesEvoForOrbAndSptam) {
   }
 }
 
+// Measured agreement is ~1e-12 relative (worst: RPE min, 1.1e-12; SVD and summation order differ from numpy);
+// 1e-9 leaves margin for other compilers / Eigen versions and is still far tighter than the 1e-6 asked for.
+constexpr double kZipRelTol = 1e-9;
+
 // The full-precision stats.json from evo's zips: APE (SE(3)) and RPE (delta 10 m, consecutive, not aligned).
 TEST_F(EvoRealData, MatchesEvoStoredResultZips) {
   const std::string res = EvoDir() + "/res_files/";
@@ -95,7 +99,7 @@ TEST_F(EvoRealData, MatchesEvoStoredResultZips) {
     EvalResult r;
     ASSERT_TRUE(RunEval(o, &r).ok);
     ASSERT_TRUE(ReadZipStats(res + name + "_ape.zip", &stats));
-    ExpectStatsNear(r.stats, stats, 1e-6);
+    ExpectStatsNear(r.stats, stats, kZipRelTol);
 
     o = KittiOptions(est);
     o.metric = EvalMetric::kRpe;
@@ -104,8 +108,41 @@ TEST_F(EvoRealData, MatchesEvoStoredResultZips) {
     const Status s = RunEval(o, &r);
     ASSERT_TRUE(s.ok) << s.message;
     ASSERT_TRUE(ReadZipStats(res + name + "_rpe.zip", &stats));
-    ExpectStatsNear(r.stats, stats, 1e-6);
+    ExpectStatsNear(r.stats, stats, kZipRelTol);
   }
+}
+
+// EuRoC CSV ground truth vs a TUM estimate (`evo_ape euroc V102_groundtruth.csv V102.txt -a`) and TUM vs TUM
+// (fr2/desk ground truth holds an exact duplicate time, which must be accepted). No evo numbers are stored for
+// these, so this checks association counts and a plausible error level (values measured, see comments).
+TEST_F(EvoRealData, EurocAndTumRunsAssociateAndAlign) {
+  EvalOptions o;
+  o.ref_path = EvoDir() + "/V102_groundtruth.csv";
+  o.est_path = EvoDir() + "/V102.txt";
+  o.format = TrajectoryFormat::kEuroc;
+  o.align = Alignment::kSe3;
+  EvalResult r;
+  Status s = RunEval(o, &r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(r.num_est_poses, 807u);
+  // 798 of 807 estimate poses have a ground-truth time within 0.01 s (cross-checked with an independent
+  // script of evo's matching_time_indices); measured SE(3)-aligned rmse 0.0917 m (a VIO on V1_02 medium).
+  EXPECT_EQ(r.num_associated, 798u);
+  EXPECT_GT(r.stats.rmse, 0.08);
+  EXPECT_LT(r.stats.rmse, 0.10);
+
+  o.ref_path = EvoDir() + "/fr2_desk_groundtruth.txt";
+  o.est_path = EvoDir() + "/fr2_desk_ORB.txt";
+  o.format = TrajectoryFormat::kTum;
+  o.align = Alignment::kSim3;
+  s = RunEval(o, &r);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(r.num_ref_poses, 20957u);
+  // 2174 of 2893 ORB poses associate (same cross-check); measured Sim(3) rmse 6.1 mm, scale 0.997 (RGB-D
+  // ORB-SLAM2 on a desk: mm-level error and metric scale expected).
+  EXPECT_EQ(r.num_associated, 2174u);
+  EXPECT_LT(r.stats.rmse, 0.01);
+  EXPECT_NEAR(r.alignment.scale, 1.0, 0.01);
 }
 
 }  // namespace

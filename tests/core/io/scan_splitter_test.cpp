@@ -37,7 +37,7 @@ TEST(RevolutionSplitter, TwoAndAHalfRevolutions) {
   EXPECT_EQ(rest->points.size(), 1400u);     // 0..280: trailing partial
   EXPECT_FALSE(splitter.Flush().has_value());
   std::size_t i = 0;
-  for (const LidarScan* s : {&scans[0], &scans[1], &*rest}) {
+  for (const LidarScan* s : std::vector<const LidarScan*>{&scans[0], &scans[1], &*rest}) {
     EXPECT_DOUBLE_EQ(s->t_start_s, points[i].t_s);
     i += s->points.size();
     EXPECT_DOUBLE_EQ(s->t_end_s, points[i - 1].t_s);

@@ -162,7 +162,7 @@ TEST(Vlp16Codec, ConfigValidateAndBadPackets) {
   EXPECT_FALSE(config.Validate(&error));
   EXPECT_NE(error.find("max_range_m"), std::string::npos);
 
-  Vlp16Decoder decoder(LidarIntrinsics(), Vlp16DecoderConfig());
+  Vlp16Decoder decoder{LidarIntrinsics(), Vlp16DecoderConfig()};
   std::vector<LidarPoint> points;
   LidarPacket short_packet;
   short_packet.payload.assign(1000, 0);

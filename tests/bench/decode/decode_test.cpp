@@ -1,0 +1,128 @@
+// `decode` on a synthetic pcap: CSV and PLY agree with the decoder, foreign/malformed input is counted.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "bench/decode/decode.hpp"
+#include "core/io/pcap.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+// 0.35 s of a head spinning at 10 Hz from azimuth 300 deg (3.5 revolutions, 263 packets), every laser returning
+// 5 m + 1 cm * laser with reflectivity 42.
+std::vector<LidarPacket> SyntheticPackets() {
+  Vlp16PacketEncoder encoder(Vlp16ReturnMode::kStrongest, 0.0);
+  std::vector<LidarPacket> packets;
+  Vlp16FiringSequence s;
+  const int n = static_cast<int>(0.35 / kVlp16SequencePeriodS);
+  for (int k = 0; k < n; ++k) {
+    s.t_s = 1.0 + k * kVlp16SequencePeriodS;
+    s.azimuth_centideg = static_cast<uint16_t>(std::lround(30000.0 + 360000.0 * (s.t_s - 1.0)) % 36000);
+    for (int l = 0; l < 16; ++l) s.distance_2mm[l] = static_cast<uint16_t>(2500 + 5 * l);
+    s.reflectivity.fill(42);
+    if (auto p = encoder.Add(s)) packets.push_back(*p);
+  }
+  return packets;
+}
+
+std::string Prefix(const std::string& name) {
+  return ::testing::TempDir() + "/rotolidar_decode_" + name + "_" + std::to_string(::getpid());
+}
+
+TEST(Decode, PcapToCsvAndPly) {
+  const std::vector<LidarPacket> packets = SyntheticPackets();
+  const std::string pcap = Prefix("in") + ".pcap";
+  PcapWriter writer;
+  ASSERT_TRUE(writer.Open(pcap).ok);
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    ASSERT_TRUE(writer.Write(packets[i]).ok);
+    if (i == 100) {
+      ASSERT_TRUE(writer.Write(EncodeVlp16PositionPacket(packets[i].t_capture_s, 0.0, 2, "$GPRMC")).ok);
+    }
+  }
+  ASSERT_TRUE(writer.Close().ok);
+
+  DecodeOptions options;
+  options.input_path = pcap;
+  options.output_prefix = Prefix("out");
+  DecodeSummary summary;
+  const Status s = RunDecode(options, &summary);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(summary.packets, packets.size());
+  EXPECT_EQ(summary.position_packets, 1u);
+  EXPECT_EQ(summary.points, packets.size() * 384);  // every channel returned, all inside 0.4..130 m
+  EXPECT_EQ(summary.points_written, summary.points);
+  // 300 deg + 0.35 s x 3600 deg/s = 1560 deg: cuts at 360, 720, 1080, 1440 -> 5 scans, 3 full revolutions.
+  EXPECT_EQ(summary.scans, 5u);
+  EXPECT_EQ(summary.full_revolutions, 3u);
+  EXPECT_NEAR(summary.t_first_s, 1.0, 1e-6);
+
+  std::ifstream csv(options.output_prefix + ".csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "x,y,z,intensity,ring,azimuth,return,time_s");
+  std::size_t rows = 0;
+  while (std::getline(csv, line)) {
+    double x, y, z, intensity, azimuth, t;
+    int ring, ret;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d,%lf,%d,%lf", &x, &y, &z, &intensity, &ring, &azimuth,
+                          &ret, &t), 8) << line;
+    EXPECT_EQ(intensity, 42);
+    EXPECT_EQ(ret, 0);
+    ++rows;
+    (void)ring, (void)azimuth, (void)t;
+  }
+  EXPECT_EQ(rows, summary.points);
+
+  std::ifstream ply(options.output_prefix + ".ply", std::ios::binary);
+  std::string header, l;
+  while (std::getline(ply, l)) {
+    header += l + "\n";
+    if (l == "end_header") break;
+  }
+  EXPECT_NE(header.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(header.find("element vertex " + std::to_string(summary.points) + "\n"), std::string::npos);
+  const auto body_start = ply.tellg();
+  ply.seekg(0, std::ios::end);
+  EXPECT_EQ(static_cast<std::size_t>(ply.tellg() - body_start), summary.points * 30);  // 4*4 + 1 + 4 + 1 + 8
+}
+
+TEST(Decode, OneRevolutionAndErrors) {
+  const std::vector<LidarPacket> packets = SyntheticPackets();
+  const std::string raw = Prefix("raw") + ".bin";
+  {
+    std::ofstream out(raw, std::ios::binary);
+    for (const auto& p : packets) out.write(reinterpret_cast<const char*>(p.payload.data()), 1206);
+  }
+  DecodeOptions options;
+  options.input_path = raw;
+  options.raw = true;
+  options.output_prefix = Prefix("rev");
+  options.revolution = 2;
+  DecodeSummary summary;
+  ASSERT_TRUE(RunDecode(options, &summary).ok);
+  // A full revolution: 0.1 s / 55.296 us = 1808.4 sequences x 16 returns.
+  EXPECT_GT(summary.points_written, 1808u * 16 - 16);
+  EXPECT_LT(summary.points_written, 1809u * 16 + 16);
+
+  options.input_path = raw + ".missing";
+  const Status s = RunDecode(options, &summary);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find(".missing"), std::string::npos);
+  options.input_path = raw;
+  options.max_range_m = 0.1;
+  EXPECT_FALSE(RunDecode(options, &summary).ok);
+  Vlp16ReturnFilter f;
+  EXPECT_TRUE(ParseReturnFilter("last", &f));
+  EXPECT_EQ(f, Vlp16ReturnFilter::kLast);
+  EXPECT_FALSE(ParseReturnFilter("first", &f));
+}
+
+}  // namespace
+}  // namespace rotolidar::bench

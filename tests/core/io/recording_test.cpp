@@ -1,0 +1,146 @@
+// Recording folder: write -> read round trip, and errors that name the file, line and field.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "core/io/calib_yaml.hpp"
+#include "core/io/recording.hpp"
+#include "core/io/vlp16.hpp"
+
+namespace rotolidar {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("rotolidar_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir.string();
+}
+
+RigCalib TestCalib() {
+  RigCalib c;
+  c.T_base_motor = MakePose({0.1, 0.2, 0.3}, Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized())));
+  c.motor_speed_radps = 2.6;
+  c.encoder.counts_per_rev = 16384;
+  c.imu.gyro_noise_density = 1.7e-4;
+  c.camera.k1 = -0.1;
+  return c;
+}
+
+/// Writes a small recording: 2 packets, 5 IMU samples, 5 encoder samples, 1 camera frame.
+void WriteSmallRecording(const std::string& dir, const RigCalib& calib) {
+  RecordingWriter writer;
+  ASSERT_TRUE(writer.Open(dir, calib).ok);
+  Vlp16PacketEncoder encoder(Vlp16ReturnMode::kStrongest, 0.0);
+  for (int k = 0; k < 48; ++k) {
+    Vlp16FiringSequence seq;
+    seq.t_s = 0.001 + k * kVlp16SequencePeriodS;
+    seq.azimuth_centideg = uint16_t((k * 20) % 36000);
+    seq.distance_2mm.fill(uint16_t(1000 + k));
+    seq.reflectivity.fill(uint8_t(k));
+    if (auto packet = encoder.Add(seq)) ASSERT_TRUE(writer.Write(*packet).ok);
+  }
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(writer.Write(ImuSample{0.005 * i, {0.1 * i, 0.2, 0.3}, {0.0, 0.0, 9.81 + i}}).ok);
+    ASSERT_TRUE(writer.Write(EncoderSample{0.001 * i, uint32_t(100 * i)}).ok);
+  }
+  CameraFrame frame;
+  frame.t_s = 0.01;
+  frame.image = cv::Mat(4, 6, CV_8UC3, cv::Scalar(10, 20, 30));
+  ASSERT_TRUE(writer.Write(frame).ok);
+  ASSERT_TRUE(writer.Close().ok);
+}
+
+TEST(Recording, WriteReadRoundTrip) {
+  const std::string dir = TempDir("roundtrip");
+  const RigCalib calib = TestCalib();
+  WriteSmallRecording(dir, calib);
+  Recording rec;
+  const Status s = LoadRecording(dir, &rec);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_TRUE(rec.calib.T_base_motor.isApprox(calib.T_base_motor, 1e-12));
+  EXPECT_EQ(rec.calib.encoder.counts_per_rev, 16384u);
+  EXPECT_DOUBLE_EQ(rec.calib.imu.gyro_noise_density, 1.7e-4);
+  EXPECT_DOUBLE_EQ(rec.calib.camera.k1, -0.1);
+  ASSERT_EQ(rec.lidar_packets.size(), 2u);
+  EXPECT_EQ(rec.lidar_packets[0].payload.size(), kVlp16PacketBytes);
+  ASSERT_EQ(rec.imu.size(), 5u);
+  EXPECT_DOUBLE_EQ(rec.imu[3].accel_mps2.z(), 12.81);
+  EXPECT_NEAR(rec.imu[3].t_s, 0.015, 1e-12);
+  ASSERT_EQ(rec.encoder.size(), 5u);
+  EXPECT_EQ(rec.encoder[4].count, 400u);
+  ASSERT_EQ(rec.camera.size(), 1u);
+  CameraFrame frame;
+  ASSERT_TRUE(LoadCameraFrame(rec.camera[0], &frame).ok);
+  EXPECT_EQ(frame.image.at<cv::Vec3b>(2, 3), cv::Vec3b(10, 20, 30));
+}
+
+TEST(Recording, BrokenImuLineIsNamed) {
+  const std::string dir = TempDir("broken_imu");
+  WriteSmallRecording(dir, TestCalib());
+  std::ofstream(dir + "/imu.csv", std::ios::app) << "0.5,1,2,x3,4,5,6\n";
+  Recording rec;
+  const Status s = LoadRecording(dir, &rec);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("imu.csv:7:"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("gyro_z_radps"), std::string::npos) << s.message;
+}
+
+TEST(Recording, EncoderCountOutOfRangeIsNamed) {
+  const std::string dir = TempDir("broken_encoder");
+  WriteSmallRecording(dir, TestCalib());
+  std::ofstream(dir + "/encoder.csv", std::ios::app) << "0.5,20000\n";
+  Recording rec;
+  const Status s = LoadRecording(dir, &rec);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("encoder.csv:7:"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("count"), std::string::npos) << s.message;
+}
+
+TEST(Recording, NonIncreasingTimeIsNamed) {
+  const std::string dir = TempDir("time_order");
+  WriteSmallRecording(dir, TestCalib());
+  std::ofstream(dir + "/encoder.csv", std::ios::app) << "0.0001,5\n";
+  Recording rec;
+  const Status s = LoadRecording(dir, &rec);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("does not increase"), std::string::npos) << s.message;
+}
+
+TEST(CalibYaml, UnknownKeyIsAnErrorWithLine) {
+  const std::string dir = TempDir("calib_unknown");
+  fs::create_directories(dir);
+  const std::string path = dir + "/calib.yaml";
+  ASSERT_TRUE(SaveCalibYaml(path, TestCalib()).ok);
+  std::ofstream(path, std::ios::app) << "motor_sped_radps: 3\n";
+  RigCalib calib;
+  const Status s = LoadCalibYaml(path, &calib);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("unknown key 'motor_sped_radps'"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("calib.yaml:"), std::string::npos) << s.message;
+}
+
+TEST(CalibYaml, WrongTypeNamesFieldAndLine) {
+  const std::string dir = TempDir("calib_type");
+  fs::create_directories(dir);
+  const std::string path = dir + "/calib.yaml";
+  std::ofstream(path) << "format_version: 1\nimu:\n  rate_hz: fast\n";
+  RigCalib calib;
+  const Status s = LoadCalibYaml(path, &calib);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("calib.yaml:3:"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("rate_hz"), std::string::npos) << s.message;
+}
+
+TEST(CalibYaml, MissingFormatVersionIsAnError) {
+  const std::string dir = TempDir("calib_version");
+  fs::create_directories(dir);
+  std::ofstream(dir + "/calib.yaml") << "motor_speed_radps: 1.0\n";
+  RigCalib calib;
+  EXPECT_FALSE(LoadCalibYaml(dir + "/calib.yaml", &calib).ok);
+}
+
+}  // namespace
+}  // namespace rotolidar

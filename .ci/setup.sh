@@ -2,6 +2,8 @@
 # rotolidar set-up: installs Debian packages (idempotently), configures, builds, then runs one job.
 #   bash .ci/setup.sh demo   -> build, then `rotolidar demo` on the built-in default scene
 #   bash .ci/setup.sh test   -> build, then the test suite (ctest)
+#   bash .ci/setup.sh core   -> build core/ alone (ROTOLIDAR_CORE_ONLY=ON), run its tests, and prove that no
+#                               simulation library (MuJoCo, Embree, OSMesa) is linked
 #   bash .ci/setup.sh deps   -> only install the Debian packages
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,13 +39,25 @@ build() {
   cmake --build "$BUILD_DIR" -j "$JOBS"
 }
 
+core_only() {
+  BUILD_DIR=${BUILD_DIR}-core build -DROTOLIDAR_CORE_ONLY=ON
+  local dir=${BUILD_DIR}-core
+  ctest --test-dir "$dir" --output-on-failure -j "$JOBS"
+  local bad
+  bad=$(find "$dir" -type f -executable -name '*test*' -exec ldd {} \; | grep -i -E 'mujoco|embree|osmesa' || true)
+  if [ -n "$bad" ]; then echo "[setup] core-only build links simulation libraries:"; echo "$bad"; exit 1; fi
+  if grep -i -E 'mujoco|embree|osmesa' "$dir/core/CMakeFiles/rotolidar_core.dir/link.txt" 2>/dev/null; then exit 1; fi
+  echo "[setup] core-only build: no MuJoCo, Embree or OSMesa linked"
+}
+
 job=${1:-demo}
 install_deps
 case "$job" in
   deps) ;;
+  core) core_only ;;
   demo) build; shift || true; "$BUILD_DIR/bench/rotolidar" demo "$@" ;;
   test) build
         export ROTOLIDAR_DATA=${ROTOLIDAR_DATA:-$(cd .. && pwd)/shared/data}
         ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
-  *) echo "usage: bash .ci/setup.sh [demo|test|deps]" >&2; exit 2 ;;
+  *) echo "usage: bash .ci/setup.sh [demo|test|core|deps]" >&2; exit 2 ;;
 esac

@@ -12,7 +12,7 @@ struct ScanMatcherConfig {
   double max_correspondence_m = 0.5;   ///< correspondences farther than this are rejected [m]
   int max_iterations = 30;
   double transformation_epsilon = 1e-6;  ///< convergence: squared change of the transform between iterations
-  int k_correspondences = 20;            ///< neighbours for each point's covariance
+  int k_correspondences = 10;            ///< neighbours for each point's covariance
   bool Validate(std::string* error) const;
 };
 

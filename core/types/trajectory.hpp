@@ -13,6 +13,6 @@ struct StampedPose {
   Pose3 T_ref_body = Pose3::Identity();
 };
 
-using Trajectory = std::vector<StampedPose>;  ///< sorted by time, strictly increasing
+using Trajectory = std::vector<StampedPose>;  ///< sorted by time (non-decreasing: real datasets repeat stamps)
 
 }  // namespace rotolidar

@@ -1,0 +1,61 @@
+// The thin end-to-end pipeline: simulate 20 s of the default rig in the box room, run the core on the
+// recording, and bound the ATE against the sim's truth.
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <gtest/gtest.h>
+
+#include "bench/run/demo.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(BoxRoomDemo, TwentySecondsHandheldAteWithinBound) {
+  DemoOptions options;
+  options.out_dir = (fs::temp_directory_path() / "rotolidar_scenario_box_room").string();
+  fs::remove_all(options.out_dir);
+  options.sim.duration_s = 20.0;
+  DemoResult result;
+  const Status s = RunDemo(options, &result);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(result.slam.bad_packets, 0u);
+  EXPECT_GE(result.slam.scans.size(), 195u);  // 10 Hz head for 20 s
+  EXPECT_EQ(result.ape.num_associated, result.slam.trajectory.size());
+  // Measured with seed 1: RMSE 0.045 m (M1-1 core: GICP scan-to-map on gyro-deskewed revolutions, ~16 m walked).
+  // Seeds 1-5 gave 0.045 / 0.029 / 0.046 / 0.194 / 0.034 m: the thin core diverges on about one seed in five
+  // (M1-5 replaces it). The bound keeps ~2x headroom over seed 1 and still fails on any frame or timing bug,
+  // which gave errors of decimetres to metres while this was built.
+  EXPECT_LT(result.ape.stats.rmse, 0.10);
+  EXPECT_LT(result.ape.stats.max, 0.35);
+  for (const char* f : {"slam/trajectory.tum", "slam/trajectory.kitti", "slam/map.ply", "slam/map.pcd",
+                        "slam/slam_config.yaml", "recording/sim_config.yaml", "metrics.json"})
+    EXPECT_TRUE(fs::exists(options.out_dir + "/" + f)) << f;
+}
+
+TEST(BoxRoomDemo, SameSeedWritesTheSameRecordingBytes) {
+  sim::SimConfig config = sim::DefaultSimConfig();
+  config.duration_s = 1.0;
+  const std::string a = (fs::temp_directory_path() / "rotolidar_det_a").string();
+  const std::string b = (fs::temp_directory_path() / "rotolidar_det_b").string();
+  const std::string c = (fs::temp_directory_path() / "rotolidar_det_c").string();
+  sim::SimSummary summary;
+  ASSERT_TRUE(sim::RunSimulation(config, a, &summary).ok);
+  ASSERT_TRUE(sim::RunSimulation(config, b, &summary).ok);
+  config.seed = 2;
+  ASSERT_TRUE(sim::RunSimulation(config, c, &summary).ok);
+  for (const char* f : {"lidar.pcap", "imu.csv", "encoder.csv", "calib.yaml", "truth/base.tum", "truth/imu_bias.csv"}) {
+    EXPECT_EQ(ReadAll(a + "/" + f), ReadAll(b + "/" + f)) << f;
+  }
+  for (const char* f : {"lidar.pcap", "imu.csv", "encoder.csv"}) EXPECT_NE(ReadAll(a + "/" + f), ReadAll(c + "/" + f)) << f;
+}
+
+}  // namespace
+}  // namespace rotolidar::bench

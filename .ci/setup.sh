@@ -52,12 +52,12 @@ core_only() {
 
 job=${1:-demo}
 install_deps
+export ROTOLIDAR_DATA=${ROTOLIDAR_DATA:-$(cd .. && pwd)/shared/data}
 case "$job" in
   deps) ;;
   core) core_only ;;
   demo) build; shift || true; "$BUILD_DIR/bench/rotolidar" demo "$@" ;;
   test) build
-        export ROTOLIDAR_DATA=${ROTOLIDAR_DATA:-$(cd .. && pwd)/shared/data}
         ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
   *) echo "usage: bash .ci/setup.sh [demo|test|core|deps]" >&2; exit 2 ;;
 esac

@@ -22,19 +22,6 @@ int Fail(const Status& s) {
   return 1;
 }
 
-/// Parses and handles --help; returns -1 to continue, else the exit code.
-int ParseOrHelp(OptionParser& parser, int argc, char** argv) {
-  if (Status s = parser.Parse(argc, argv); !s) {
-    std::cerr << "error: " << s.message << "\n";
-    return 2;
-  }
-  if (parser.help_requested()) {
-    parser.PrintHelp(std::cout);
-    return 0;
-  }
-  return -1;
-}
-
 /// A slam config file: a YAML mapping of EstimatorConfig keys (see slam_config.yaml of any run).
 Status LoadSlamConfig(const std::string& path, EstimatorConfig* config) {
   if (path.empty()) return Status::Ok();

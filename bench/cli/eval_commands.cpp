@@ -49,11 +49,7 @@ int CmdEval(int argc, char** argv) {
   p.AddFlag("all-pairs", "RPE: use all pairs, not consecutive non-overlapping ones");
   p.Add("max-diff", "0.01", "s", "timestamp association tolerance (tum, euroc)");
   p.Add("json", "", "-", "write the statistics as JSON to this file");
-  if (Status s = p.Parse(argc, argv); !s) return Usage(s.message);
-  if (p.help_requested()) {
-    p.PrintHelp(std::cout);
-    return 0;
-  }
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EvalOptions options;
   if (Status s = ParseEvalOptions(p, &options); !s) return Usage(s.message);
   EvalResult result;
@@ -78,11 +74,7 @@ int CmdDecode(int argc, char** argv) {
   p.Add("cut-azimuth", "0", "deg", "revolutions start where the azimuth crosses this");
   p.Add("revolution", "-1", "-", "write only this revolution (0 = first, usually partial); -1 = all points");
   p.AddFlag("strict", "stop at the first malformed packet instead of counting it");
-  if (Status s = p.Parse(argc, argv); !s) return Usage(s.message);
-  if (p.help_requested()) {
-    p.PrintHelp(std::cout);
-    return 0;
-  }
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   DecodeOptions o;
   o.input_path = p.Get("INPUT");
   o.output_prefix = p.Get("out");

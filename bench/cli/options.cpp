@@ -2,7 +2,7 @@
 
 #include <cstdlib>
 #include <iomanip>
-#include <ostream>
+#include <iostream>
 
 namespace rotolidar::bench {
 
@@ -102,6 +102,18 @@ Status OptionParser::GetInt(const std::string& name, long* value) const {
   if (text.empty() || *end != '\0') return Status::Error(command_ + ": --" + name + ": not an integer: '" + text + "'");
   *value = v;
   return Status::Ok();
+}
+
+int ParseOrHelp(OptionParser& parser, int argc, char** argv) {
+  if (Status s = parser.Parse(argc, argv); !s) {
+    std::cerr << "error: " << s.message << "\n";
+    return 2;
+  }
+  if (parser.help_requested()) {
+    parser.PrintHelp(std::cout);
+    return 0;
+  }
+  return -1;
 }
 
 }  // namespace rotolidar::bench

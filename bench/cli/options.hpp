@@ -48,4 +48,8 @@ class OptionParser {
   bool help_ = false;
 };
 
+/// Parses argv; prints the help table for --help. Returns -1 to go on, otherwise the exit code to return
+/// (0 after help, 2 after a usage error, whose message goes to stderr).
+int ParseOrHelp(OptionParser& parser, int argc, char** argv);
+
 }  // namespace rotolidar::bench

@@ -78,9 +78,9 @@ Status LoadCamera(const std::string& dir, std::vector<CameraFrameRef>* out) {
   return reader.status();
 }
 
-Status LoadPackets(const std::string& path, std::vector<LidarPacket>* out) {
+Status LoadPackets(const std::string& path, double epoch_unix_s, std::vector<LidarPacket>* out) {
   PcapReader reader;
-  if (Status s = reader.Open(path); !s) return s;
+  if (Status s = reader.Open(path, epoch_unix_s); !s) return s;  // record time - epoch = rig time
   LidarPacket packet;
   Status status;
   while (reader.Next(&packet, &status)) out->push_back(packet);
@@ -94,7 +94,7 @@ Status LoadRecording(const std::string& dir, Recording* recording) {
   r.dir = dir;
   if (!fs::is_directory(dir)) return Status::Error(dir + ": not a recording folder (no such directory)");
   if (Status s = LoadCalibYaml(dir + "/" + RecordingLayout::kCalib, &r.calib); !s) return s;
-  if (Status s = LoadPackets(dir + "/" + RecordingLayout::kLidar, &r.lidar_packets); !s) return s;
+  if (Status s = LoadPackets(dir + "/" + RecordingLayout::kLidar, r.calib.epoch_unix_s, &r.lidar_packets); !s) return s;
   if (Status s = LoadImu(dir + "/" + RecordingLayout::kImu, &r.imu); !s) return s;
   if (Status s = LoadEncoder(dir + "/" + RecordingLayout::kEncoder, r.calib.encoder.counts_per_rev, &r.encoder); !s)
     return s;

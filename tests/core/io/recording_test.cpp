@@ -77,6 +77,20 @@ TEST(Recording, WriteReadRoundTrip) {
   EXPECT_EQ(frame.image.at<cv::Vec3b>(2, 3), cv::Vec3b(10, 20, 30));
 }
 
+TEST(Recording, EpochMapsPcapTimesToTheRigClock) {
+  const std::string dir = TempDir("epoch");
+  RigCalib calib = TestCalib();
+  calib.epoch_unix_s = 1.7e9;  // a real logger's start time
+  WriteSmallRecording(dir, calib);
+  Recording rec;
+  ASSERT_TRUE(LoadRecording(dir, &rec).ok);
+  ASSERT_EQ(rec.lidar_packets.size(), 2u);
+  // The first packet's last firing is at 0.001 + 23 * 55.296 us = 2.27 ms; capture adds the 16th laser's offset
+  // and the encoder's fixed 0.1 ms transmit latency: in rig time (not Unix seconds), within microseconds.
+  EXPECT_GT(rec.lidar_packets[0].t_capture_s, 0.002);
+  EXPECT_LT(rec.lidar_packets[0].t_capture_s, 0.003);
+}
+
 TEST(Recording, BrokenImuLineIsNamed) {
   const std::string dir = TempDir("broken_imu");
   WriteSmallRecording(dir, TestCalib());

@@ -189,17 +189,11 @@ std::vector<std::pair<Seconds, Eigen::Matrix3d>> Estimator::GyroRotations(Second
   return out;
 }
 
-// Rotation of the base between t0 and t1 from integrated gyro samples; identity when the IMU does not cover it.
+// Rotation of the base between t0 and t1: the last entry of the integrated gyro table.
 std::optional<Eigen::Matrix3d> Estimator::GyroRotation(Seconds t0_s, Seconds t1_s) const {
-  if (imu_.size() < 2 || imu_.front().t_s > t0_s || imu_.back().t_s < t1_s) return std::nullopt;
-  Eigen::Matrix3d R_imu0_imu = Eigen::Matrix3d::Identity();
-  for (size_t i = 0; i + 1 < imu_.size(); ++i) {
-    const double a = std::max(imu_[i].t_s, t0_s), b = std::min(imu_[i + 1].t_s, t1_s);
-    if (b <= a) continue;
-    R_imu0_imu = R_imu0_imu * ExpSO3(0.5 * (imu_[i].gyro_radps + imu_[i + 1].gyro_radps) * (b - a));
-  }
-  const Eigen::Matrix3d R_base_imu = calib_.T_base_imu.linear();
-  return Eigen::Matrix3d(R_base_imu * R_imu0_imu * R_base_imu.transpose());
+  const auto table = GyroRotations(t0_s, t1_s);
+  if (table.empty()) return std::nullopt;
+  return table.back().second;
 }
 
 void Estimator::UpdateMap(const Pose3& T_world_base, const std::vector<Eigen::Vector3d>& p_base) {

@@ -8,5 +8,8 @@ int CmdSim(int argc, char** argv);
 int CmdSlam(int argc, char** argv);
 int CmdEval(int argc, char** argv);
 int CmdDecode(int argc, char** argv);
+int CmdBench(int argc, char** argv);
+int CmdReplay(int argc, char** argv);
+int CmdScene(int argc, char** argv);
 
 }  // namespace rotolidar::bench

@@ -20,6 +20,9 @@ const Command kCommands[] = {
     {"slam", rotolidar::bench::CmdSlam, "run the SLAM core on a recording folder"},
     {"eval", rotolidar::bench::CmdEval, "compare trajectories (APE/RPE, evo's definitions)"},
     {"decode", rotolidar::bench::CmdDecode, "decode VLP-16 packets (pcap or raw) to CSV and PLY points"},
+    {"bench", rotolidar::bench::CmdBench, "speed benchmarks (ratios to real time) and the IMU Allan check"},
+    {"replay", rotolidar::bench::CmdReplay, "send a recording's VLP-16 packets over UDP at N x real time"},
+    {"scene", rotolidar::bench::CmdScene, "inspect scenes: list, show (top and perspective pictures)"},
 };
 
 void PrintUsage(std::ostream& os) {

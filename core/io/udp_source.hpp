@@ -1,6 +1,6 @@
 #pragma once
-// Live VLP-16 packets over UDP: a receiver with a bounded queue (the estimator's input from a real sensor) and a
-// sender that replays LidarPackets (a fake sensor for tests and demos). IPv4 only.
+// Live VLP-16 packets over UDP: a receiver with a bounded queue (the estimator's input from a real sensor). The
+// sender that plays packets back (a fake sensor) is in udp_sender.hpp, included here for its users. IPv4 only.
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/io/udp_sender.hpp"
 #include "core/types/messages.hpp"
 #include "core/util/log.hpp"
 
@@ -61,28 +62,6 @@ class UdpPacketSource {
   std::deque<LidarPacket> queue_;
   std::atomic<std::size_t> received_{0}, dropped_{0}, rejected_{0};
   double start_steady_s_ = 0.0;
-};
-
-/// Sends LidarPackets' payloads as UDP datagrams to host:port. Not thread-safe.
-class UdpPacketSender {
- public:
-  UdpPacketSender() = default;
-  ~UdpPacketSender();
-  UdpPacketSender(const UdpPacketSender&) = delete;
-  UdpPacketSender& operator=(const UdpPacketSender&) = delete;
-
-  /// host: a dotted IPv4 address ("127.0.0.1", "255.255.255.255" enables broadcast).
-  Status Open(const std::string& host, uint16_t port);
-  Status Send(const LidarPacket& packet);
-  /// Sends all packets, paced so that packet i leaves at (t_capture_s[i] - t_capture_s[0]) / speed after the
-  /// first; speed <= 0 sends as fast as possible. Stops at the first send error.
-  Status SendAll(const std::vector<LidarPacket>& packets, double speed);
-  void Close();
-
- private:
-  int fd_ = -1;
-  std::string host_;
-  uint16_t port_ = 0;
 };
 
 }  // namespace rotolidar

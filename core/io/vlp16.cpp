@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <sstream>
 
@@ -116,6 +117,100 @@ uint32_t Vlp16TimestampUs(Seconds t_s, double lidar_clock_offset_s) {
   int64_t v = static_cast<int64_t>(us) % hour;
   if (v < 0) v += hour;
   return static_cast<uint32_t>(v);
+}
+
+int64_t UnixDaysFromCivil(int year, int month, int day) {
+  // Howard Hinnant's days_from_civil: days since 1970-01-01 of a proleptic Gregorian date.
+  const int y = year - (month <= 2 ? 1 : 0);
+  const int era = (y >= 0 ? y : y - 399) / 400;
+  const unsigned yoe = static_cast<unsigned>(y - era * 400);
+  const unsigned doy = static_cast<unsigned>((153 * (month + (month > 2 ? -3 : 9)) + 2) / 5 + day - 1);
+  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return static_cast<int64_t>(era) * 146097 + static_cast<int64_t>(doe) - 719468;
+}
+
+namespace {
+
+void CivilFromDays(int64_t z, int* year, int* month, int* day) {
+  z += 719468;  // the inverse of UnixDaysFromCivil (same source)
+  const int64_t era = (z >= 0 ? z : z - 146096) / 146097;
+  const unsigned doe = static_cast<unsigned>(z - era * 146097);
+  const unsigned yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+  const unsigned doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+  const unsigned mp = (5 * doy + 2) / 153;
+  *day = static_cast<int>(doy - (153 * mp + 2) / 5 + 1);
+  *month = static_cast<int>(mp < 10 ? mp + 3 : mp - 9);
+  *year = static_cast<int>(yoe + era * 400 + (*month <= 2 ? 1 : 0));
+}
+
+unsigned NmeaChecksum(const std::string& body) {
+  unsigned x = 0;
+  for (char c : body) x ^= static_cast<unsigned char>(c);
+  return x;
+}
+
+/// ddmm.mmmm (latitude, 2 degree digits) or dddmm.mmmm (longitude, 3).
+std::string NmeaAngle(double deg, int degree_digits) {
+  const double a = std::abs(deg);
+  int whole = static_cast<int>(a);
+  double minutes = (a - whole) * 60.0;
+  if (minutes >= 59.99995) whole += 1, minutes = 0.0;  // would print as 60.0000
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%0*d%07.4f", degree_digits, whole, minutes);
+  return buf;
+}
+
+}  // namespace
+
+std::string FormatGprmc(double utc_unix_s, bool valid, double latitude_deg, double longitude_deg) {
+  const int64_t t = static_cast<int64_t>(std::floor(std::max(0.0, utc_unix_s)));
+  const int64_t days = t / 86400, sec = t % 86400;
+  int year = 1970, month = 1, day = 1;
+  CivilFromDays(days, &year, &month, &day);
+  char buf[128];
+  std::snprintf(buf, sizeof(buf), "GPRMC,%02d%02d%02d,%c,%s,%c,%s,%c,000.0,000.0,%02d%02d%02d,,,%c",
+                static_cast<int>(sec / 3600), static_cast<int>(sec / 60 % 60), static_cast<int>(sec % 60),
+                valid ? 'A' : 'V', NmeaAngle(latitude_deg, 2).c_str(), latitude_deg < 0 ? 'S' : 'N',
+                NmeaAngle(longitude_deg, 3).c_str(), longitude_deg < 0 ? 'W' : 'E', day, month, year % 100,
+                valid ? 'A' : 'N');
+  const std::string body = buf;
+  char tail[8];
+  std::snprintf(tail, sizeof(tail), "*%02X\r\n", NmeaChecksum(body));
+  return "$" + body + tail;
+}
+
+Status ParseGprmcUtc(const std::string& sentence, double* utc_unix_s) {
+  auto fail = [&](const std::string& what) { return Status::Error("RMC sentence: " + what); };
+  if (sentence.size() < 7 || sentence[0] != '$' || sentence.compare(3, 3, "RMC") != 0) {
+    return fail("does not start with $--RMC");
+  }
+  std::string body = sentence.substr(1);
+  const std::size_t star = body.find('*');
+  if (star != std::string::npos) {
+    unsigned given = 0;
+    if (std::sscanf(body.c_str() + star + 1, "%2x", &given) != 1) return fail("unreadable checksum");
+    body.resize(star);
+    if (given != NmeaChecksum(body)) return fail("checksum mismatch");
+  }
+  std::vector<std::string> fields(1);
+  for (char c : body) {
+    if (c == ',') fields.emplace_back();
+    else if (c != '\r' && c != '\n') fields.back() += c;
+  }
+  if (fields.size() < 10) return fail("has " + std::to_string(fields.size()) + " fields (need >= 10)");
+  int hh = 0, mm = 0, dd = 0, mo = 0, yy = 0;
+  double ss = 0.0;
+  if (fields[1].size() < 6 || std::sscanf(fields[1].c_str(), "%2d%2d%lf", &hh, &mm, &ss) != 3 || hh > 23 ||
+      mm > 59 || !(ss >= 0.0 && ss < 61.0)) {
+    return fail("field 1 (UTC time hhmmss) '" + fields[1] + "'");
+  }
+  if (fields[9].size() != 6 || std::sscanf(fields[9].c_str(), "%2d%2d%2d", &dd, &mo, &yy) != 3 || dd < 1 ||
+      dd > 31 || mo < 1 || mo > 12) {
+    return fail("field 9 (date ddmmyy) '" + fields[9] + "'");
+  }
+  const int year = yy < 80 ? 2000 + yy : 1900 + yy;
+  *utc_unix_s = static_cast<double>(UnixDaysFromCivil(year, mo, dd)) * 86400.0 + hh * 3600.0 + mm * 60.0 + ss;
+  return Status::Ok();
 }
 
 LidarPacket EncodeVlp16PositionPacket(Seconds t_s, double lidar_clock_offset_s, uint8_t pps_status,

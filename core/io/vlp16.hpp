@@ -107,6 +107,17 @@ Status ParseVlp16PositionPacket(const uint8_t* data, std::size_t size, Vlp16Posi
 /// tolerance is added before the floor so that times meant to be whole microseconds do not lose one to rounding.
 uint32_t Vlp16TimestampUs(Seconds t_s, double lidar_clock_offset_s);
 
+/// The NMEA 0183 $GPRMC sentence a GPS receiver sends for the whole UTC second containing utc_unix_s (fraction
+/// dropped, as receivers stamp the PPS edge): "$GPRMC,hhmmss,A|V,ddmm.mmmm,N|S,dddmm.mmmm,E|W,000.0,000.0,ddmmyy,,,
+/// A|N*hh\r\n" (hh = XOR checksum of the characters between '$' and '*'). `valid` selects status A (fix) or V.
+/// utc_unix_s must be >= 0 (dates from 1970 on).
+std::string FormatGprmc(double utc_unix_s, bool valid, double latitude_deg, double longitude_deg);
+/// UTC [Unix seconds] of an RMC sentence ($GPRMC, $GNRMC, ...): time hhmmss[.ss] (field 1), date ddmmyy (field 9;
+/// yy < 80 is 20yy). A present checksum must match. Fails naming the field; *utc_unix_s is written only on success.
+Status ParseGprmcUtc(const std::string& sentence, double* utc_unix_s);
+/// Unix seconds at 00:00:00 UTC of a proleptic Gregorian date (the civil-from-days algorithm, no time zone).
+int64_t UnixDaysFromCivil(int year, int month, int day);
+
 // ---------------------------------------------------------------------------------------------------------------
 /// Packs firing sequences into data packets, as the sensor does. Not thread-safe.
 ///
@@ -170,20 +181,34 @@ class Vlp16Decoder {
   Status Decode(const LidarPacket& packet, std::vector<LidarPoint>* appended);
 
   const std::optional<Vlp16PositionPacket>& last_position() const { return last_position_; }
+  /// Unix time [s] of the UTC top of the hour the sensor's timestamps count from, known once a position packet
+  /// with PPS locked (status 2) and a parsable RMC sentence has been decoded (manual 9.3.1.6: with PPS the
+  /// timestamp is UTC microseconds past the hour): round((utc_rmc - timestamp) / 3600 s) * 3600 s, which
+  /// tolerates the sentence being up to half an hour stale. nullopt before. With it a logger can set
+  /// calib.yaml's lidar_clock_offset_s = hour start - epoch_unix_s (the rig clock then reads UTC - epoch).
+  const std::optional<double>& hour_start_unix_s() const { return hour_start_unix_s_; }
   const Vlp16RawPacket& last_raw() const { return raw_; }  ///< the last data packet parsed
   /// Rig time [s] of a timestamp in the current unwrapping state (updates it, as Decode does).
   Seconds UnwrapToRigTime(uint32_t timestamp_us);
 
  private:
-  void DecodeChannel(int block, int ch, double d_az, double packet_t_s, std::vector<LidarPoint>* appended) const;
+  /// Points of one firing (16 lasers) of block `block`, firing `firing` (0/1), in laser order.
+  void DecodeFiring(int block, int firing, double d_az, double packet_t_s, std::vector<LidarPoint>* appended) const;
   std::array<double, 12> AzimuthSteps() const;  ///< d_az [0.01 deg] per block of raw_
+  void TakePosition(const Vlp16PositionPacket& position);
 
   LidarIntrinsics intrinsics_;
   Vlp16DecoderConfig config_;
   std::array<uint8_t, 16> ring_of_laser_{};
-  std::array<double, 16> elevation_rad_{};
+  std::array<double, 16> cos_elevation_{};  ///< per laser ID
+  std::array<double, 16> sin_elevation_{};
+  // Per-laser azimuth increment rotations (cos, sin of d_az * laser * 2.304 / 110.592) for the d_az last seen.
+  mutable double cached_d_az_ = -1.0;
+  mutable std::array<double, 16> cos_increment_{};
+  mutable std::array<double, 16> sin_increment_{};
   Vlp16RawPacket raw_;
   std::optional<Vlp16PositionPacket> last_position_;
+  std::optional<double> hour_start_unix_s_;
   bool have_time_ = false;
   int64_t hour_ = 0;
   int64_t last_unwrapped_us_ = 0;

@@ -9,8 +9,11 @@ namespace rotolidar {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kCentidegToRad = 0.01 * kDegToRad;
 constexpr double kMaxPlausibleStepCentideg = 1000.0;  // 10 deg per block (pair): 1200 rpm moves ~0.8 deg
 constexpr int64_t kHourUs = static_cast<int64_t>(kVlp16MicrosPerHour);
+constexpr double kHourS = 3600.0;
+constexpr uint8_t kPpsLocked = 2;
 
 uint8_t ReturnTypeOf(Vlp16ReturnMode mode, int block) {
   if (mode == Vlp16ReturnMode::kDual) return block % 2 == 0 ? 1 : 0;  // even = last, odd = strongest
@@ -49,7 +52,12 @@ Vlp16Decoder::Vlp16Decoder(const LidarIntrinsics& intrinsics, const Vlp16Decoder
     return intrinsics_.elevation_deg[a] < intrinsics_.elevation_deg[b];
   });
   for (int ring = 0; ring < 16; ++ring) ring_of_laser_[order[ring]] = static_cast<uint8_t>(ring);
-  for (int id = 0; id < 16; ++id) elevation_rad_[id] = intrinsics_.elevation_deg[id] * kDegToRad;
+  for (int id = 0; id < 16; ++id) {
+    // Vlp16RayDirection's elevation terms, computed once.
+    const Eigen::Vector3d d = Vlp16RayDirection(intrinsics_.elevation_deg[id] * kDegToRad, 0.0);
+    cos_elevation_[id] = d.x();
+    sin_elevation_[id] = d.z();
+  }
 }
 
 Seconds Vlp16Decoder::UnwrapToRigTime(uint32_t timestamp_us) {
@@ -85,34 +93,63 @@ std::array<double, 12> Vlp16Decoder::AzimuthSteps() const {
   return steps;
 }
 
-void Vlp16Decoder::DecodeChannel(int block, int ch, double d_az, double packet_t_s,
-                                 std::vector<LidarPoint>* appended) const {
-  const Vlp16RawBlock& raw_block = raw_.blocks[block];
-  const uint16_t d = raw_block.distance_2mm[ch];
-  if (d == 0) return;
-  const double range_m = d * kVlp16DistanceUnitM;
-  if (range_m < config_.min_range_m || range_m > config_.max_range_m) return;
+// Azimuth of laser l in a firing = base + d_az * l * 2.304 / 110.592 [0.01 deg] (driver formula). Its cosine and
+// sine come from the base angle's (one sincos per firing) rotated by the per-laser increment (cached per d_az):
+// the same numbers as direct evaluation to ~1e-16.
+void Vlp16Decoder::DecodeFiring(int block, int firing, double d_az, double packet_t_s,
+                                std::vector<LidarPoint>* appended) const {
   const auto mode = static_cast<Vlp16ReturnMode>(raw_.return_mode);
-  const uint8_t return_type = ReturnTypeOf(mode, block);
-  if (!Keep(config_.return_filter, return_type)) return;
-  const int firing = ch / 16, laser = ch % 16;
-  const double az = std::fmod(raw_block.azimuth_centideg + d_az * (laser * 2.304 + firing * 55.296) / 110.592,
-                              36000.0);
-  const Eigen::Vector3d p = Vlp16RayOrigin(intrinsics_.vertical_offset_m[laser]) +
-                            Vlp16RayDirection(elevation_rad_[laser], az * 0.01 * kDegToRad) * range_m;
-  LidarPoint point;
-  point.x_m = static_cast<float>(p.x());
-  point.y_m = static_cast<float>(p.y());
-  point.z_m = static_cast<float>(p.z());
-  point.intensity = raw_block.reflectivity[ch];
-  point.azimuth_deg = static_cast<float>(az * 0.01);
-  if (point.azimuth_deg >= 360.f) point.azimuth_deg = 0.f;  // float rounding of 359.99999
-  point.ring = ring_of_laser_[laser];
-  point.laser_id = static_cast<uint8_t>(laser);
-  point.return_type = return_type;
-  const int seq = (mode == Vlp16ReturnMode::kDual ? block - block % 2 : 2 * block) + firing;
-  point.t_s = packet_t_s + seq * kVlp16SequencePeriodS + laser * kVlp16FiringPeriodS;
-  appended->push_back(point);
+  const bool dual = mode == Vlp16ReturnMode::kDual;
+  const int stride = dual ? 2 : 1;
+  if (d_az != cached_d_az_) {
+    for (int l = 0; l < 16; ++l) {
+      const double inc = d_az * l * 2.304 / 110.592 * kCentidegToRad;
+      cos_increment_[l] = std::cos(inc);
+      sin_increment_[l] = std::sin(inc);
+    }
+    cached_d_az_ = d_az;
+  }
+  const double base_centideg = raw_.blocks[block].azimuth_centideg + d_az * firing * (55.296 / 110.592);
+  const double cos_base = std::cos(base_centideg * kCentidegToRad);
+  const double sin_base = std::sin(base_centideg * kCentidegToRad);
+  const int seq = (dual ? block : 2 * block) + firing;
+  const double firing_t_s = packet_t_s + seq * kVlp16SequencePeriodS;
+  for (int laser = 0; laser < 16; ++laser) {
+    const int ch = 16 * firing + laser;
+    for (int k = 0; k < stride; ++k) {  // dual: the even (last) block, then the odd (strongest) one
+      const Vlp16RawBlock& raw_block = raw_.blocks[block + k];
+      const uint16_t d = raw_block.distance_2mm[ch];
+      if (d == 0) continue;
+      const double range_m = d * kVlp16DistanceUnitM;
+      if (range_m < config_.min_range_m || range_m > config_.max_range_m) continue;
+      const uint8_t return_type = ReturnTypeOf(mode, block + k);
+      if (!Keep(config_.return_filter, return_type)) continue;
+      const double cos_az = cos_base * cos_increment_[laser] - sin_base * sin_increment_[laser];
+      const double sin_az = sin_base * cos_increment_[laser] + cos_base * sin_increment_[laser];
+      const double horizontal_m = cos_elevation_[laser] * range_m;
+      double az = base_centideg + d_az * laser * (2.304 / 110.592);
+      if (az >= 36000.0) az -= 36000.0;
+      LidarPoint point;
+      point.x_m = static_cast<float>(horizontal_m * cos_az);
+      point.y_m = static_cast<float>(-horizontal_m * sin_az);
+      point.z_m = static_cast<float>(intrinsics_.vertical_offset_m[laser] + sin_elevation_[laser] * range_m);
+      point.intensity = raw_block.reflectivity[ch];
+      point.azimuth_deg = static_cast<float>(az * 0.01);
+      if (point.azimuth_deg >= 360.f) point.azimuth_deg = 0.f;  // float rounding of 359.99999
+      point.ring = ring_of_laser_[laser];
+      point.laser_id = static_cast<uint8_t>(laser);
+      point.return_type = return_type;
+      point.t_s = firing_t_s + laser * kVlp16FiringPeriodS;
+      appended->push_back(point);
+    }
+  }
+}
+
+void Vlp16Decoder::TakePosition(const Vlp16PositionPacket& position) {
+  last_position_ = position;
+  double utc_s = 0.0;
+  if (position.pps_status != kPpsLocked || !ParseGprmcUtc(position.nmea, &utc_s)) return;
+  hour_start_unix_s_ = std::round((utc_s - position.timestamp_us * 1e-6) / kHourS) * kHourS;
 }
 
 Status Vlp16Decoder::Decode(const LidarPacket& packet, std::vector<LidarPoint>* appended) {
@@ -120,20 +157,21 @@ Status Vlp16Decoder::Decode(const LidarPacket& packet, std::vector<LidarPoint>* 
   if (packet.udp_port == kVlp16PositionPort || packet.payload.size() == kVlp16PositionPacketBytes) {
     Vlp16PositionPacket position;
     const Status s = ParseVlp16PositionPacket(packet.payload.data(), packet.payload.size(), &position);
-    if (s) last_position_ = position;
+    if (s) TakePosition(position);
     return s;
   }
   const Status s = ParseVlp16DataPacket(packet.payload.data(), packet.payload.size(), &raw_);
   if (!s) return s;
   const double packet_t_s = UnwrapToRigTime(raw_.timestamp_us);
   const std::array<double, 12> steps = AzimuthSteps();
+  if (appended->capacity() - appended->size() < 384) {  // grow geometrically: never one packet at a time
+    appended->reserve(std::max<std::size_t>(2 * appended->capacity(), appended->size() + 384));
+  }
   // Emit in firing order so that times never decrease; in dual mode a pair's two returns of one firing are
   // adjacent (last, then strongest) and share their time.
   const int stride = raw_.return_mode == static_cast<uint8_t>(Vlp16ReturnMode::kDual) ? 2 : 1;
   for (int b = 0; b < 12; b += stride) {
-    for (int ch = 0; ch < 32; ++ch) {
-      for (int k = 0; k < stride; ++k) DecodeChannel(b + k, ch, steps[b + k], packet_t_s, appended);
-    }
+    for (int firing = 0; firing < 2; ++firing) DecodeFiring(b, firing, steps[b], packet_t_s, appended);
   }
   return Status::Ok();
 }

@@ -1,4 +1,4 @@
-// Simulated VLP-16 head: schedule, ray casting in batches, range/intensity model (see the header).
+// Simulated VLP-16 head: schedule, ray casting in batches, beam/echo, range and intensity model (see the header).
 #include "sim/lidar/vlp16_caster.hpp"
 
 #include <algorithm>
@@ -10,8 +10,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
 constexpr int kLasers = 16;
-constexpr int kSequencesPerBatch = 32;  // 512 rays per Embree stream call
+constexpr int kSequencesPerBatch = 32;  // 512 firings per Embree stream call
 constexpr double kMaxEncodableRangeM = 65535 * kVlp16DistanceUnitM;
+constexpr double kPassThroughM = 1e-4;  // a transmitted sub-ray restarts this far behind the surface it crossed
 
 bool Fail(std::string* error, const std::string& message) {
   if (error) *error = message;
@@ -44,7 +45,38 @@ bool Vlp16CasterConfig::Validate(std::string* error) const {
   if (!(intensity_attenuation_per_m >= 0.0 && intensity_attenuation_per_m < 1.0)) {
     return Fail(error, "lidar.intensity_attenuation_per_m must be in [0, 1)");
   }
+  if (return_mode != Vlp16ReturnMode::kStrongest && return_mode != Vlp16ReturnMode::kLast &&
+      return_mode != Vlp16ReturnMode::kDual) {
+    return Fail(error, "lidar.return_mode must be strongest, last or dual");
+  }
+  if (!(beam_rings >= 0 && beam_rings <= 4)) return Fail(error, "lidar.beam_rings must be in 0..4");
+  if (!(beam_divergence_horizontal_mrad >= 0.0 && beam_divergence_horizontal_mrad < 100.0)) {
+    return Fail(error, "lidar.beam_divergence_horizontal_mrad must be in [0, 100)");
+  }
+  if (!(beam_divergence_vertical_mrad >= 0.0 && beam_divergence_vertical_mrad < 100.0)) {
+    return Fail(error, "lidar.beam_divergence_vertical_mrad must be in [0, 100)");
+  }
+  if (!(echo_separation_m > 0.0 && echo_separation_m < 100.0)) {
+    return Fail(error, "lidar.echo_separation_m must be in (0, 100)");
+  }
+  for (const auto& [name, t] : material_transmittance) {
+    if (!(t >= 0.0 && t < 1.0)) return Fail(error, "lidar.material_transmittance." + name + " must be in [0, 1)");
+  }
+  if (!(max_surfaces_per_ray >= 1 && max_surfaces_per_ray <= 8)) {
+    return Fail(error, "lidar.max_surfaces_per_ray must be in 1..8");
+  }
   return true;
+}
+
+Status CheckCasterMaterials(const Vlp16CasterConfig& config, const std::vector<Material>& materials) {
+  for (const auto& entry : config.material_transmittance) {
+    const bool found = std::any_of(materials.begin(), materials.end(),
+                                   [&](const Material& m) { return m.name == entry.first; });
+    if (!found) {
+      return Status::Error("lidar.material_transmittance: material '" + entry.first + "' is not in the scene");
+    }
+  }
+  return Status::Ok();
 }
 
 Vlp16Caster::Vlp16Caster(const EmbreeScene& scene, const LidarIntrinsics& intrinsics,
@@ -56,12 +88,33 @@ Vlp16Caster::Vlp16Caster(const EmbreeScene& scene, const LidarIntrinsics& intrin
       rpm_rng_(run_seed, "lidar.rpm") {
   std::string error;
   ROTOLIDAR_CHECK(config_.Validate(&error), error);
+  const Status materials = CheckCasterMaterials(config_, scene_.materials());
+  ROTOLIDAR_CHECK(materials.ok, materials.message);
   head_azimuth_deg_ = std::fmod(config_.azimuth0_deg, 360.0);
   if (head_azimuth_deg_ < 0.0) head_azimuth_deg_ += 360.0;
   if (config_.rpm_jitter_frac > 0.0) spin_error_ = rpm_rng_.Normal();  // start in the stationary distribution
   spin_rate_degps_ = config_.rpm * 6.0 * (1.0 + config_.rpm_jitter_frac * spin_error_);
   // At exactly 90 deg the cutoff only drops rays parallel to the surface.
   cos_grazing_cutoff_ = std::cos(config_.grazing_cutoff_deg * kDegToRad);
+  for (int i = 0; i < kLasers; ++i) {
+    const Eigen::Vector3d d = Vlp16RayDirection(intrinsics_.elevation_deg[i] * kDegToRad, 0.0);
+    cos_elevation_[i] = d.x();
+    sin_elevation_[i] = d.z();
+  }
+  pattern_ = BeamPattern(config_.beam_rings);
+  transmittance_.assign(scene_.materials().size(), 0.0);
+  for (std::size_t m = 0; m < transmittance_.size(); ++m) {
+    for (const auto& [name, t] : config_.material_transmittance) {
+      if (scene_.materials()[m].name == name) transmittance_[m] = t;
+    }
+    any_transmissive_ = any_transmissive_ || transmittance_[m] > 0.0;
+  }
+  const std::size_t firings = kSequencesPerBatch * kLasers;
+  firings_.resize(firings);
+  queries_.resize(firings * pattern_.size());
+  hits_.resize(queries_.size());
+  returns_.resize(queries_.size() * static_cast<std::size_t>(config_.max_surfaces_per_ray));
+  return_counts_.resize(firings);
 }
 
 Seconds Vlp16Caster::FiringTime(int64_t sequence_index, int laser_id) const {
@@ -77,84 +130,193 @@ void Vlp16Caster::AdvanceSpinRate() {
   spin_rate_degps_ = config_.rpm * 6.0 * (1.0 + config_.rpm_jitter_frac * spin_error_);
 }
 
-void Vlp16Caster::PlanSequence(const std::function<Pose3(Seconds)>& T_world_lidar_at, Vlp16FiringSequence* seq,
-                               Firing* firings) {
+void Vlp16Caster::SequencePoses(const PoseFn& T_world_lidar_at) {
+  if (config_.pose_per_firing) return;
+  pose_start_ = have_next_pose_ ? pose_next_ : T_world_lidar_at(FiringTime(next_sequence_, 0));
+  pose_next_ = T_world_lidar_at(FiringTime(next_sequence_ + 1, 0));  // the next sequence's start pose
+  have_next_pose_ = true;
+}
+
+// Head azimuth of laser i: a0 + w * i * 2.304 us; its cosine/sine by rotating the previous laser's by one step.
+void Vlp16Caster::PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequence* seq, Firing* firings,
+                               RayQuery* queries) {
   seq->t_s = FiringTime(next_sequence_, 0);
   seq->azimuth_centideg = static_cast<uint16_t>(std::llround(head_azimuth_deg_ * 100.0) % 36000);
+  const double step_rad = spin_rate_degps_ * kVlp16FiringPeriodS * kDegToRad;
+  const double cos_step = std::cos(step_rad), sin_step = std::sin(step_rad);
+  double cos_a = std::cos(head_azimuth_deg_ * kDegToRad), sin_a = std::sin(head_azimuth_deg_ * kDegToRad);
+  const double tan_h = std::tan(0.5e-3 * config_.beam_divergence_horizontal_mrad);
+  const double tan_v = std::tan(0.5e-3 * config_.beam_divergence_vertical_mrad);
+  const std::size_t k_rays = pattern_.size();
+  SequencePoses(T_world_lidar_at);
+  // Linear interpolation of the pose matrix over 55 us: the rotation is orthonormal to ~(w dt)^2 / 8 (< 1e-8 for
+  // w < 3 rad/s), far below the 2 mm range unit; directions are normalised below.
+  const Eigen::Matrix3d dR = pose_next_.linear() - pose_start_.linear();
+  const Eigen::Vector3d dt = pose_next_.translation() - pose_start_.translation();
+  Pose3 T_world_lidar = pose_start_;
   for (int i = 0; i < kLasers; ++i) {
     Firing& f = firings[i];
     f.t_s = FiringTime(next_sequence_, i);
-    const double azimuth_rad = (head_azimuth_deg_ + spin_rate_degps_ * i * kVlp16FiringPeriodS) * kDegToRad;
-    const Pose3 T_world_lidar = T_world_lidar_at(f.t_s);
+    if (config_.pose_per_firing) {
+      T_world_lidar = T_world_lidar_at(f.t_s);
+    } else {
+      const double s = i * (kVlp16FiringPeriodS / kVlp16SequencePeriodS);
+      T_world_lidar.linear() = pose_start_.linear() + s * dR;
+      T_world_lidar.translation() = pose_start_.translation() + s * dt;
+    }
     f.origin_world = T_world_lidar * Vlp16RayOrigin(intrinsics_.vertical_offset_m[i]);
-    const Eigen::Vector3d dir_lidar = Vlp16RayDirection(intrinsics_.elevation_deg[i] * kDegToRad, azimuth_rad);
+    const double ce = cos_elevation_[i], se = sin_elevation_[i];
+    const Eigen::Vector3d dir_lidar(ce * cos_a, -ce * sin_a, se);  // = Vlp16RayDirection(elev_i, a_i)
     f.dir_world = (T_world_lidar.linear() * dir_lidar).normalized();
+    queries[i * k_rays] = RayQuery{f.origin_world, f.dir_world, config_.max_range_m};
+    if (k_rays > 1) {  // footprint axes: along the scan (d dir / d azimuth) and across it (d dir / d elevation)
+      const Eigen::Vector3d u_h = T_world_lidar.linear() * Eigen::Vector3d(-sin_a, -cos_a, 0.0);
+      const Eigen::Vector3d u_v = T_world_lidar.linear() * Eigen::Vector3d(-se * cos_a, se * sin_a, ce);
+      for (std::size_t k = 1; k < k_rays; ++k) {
+        const Eigen::Vector3d d = f.dir_world + pattern_[k].x * tan_h * u_h + pattern_[k].y * tan_v * u_v;
+        queries[i * k_rays + k] = RayQuery{f.origin_world, d.normalized(), config_.max_range_m};
+      }
+    }
+    const double c = cos_a * cos_step - sin_a * sin_step;
+    sin_a = sin_a * cos_step + cos_a * sin_step;
+    cos_a = c;
   }
   ++next_sequence_;
   AdvanceSpinRate();
 }
 
-void Vlp16Caster::Measure(const Firing& firing, const RayHit& hit, int laser_id, uint16_t* distance_2mm,
-                          uint8_t* reflectivity, LidarTruthPoint* truth) {
-  const double noise_m = config_.range_noise_sigma_m * range_rng_.Normal();  // drawn for every firing
-  *distance_2mm = 0;
-  *reflectivity = 0;
-  truth->t_s = firing.t_s;
-  truth->laser_id = static_cast<uint8_t>(laser_id);
-  truth->hit = hit.hit;
-  truth->returned = false;
-  if (!hit.hit) return;
-  truth->true_range_m = hit.distance_m;
-  truth->p_world = firing.origin_world + hit.distance_m * firing.dir_world;
-
-  const double cos_incidence = -hit.normal_world.dot(firing.dir_world);
-  if (cos_incidence < cos_grazing_cutoff_ || cos_incidence <= 0.0) return;
-  const Material& material = scene_.material(hit.material_id);
-  const double s = material.albedo * cos_incidence * std::exp(-config_.intensity_attenuation_per_m * hit.distance_m);
-  if (100.0 * s < config_.min_intensity_for_return) return;
-  const double measured_m = hit.distance_m + noise_m;
-  if (measured_m < config_.min_range_m || measured_m > config_.max_range_m) return;
-  const long long units = std::llround(measured_m / kVlp16DistanceUnitM);
-  if (units <= 0 || units > 65535) return;
-
-  *distance_2mm = static_cast<uint16_t>(units);
-  const long long byte = material.retroreflective ? 101 + std::llround(154.0 * s) : std::llround(100.0 * s);
-  *reflectivity = static_cast<uint8_t>(std::clamp<long long>(byte, 0, 255));
-  truth->returned = true;
+// Casts the batch's queries, then follows sub-rays through transmissive surfaces (one more Embree call per
+// surface depth, for the sub-rays that crossed one), collecting each firing's surface returns in returns_.
+void Vlp16Caster::CastBatch(std::size_t n_firings) {
+  const std::size_t k_rays = pattern_.size();
+  const std::size_t capacity = k_rays * static_cast<std::size_t>(config_.max_surfaces_per_ray);
+  std::fill(return_counts_.begin(), return_counts_.begin() + static_cast<std::ptrdiff_t>(n_firings), 0);
+  std::size_t n = n_firings * k_rays;
+  scene_.IntersectBatch(queries_.data(), n, hits_.data());
+  const RayQuery* queries = queries_.data();
+  const RayHit* hits = hits_.data();
+  for (int depth = 0; n > 0; ++depth) {
+    next_info_.clear();
+    next_queries_.clear();
+    for (std::size_t q = 0; q < n; ++q) {
+      const RayHit& hit = hits[q];
+      if (!hit.hit) continue;
+      // Pass 0: query q is sub-ray q of the batch; later passes carry (sub-ray, path transmittance so far).
+      const std::size_t ray = depth == 0 ? q : pass_info_[q].first;
+      const double path_t = depth == 0 ? 1.0 : pass_info_[q].second;
+      const std::size_t firing = ray / k_rays;
+      const RayQuery& query = queries[q];
+      const double range_m =
+          depth == 0 ? hit.distance_m : (query.origin_world - queries_[ray].origin_world).norm() + hit.distance_m;
+      const double cos_incidence = -hit.normal_world.dot(query.dir_world);
+      const Material& material = scene_.material(hit.material_id);
+      const double t = transmittance_[static_cast<std::size_t>(hit.material_id)];
+      SurfaceReturn& r = returns_[firing * capacity + static_cast<std::size_t>(return_counts_[firing]++)];
+      r.range_m = range_m;
+      r.retroreflective = material.retroreflective;
+      r.power = (cos_incidence < cos_grazing_cutoff_ || cos_incidence <= 0.0)
+                    ? 0.0
+                    : pattern_[ray % k_rays].weight * path_t * path_t * (1.0 - t) * material.albedo *
+                          cos_incidence * std::exp(-config_.intensity_attenuation_per_m * range_m);
+      if (t > 0.0 && depth + 1 < config_.max_surfaces_per_ray && range_m + kPassThroughM < config_.max_range_m) {
+        next_info_.emplace_back(ray, path_t * t);
+        next_queries_.push_back(RayQuery{query.origin_world + (hit.distance_m + kPassThroughM) * query.dir_world,
+                                         query.dir_world, config_.max_range_m - range_m - kPassThroughM});
+      }
+    }
+    if (next_queries_.empty()) break;
+    pass_queries_.swap(next_queries_);
+    pass_info_.swap(next_info_);
+    pass_hits_.resize(pass_queries_.size());
+    scene_.IntersectBatch(pass_queries_.data(), pass_queries_.size(), pass_hits_.data());
+    queries = pass_queries_.data();
+    hits = pass_hits_.data();
+    n = pass_queries_.size();
+  }
 }
 
-void Vlp16Caster::Fire(int num_sequences, const std::function<Pose3(Seconds)>& T_world_lidar_at,
-                       std::vector<Vlp16FiringSequence>* out, std::vector<LidarTruthPoint>* truth_out) {
+// Forms the firing's echoes, picks the reported ones, adds noise and writes the wire fields (and *truth, when
+// not null).
+void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int laser_id, Vlp16FiringSequence* seq,
+                          LidarTruthPoint* truth) {
+  const bool dual = config_.return_mode == Vlp16ReturnMode::kDual;
+  double noise_m[2] = {config_.range_noise_sigma_m * range_rng_.Normal(), 0.0};  // drawn for every firing
+  if (dual) noise_m[1] = config_.range_noise_sigma_m * range_rng_.Normal();
+  const std::size_t k_rays = pattern_.size();
+  const std::size_t capacity = k_rays * static_cast<std::size_t>(config_.max_surfaces_per_ray);
+  if (truth) {
+    const RayHit& central = hits_[firing_index * k_rays];
+    *truth = LidarTruthPoint();
+    truth->t_s = firing.t_s;
+    truth->laser_id = static_cast<uint8_t>(laser_id);
+    truth->hit = central.hit;
+    truth->origin_world = firing.origin_world;
+    truth->dir_world = firing.dir_world;
+    if (central.hit) {
+      truth->true_range_m = central.distance_m;
+      truth->p_world = firing.origin_world + central.distance_m * firing.dir_world;
+    }
+  }
+  echoes_.clear();
+  const std::size_t n_returns = static_cast<std::size_t>(return_counts_[firing_index]);
+  const SurfaceReturn* first = &returns_[firing_index * capacity];
+  if (n_returns == 1 && first->power > 0.0) {  // the common case of a single surface: one echo, nothing to merge
+    echoes_.push_back(Echo{first->range_m, first->power, first->retroreflective});
+  } else {
+    FormEchoes(&returns_[firing_index * capacity], n_returns, config_.echo_separation_m, &echoes_);
+  }
+  const EchoChoice choice = ChooseEchoes(echoes_, config_.return_mode, config_.min_intensity_for_return,
+                                         config_.min_range_m, config_.max_range_m);
+  const int slots[2] = {choice.primary, dual ? choice.secondary : -1};
+  uint16_t distance[2] = {0, 0};
+  uint8_t reflectivity[2] = {0, 0};
+  for (int s = 0; s < 2; ++s) {
+    if (slots[s] < 0) continue;
+    const Echo& e = echoes_[static_cast<std::size_t>(slots[s])];
+    // One echo reported twice (dual mode, single echo) is one measurement: identical blocks (manual 9.3.2).
+    const double measured_m = e.range_m + noise_m[s == 1 && slots[1] == slots[0] ? 0 : s];
+    if (measured_m < config_.min_range_m || measured_m > config_.max_range_m) continue;
+    const long long units = static_cast<long long>(measured_m / kVlp16DistanceUnitM + 0.5);  // > 0: rounds
+    if (units <= 0 || units > 65535) continue;
+    distance[s] = static_cast<uint16_t>(units);
+    const double p = std::min(e.power, 1.0);
+    const long long byte = e.retroreflective ? 101 + static_cast<long long>(154.0 * p + 0.5)
+                                             : static_cast<long long>(100.0 * p + 0.5);
+    reflectivity[s] = static_cast<uint8_t>(std::clamp<long long>(byte, 0, 255));
+    if (truth) truth->echo_range_m[static_cast<std::size_t>(s)] = e.range_m;
+  }
+  if (truth) {
+    truth->returned = distance[0] != 0;
+    truth->returned2 = dual && distance[1] != 0;
+  }
+  seq->distance_2mm[laser_id] = distance[0];
+  seq->reflectivity[laser_id] = reflectivity[0];
+  seq->distance2_2mm[laser_id] = dual ? distance[1] : distance[0];
+  seq->reflectivity2[laser_id] = dual ? reflectivity[1] : reflectivity[0];
+}
+
+void Vlp16Caster::Fire(int num_sequences, const PoseFn& T_world_lidar_at, std::vector<Vlp16FiringSequence>* out,
+                       std::vector<LidarTruthPoint>* truth_out) {
   ROTOLIDAR_CHECK(out != nullptr, "Fire needs an output");
   ROTOLIDAR_CHECK(num_sequences >= 0, "num_sequences = " << num_sequences);
-  std::vector<Firing> firings(kSequencesPerBatch * kLasers);
-  std::vector<RayQuery> queries(firings.size());
-  std::vector<RayHit> hits(firings.size());
   out->reserve(out->size() + static_cast<std::size_t>(num_sequences));
   if (truth_out) truth_out->reserve(truth_out->size() + static_cast<std::size_t>(num_sequences) * kLasers);
-
+  const std::size_t k_rays = pattern_.size();
   for (int done = 0; done < num_sequences; done += kSequencesPerBatch) {
     const int n_seq = std::min(kSequencesPerBatch, num_sequences - done);
     const std::size_t first = out->size();
     out->resize(first + static_cast<std::size_t>(n_seq));
     for (int s = 0; s < n_seq; ++s) {
-      PlanSequence(T_world_lidar_at, &(*out)[first + s], &firings[static_cast<std::size_t>(s) * kLasers]);
+      const std::size_t f0 = static_cast<std::size_t>(s) * kLasers;
+      PlanSequence(T_world_lidar_at, &(*out)[first + s], &firings_[f0], &queries_[f0 * k_rays]);
     }
-    const std::size_t n_rays = static_cast<std::size_t>(n_seq) * kLasers;
-    for (std::size_t r = 0; r < n_rays; ++r) {
-      queries[r] = RayQuery{firings[r].origin_world, firings[r].dir_world, config_.max_range_m};
-    }
-    scene_.IntersectBatch(queries.data(), n_rays, hits.data());
+    CastBatch(static_cast<std::size_t>(n_seq) * kLasers);
     for (int s = 0; s < n_seq; ++s) {
-      Vlp16FiringSequence& seq = (*out)[first + s];
       for (int i = 0; i < kLasers; ++i) {
-        const std::size_t r = static_cast<std::size_t>(s) * kLasers + i;
-        LidarTruthPoint truth;
-        Measure(firings[r], hits[r], i, &seq.distance_2mm[i], &seq.reflectivity[i], &truth);
-        if (truth_out) truth_out->push_back(truth);
+        const std::size_t f = static_cast<std::size_t>(s) * kLasers + i;
+        LidarTruthPoint* truth = truth_out ? &truth_out->emplace_back() : nullptr;
+        Measure(firings_[f], f, i, &(*out)[first + s], truth);
       }
-      seq.distance2_2mm = seq.distance_2mm;
-      seq.reflectivity2 = seq.reflectivity;
     }
   }
 }

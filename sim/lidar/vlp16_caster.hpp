@@ -1,26 +1,35 @@
 #pragma once
-// The simulated VLP-16 head: keeps the firing schedule (../shared/docs/sensor_facts.md), casts each laser's ray
+// The simulated VLP-16 head: keeps the firing schedule (../shared/docs/sensor_facts.md), casts each laser's beam
 // into the EmbreeScene from the lidar pose at that laser's own firing time, and produces the firing sequences the
-// packet encoder turns into wire bytes, plus per-ray ground truth for the bench.
+// packet encoder turns into wire bytes, plus per-firing ground truth for the bench. Every model and the source of
+// its numbers: docs/lidar_model.md.
 //
 // Schedule: sequence k (counted from construction, across Fire calls) starts at t0_s + k * 55.296 us; laser i of
 // it fires at + i * 2.304 us. The head azimuth a(t) grows at the spin rate (rpm, optionally with a seeded,
 // slowly varying speed error); a sequence's azimuth_centideg is a(t_k) rounded to 0.01 deg, while each ray is
 // cast at the exact a(t_k + i * 2.304 us), which the decoder's interpolation between sequences reproduces.
-// Ray of laser i in the lidar frame: origin Vlp16RayOrigin(offset_i) + r * Vlp16RayDirection(elev_i, a) (shared
-// with the decoder in core/io/vlp16.hpp).
+// Central ray of laser i in the lidar frame: origin Vlp16RayOrigin(offset_i) + r * Vlp16RayDirection(elev_i, a)
+// (shared with the decoder in core/io/vlp16.hpp). Pose: T_world_lidar at each firing time, exactly
+// (pose_per_firing) or interpolated between the exact poses at the two sequence starts around it (55.296 us
+// apart; the default, measured against the exact poses in tests/sim/test_vlp16_caster.cpp).
 //
-// Range model: r_meas = r_true + N(0, range_noise_sigma_m), quantised to 2 mm. No return (distance 0) when the
-// ray hits nothing within max_range_m, r_meas is outside [min_range_m, max_range_m], the incidence angle exceeds
-// grazing_cutoff_deg, or the diffuse intensity below falls under min_intensity_for_return.
-// Reflectivity model (docs/scene_format.md): with theta the incidence angle and r the true range,
-//   s = albedo * cos(theta) * exp(-intensity_attenuation_per_m * r)          (in [0, 1])
-//   diffuse:          byte = round(100 * s)           (0..100; the VLP-16 calibrates out 1/r^2)
-//   retroreflective:  byte = 101 + round(154 * s)     (101..255)
-// Dual-return fields repeat the primary return.
+// Beam and echoes (vlp16_echoes.hpp): beam_rings = 0 casts the central ray only; > 0 samples the divergent beam
+// with sub-rays, so a spot straddling an edge returns a mixed (power-weighted) range or two echoes >= 1 m apart.
+// Transmissive materials (glass) pass part of the power on to the surfaces behind them.
+// Range model: each reported echo's range + N(0, range_noise_sigma_m), quantised to 2 mm. No return (distance 0)
+// when nothing is hit within max_range_m, the range is outside [min_range_m, max_range_m], every contributing
+// surface is beyond grazing_cutoff_deg, or the echo's intensity 100 * power falls under min_intensity_for_return.
+// Reflectivity byte of an echo of power s (in [0, 1]): diffuse round(100 s) (0..100; the VLP-16 calibrates out
+// 1/r^2), retroreflective 101 + round(154 s) (101..255), with per surface s = albedo * cos(incidence) *
+// exp(-intensity_attenuation_per_m * r) times the sub-ray's beam weight.
+// Return mode: single modes put the strongest / last echo in distance_2mm; dual mode puts the last echo there and
+// the strongest (the second strongest when the strongest is the last) in distance2_2mm, identical when there is
+// only one echo (manual 9.3.2). In single modes distance2_2mm repeats distance_2mm.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -29,6 +38,7 @@
 #include "core/types/calib.hpp"
 #include "core/types/geometry.hpp"
 #include "core/util/rng.hpp"
+#include "sim/lidar/vlp16_echoes.hpp"
 #include "sim/world/embree_scene.hpp"
 
 namespace rotolidar::sim {
@@ -49,34 +59,60 @@ struct Vlp16CasterConfig {
   double grazing_cutoff_deg = 85.0;          ///< incidence angles above this give no return
   double min_intensity_for_return = 1.0;     ///< on the 0..100 diffuse scale (100 * s); 1.0 drops albedo < 1 %
   double intensity_attenuation_per_m = 0.004;  ///< residual range falloff of the reported byte (CARLA's default)
+  /// Which echoes the sequences carry; keep equal to the packet encoder's mode (SimConfig::return_mode).
+  Vlp16ReturnMode return_mode = Vlp16ReturnMode::kStrongest;
+  /// Beam footprint: 0 = central ray only (no divergence, no mixed points); n = 1..4 rings of sub-rays
+  /// (7, 19, 37, 61 rays per firing; the cost grows accordingly).
+  int beam_rings = 0;
+  double beam_divergence_horizontal_mrad = 3.0;  ///< full angle, 1/e^2, along the scan (VLP-16 datasheet copies)
+  double beam_divergence_vertical_mrad = 1.5;    ///< full angle, 1/e^2, across the scan
+  /// Returns closer than this merge into one echo (the manual: both returns only for objects >= 1 m apart).
+  double echo_separation_m = 1.0;
+  /// Materials (by scene name) that pass a fraction of the power on, e.g. {"window_glass", 0.9}; a sub-ray meets
+  /// at most max_surfaces_per_ray surfaces.
+  std::vector<std::pair<std::string, double>> material_transmittance;
+  int max_surfaces_per_ray = 3;
+  /// true: T_world_lidar_at is called for every laser firing; false: at each sequence start, interpolated between.
+  bool pose_per_firing = false;
 
   /// True when usable; otherwise false with the field named in *error.
   bool Validate(std::string* error) const;
 };
 
-/// Ground truth of one ray (bench only). `hit`: the ray met geometry within max_range_m (whether or not the
-/// sensor reported it); `returned`: the sequence carries a non-zero distance for it.
+/// Checks that every material_transmittance name exists among `materials` (message names the material).
+Status CheckCasterMaterials(const Vlp16CasterConfig& config, const std::vector<Material>& materials);
+
+/// Ground truth of one laser firing (bench only). `hit`: the central ray met geometry within max_range_m (whether
+/// or not the sensor reported it); `returned`: distance_2mm is non-zero; `returned2`: distance2_2mm is.
+/// A decoded point of slot s lies at origin_world + echo_range_m[s] * dir_world, up to noise and quantisation.
 struct LidarTruthPoint {
   Seconds t_s = 0.0;   ///< firing time
   uint8_t laser_id = 0;
   bool hit = false;
   bool returned = false;
-  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  ///< exact hit point (valid when hit)
-  double true_range_m = 0.0;  ///< from the laser's origin, before noise and quantisation
+  bool returned2 = false;
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  ///< exact first hit of the central ray (valid when hit)
+  double true_range_m = 0.0;  ///< of p_world from the laser's origin
+  Eigen::Vector3d origin_world = Eigen::Vector3d::Zero();  ///< the laser's origin at its firing time
+  Eigen::Vector3d dir_world = Eigen::Vector3d::UnitX();    ///< unit central ray
+  std::array<double, 2> echo_range_m{};  ///< noise-free range of the echo in slot 0 / 1 (0 = none)
 };
 
 /// Stateful: each Fire call continues the schedule (sequence counter, head azimuth, random streams) where the
 /// previous one stopped. Deterministic for a given (scene, intrinsics, config, run_seed, call pattern): the
-/// random streams "lidar.range" and "lidar.rpm" draw one value per firing / per sequence regardless of hits.
-/// The scene must outlive the caster. Not thread-safe (one caster per thread).
+/// random stream "lidar.range" draws one value per firing (two in dual mode) and "lidar.rpm" one per sequence,
+/// regardless of hits. The scene must outlive the caster. Not thread-safe (one caster per thread).
 class Vlp16Caster {
  public:
-  /// Throws InternalError (a programmer error) if config.Validate fails: validate configs at the edges.
+  /// Throws InternalError (a programmer error) if config.Validate or CheckCasterMaterials fails: validate configs
+  /// at the edges.
   Vlp16Caster(const EmbreeScene& scene, const LidarIntrinsics& intrinsics, const Vlp16CasterConfig& config,
               uint64_t run_seed);
 
-  /// Fires `num_sequences` sequences. T_world_lidar_at(t) is called once per laser firing, in time order.
-  /// Appends to *out and (when not null) 16 truth points per sequence to *truth_out.
+  /// Fires `num_sequences` sequences. T_world_lidar_at(t) is called with non-decreasing times: with
+  /// pose_per_firing once per laser firing, otherwise once per sequence start, including the start of the
+  /// sequence after the last one fired (55.296 us ahead). Appends to *out and (when not null) 16 truth points per
+  /// sequence to *truth_out.
   void Fire(int num_sequences, const std::function<Pose3(Seconds)>& T_world_lidar_at,
             std::vector<Vlp16FiringSequence>* out, std::vector<LidarTruthPoint>* truth_out);
 
@@ -84,17 +120,20 @@ class Vlp16Caster {
   Seconds FiringTime(int64_t sequence_index, int laser_id) const;
   int64_t sequences_fired() const { return next_sequence_; }
   const Vlp16CasterConfig& config() const { return config_; }
+  int rays_per_firing() const { return static_cast<int>(pattern_.size()); }
 
  private:
-  struct Firing {  // one laser shot awaiting its hit
+  struct Firing {  // one laser shot awaiting its hits
     Seconds t_s;
     Eigen::Vector3d origin_world;
-    Eigen::Vector3d dir_world;
+    Eigen::Vector3d dir_world;  // unit central ray
   };
-  void PlanSequence(const std::function<Pose3(Seconds)>& T_world_lidar_at, Vlp16FiringSequence* seq,
-                    Firing* firings);
-  void Measure(const Firing& firing, const RayHit& hit, int laser_id, uint16_t* distance_2mm,
-               uint8_t* reflectivity, LidarTruthPoint* truth);
+  using PoseFn = std::function<Pose3(Seconds)>;
+  void PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequence* seq, Firing* firings, RayQuery* queries);
+  void SequencePoses(const PoseFn& T_world_lidar_at);  ///< pose_start_/pose_next_ of the sequence to plan
+  void CastBatch(std::size_t n_firings);
+  void Measure(const Firing& firing, std::size_t firing_index, int laser_id, Vlp16FiringSequence* seq,
+               LidarTruthPoint* truth);
   void AdvanceSpinRate();
 
   const EmbreeScene& scene_;
@@ -107,6 +146,24 @@ class Vlp16Caster {
   double spin_error_ = 0.0;         ///< Gauss-Markov state, unit variance
   double spin_rate_degps_ = 0.0;    ///< during the next sequence
   double cos_grazing_cutoff_ = 0.0;
+  std::array<double, 16> cos_elevation_{}, sin_elevation_{};
+  std::vector<BeamSample> pattern_;
+  std::vector<double> transmittance_;  ///< per material id (0 = opaque)
+  bool any_transmissive_ = false;
+  // Pose at the start of the sequence being planned and of the next one (interpolation mode).
+  bool have_next_pose_ = false;
+  Pose3 pose_start_ = Pose3::Identity(), pose_next_ = Pose3::Identity();
+  // Per-batch scratch, reused across calls: firings, queries (pattern_.size() per firing), and the surface
+  // returns of each firing (capacity rays * max_surfaces_per_ray each).
+  std::vector<Firing> firings_;
+  std::vector<RayQuery> queries_;
+  std::vector<RayHit> hits_;
+  std::vector<SurfaceReturn> returns_;
+  std::vector<int> return_counts_;
+  std::vector<RayQuery> pass_queries_, next_queries_;  ///< sub-rays continuing behind transmissive surfaces
+  std::vector<RayHit> pass_hits_;
+  std::vector<std::pair<std::size_t, double>> pass_info_, next_info_;  ///< (sub-ray index, path transmittance)
+  std::vector<Echo> echoes_;
 };
 
 }  // namespace rotolidar::sim

@@ -63,7 +63,11 @@ uint32_t EncoderModel::Quantise(double raw_angle_rad, double noise_counts) const
 }
 
 EncoderSample EncoderModel::Sample(const RotorMotion& rotor, Seconds t) {
-  const double raw = rotor.AngleAt(t - config_.latency_s) + config_.zero_offset_rad;
+  return SampleAngle(t, rotor.AngleAt(t - config_.latency_s));
+}
+
+EncoderSample EncoderModel::SampleAngle(Seconds t, double theta_rad) {
+  const double raw = theta_rad + config_.zero_offset_rad;
   const double noise = config_.noise_sigma_counts > 0 ? config_.noise_sigma_counts * noise_.Normal() : 0.0;
   return EncoderSample{t, Quantise(raw, noise)};
 }
@@ -76,6 +80,47 @@ std::vector<EncoderSample> EncoderModel::SampleRange(const RotorMotion& rotor, S
   out.reserve(static_cast<size_t>(n + 1));
   for (long i = 0; i <= n; ++i) out.push_back(Sample(rotor, t0 + static_cast<double>(i) * dt));
   return out;
+}
+
+EncoderStream::EncoderStream(const EncoderConfig& config, uint64_t run_seed) : quantiser_(config, run_seed) {}
+
+void EncoderStream::Push(const RotorJointState& state, std::vector<EncoderSample>* out) {
+  ROTOLIDAR_CHECK(std::isfinite(state.t_s) && std::isfinite(state.theta_rad) && std::isfinite(state.omega_radps),
+                  "non-finite rotor state at t " << state.t_s);
+  ROTOLIDAR_CHECK(history_.empty() || state.t_s > history_.back().t_s,
+                  "states must come in increasing time: " << state.t_s << " after " << history_.back().t_s);
+  const EncoderConfig& c = quantiser_.config();
+  const double period = 1.0 / c.rate_hz;
+  if (!started_) {
+    next_k_ = static_cast<int64_t>(std::ceil(state.t_s / period - 1e-9));
+    started_ = true;
+  }
+  history_.push_back(state);
+  for (;;) {
+    const double t_k = static_cast<double>(next_k_) * period;
+    if (t_k > state.t_s + 1e-9) break;
+    out->push_back(quantiser_.SampleAngle(t_k, TrueAngleAt(t_k - c.latency_s)));
+    ++next_k_;
+  }
+  // Keep what the next samples can still ask for: everything after (now - latency) plus the state before it.
+  const double keep_after = state.t_s - c.latency_s - period;
+  while (history_.size() > 2 && history_[1].t_s < keep_after) history_.pop_front();
+}
+
+double EncoderStream::TrueAngleAt(Seconds t) const {
+  ROTOLIDAR_CHECK(!history_.empty(), "no state pushed yet");
+  const RotorJointState& first = history_.front();
+  if (t <= first.t_s) return first.theta_rad + first.omega_radps * (t - first.t_s);
+  const RotorJointState& last = history_.back();
+  if (t >= last.t_s) return last.theta_rad + last.omega_radps * (t - last.t_s);
+  // The segment [a, b] holding t (history is short: a linear scan from the back is cheapest).
+  size_t i = history_.size() - 1;
+  while (history_[i - 1].t_s > t) --i;
+  const RotorJointState& a = history_[i - 1];
+  const RotorJointState& b = history_[i];
+  const double h = b.t_s - a.t_s, s = (t - a.t_s) / h, s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * a.theta_rad + (s3 - 2 * s2 + s) * h * a.omega_radps +
+         (-2 * s3 + 3 * s2) * b.theta_rad + (s3 - s2) * h * b.omega_radps;
 }
 
 }  // namespace rotolidar::sim

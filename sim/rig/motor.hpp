@@ -2,9 +2,11 @@
 // The rotor (motor shaft carrying the LiDAR) and its shaft encoder.
 //
 // Rotor angle theta [rad] is the rotation of the rotor frame about the motor z axis (core/types/calib.hpp:
-// T_base_rotor(theta) = T_base_motor * RotZ(theta)). RotorMotion is an interface: today a constant-speed rotor,
-// later a stepper model or MuJoCo dynamics.
+// T_base_rotor(theta) = T_base_motor * RotZ(theta)). RotorMotion is an interface for rotors known as a function
+// of time (ConstantSpeedRotor here, ProfileRotor in sim/rig/motor_profile.hpp); a rotor integrated by physics is
+// driven through sim/rig/rotor_drive.hpp and sampled by EncoderStream. See docs/motor_model.md.
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,7 @@
 #include "core/types/messages.hpp"
 #include "core/types/time.hpp"
 #include "core/util/rng.hpp"
+#include "sim/rig/rotor_drive.hpp"
 
 namespace rotolidar::sim {
 
@@ -73,6 +76,9 @@ class EncoderModel {
 
   /// One sample stamped `t`.
   EncoderSample Sample(const RotorMotion& rotor, Seconds t);
+  /// One sample stamped `t` for a given true angle theta_rad (the caller has already applied the latency:
+  /// theta_rad is the angle at t - latency_s). Draws the noise.
+  EncoderSample SampleAngle(Seconds t, double theta_rad);
   /// Samples at t0, t0 + 1/rate_hz, ... while t <= t1 (t1 >= t0).
   std::vector<EncoderSample> SampleRange(const RotorMotion& rotor, Seconds t0, Seconds t1);
   /// Quantises a raw encoder angle (theta + zero offset, any real value) to a count in [0, counts_per_rev).
@@ -82,6 +88,32 @@ class EncoderModel {
  private:
   EncoderConfig config_;
   RandomStream noise_;
+};
+
+/// The same encoder fed by a stream of TRUE joint states (a rotor integrated by physics) instead of a function of
+/// time. Samples lie on the grid t_k = k * (1 / rate_hz) (k integer, the grid of EncoderModel::SampleRange from
+/// 0); the first is the first grid time >= the first state's time. Sample t_k reports the angle at t_k - latency_s,
+/// interpolated (cubic Hermite on theta and omega) between the two pushed states around it; before the first
+/// state it extrapolates that state at constant speed. Noise and quantisation as EncoderModel, from the same
+/// stream RandomStream(run_seed, "encoder.noise"), so for the same seed and the same true angles both produce
+/// the same counts. Not thread-safe.
+class EncoderStream {
+ public:
+  EncoderStream(const EncoderConfig& config, uint64_t run_seed);  ///< config must Validate (ROTOLIDAR_CHECK)
+
+  /// Adds the true state (t_s strictly increasing, ROTOLIDAR_CHECK) and appends to *out every sample stamped
+  /// <= state.t_s (+1e-9 s for rounding of accumulated physics times) not emitted yet, in time order.
+  void Push(const RotorJointState& state, std::vector<EncoderSample>* out);
+  /// The true angle [rad] at time t interpolated from the pushed history (t >= the oldest kept state minus any
+  /// amount: extrapolated as described above; kept history covers latency_s plus two pushes).
+  double TrueAngleAt(Seconds t) const;
+  const EncoderConfig& config() const { return quantiser_.config(); }
+
+ private:
+  EncoderModel quantiser_;  // owns the noise stream and the quantisation
+  std::deque<RotorJointState> history_;
+  int64_t next_k_ = 0;  ///< grid index of the next sample
+  bool started_ = false;
 };
 
 }  // namespace rotolidar::sim

@@ -1,7 +1,10 @@
-// Embree 3 scene: one triangle geometry for the whole mesh, robust traversal (no leaks along shared edges).
+// Embree 3 scene: one triangle geometry for the static mesh (instanced when dynamic objects exist), one instance
+// per dynamic object; robust traversal (no leaks along shared edges).
 #include "sim/world/embree_scene.hpp"
 
 #include <limits>
+
+#include "sim/world/scene_dynamic.hpp"
 #include <sstream>
 
 namespace rotolidar::sim {
@@ -72,7 +75,63 @@ bool UsableRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double
   return origin.allFinite() && dir.allFinite() && dir.squaredNorm() > 0.0 && t_max > 0.0;
 }
 
+void SetTransform(RTCGeometry instance, const Eigen::Isometry3d& T) {
+  float xfm[12];  // 3x4 column major: the rotation's columns, then the translation
+  for (int c = 0; c < 4; ++c) {
+    for (int r = 0; r < 3; ++r) xfm[3 * c + r] = static_cast<float>(T.matrix()(r, c));
+  }
+  rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+  rtcCommitGeometry(instance);
+}
+
+RTCScene NewScene(RTCDevice device, bool top_level) {
+  RTCScene scene = rtcNewScene(device);
+  rtcSetSceneFlags(scene, top_level ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC : RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene, top_level ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_HIGH);
+  return scene;
+}
+
+/// Instances `child` into `top`, returns its geometry id.
+unsigned AttachInstance(RTCDevice device, RTCScene top, RTCScene child, const Eigen::Isometry3d& T) {
+  RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+  rtcSetGeometryInstancedScene(instance, child);
+  rtcSetGeometryTimeStepCount(instance, 1);
+  SetTransform(instance, T);
+  const unsigned id = rtcAttachGeometry(top, instance);
+  rtcReleaseGeometry(instance);
+  return id;
+}
+
 }  // namespace
+
+Status EmbreeScene::AddTriangles(RTCScene target, const TriangleMesh& mesh, Part* part) {
+  if (Status s = CheckMesh(mesh); !s) return s;
+  RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), mesh.vertices_m.size()));
+  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                 3 * sizeof(unsigned), mesh.triangles.size()));
+  if (!vertices || !indices) {
+    rtcReleaseGeometry(geom);
+    return DeviceStatus(device_, "buffer allocation");
+  }
+  for (std::size_t v = 0; v < mesh.vertices_m.size(); ++v) {
+    for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(mesh.vertices_m[v][k]);
+  }
+  part->front_normals.reserve(mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Eigen::Vector3i& tri = mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) indices[3 * t + k] = static_cast<unsigned>(tri[k]);
+    const Eigen::Vector3d& a = mesh.vertices_m[tri[0]];
+    part->front_normals.push_back((mesh.vertices_m[tri[1]] - a).cross(mesh.vertices_m[tri[2]] - a).normalized());
+  }
+  part->material_ids = mesh.material_ids;
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(target, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(target);
+  return DeviceStatus(device_, "scene commit");
+}
 
 Status EmbreeScene::Create(const TriangleMesh& mesh, std::unique_ptr<EmbreeScene>* out) {
   ROTOLIDAR_CHECK(out != nullptr, "EmbreeScene::Create needs an output");
@@ -81,57 +140,94 @@ Status EmbreeScene::Create(const TriangleMesh& mesh, std::unique_ptr<EmbreeScene
   es->device_ = rtcNewDevice(nullptr);
   if (!es->device_) return DeviceStatus(nullptr, "rtcNewDevice");
   rtcSetDeviceErrorFunction(es->device_, EmbreeErrorToLog, nullptr);
-  es->scene_ = rtcNewScene(es->device_);
-  rtcSetSceneFlags(es->scene_, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(es->scene_, RTC_BUILD_QUALITY_HIGH);
-
-  RTCGeometry geom = rtcNewGeometry(es->device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), mesh.vertices_m.size()));
-  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                 3 * sizeof(unsigned), mesh.triangles.size()));
-  if (!vertices || !indices) {
-    rtcReleaseGeometry(geom);
-    return DeviceStatus(es->device_, "buffer allocation");
-  }
-  for (std::size_t v = 0; v < mesh.vertices_m.size(); ++v) {
-    for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(mesh.vertices_m[v][k]);
-  }
-  es->front_normals_.reserve(mesh.triangles.size());
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Eigen::Vector3i& tri = mesh.triangles[t];
-    for (int k = 0; k < 3; ++k) indices[3 * t + k] = static_cast<unsigned>(tri[k]);
-    const Eigen::Vector3d& a = mesh.vertices_m[tri[0]];
-    es->front_normals_.push_back(
-        (mesh.vertices_m[tri[1]] - a).cross(mesh.vertices_m[tri[2]] - a).normalized());
-  }
-  rtcCommitGeometry(geom);
-  rtcAttachGeometry(es->scene_, geom);
-  rtcReleaseGeometry(geom);
-  rtcCommitScene(es->scene_);
-  if (Status s = DeviceStatus(es->device_, "scene commit"); !s) return s;
-  es->material_ids_ = mesh.material_ids;
+  es->scene_ = NewScene(es->device_, false);
+  if (Status s = es->AddTriangles(es->scene_, mesh, &es->static_part_); !s) return s;
   es->materials_ = mesh.materials;
   *out = std::move(es);
   return Status::Ok();
 }
 
+Status EmbreeScene::AddObject(const Scene& scene, const DynamicObject& object) {
+  Object o;
+  o.description = object;
+  o.scene = NewScene(device_, false);
+  objects_.push_back(o);  // owned from here on (released in the destructor)
+  Object& added = objects_.back();
+  if (Status s = AddTriangles(added.scene, BuildObjectMesh(scene, object), &added.part); !s) {
+    return Status::Error(s.message + " (dynamic object '" + object.name + "')");
+  }
+  added.instance_id = AttachInstance(device_, scene_, added.scene, Eigen::Isometry3d::Identity());
+  if (object_of_instance_.size() <= added.instance_id) object_of_instance_.resize(added.instance_id + 1, -1);
+  object_of_instance_[added.instance_id] = static_cast<int>(objects_.size()) - 1;
+  return Status::Ok();
+}
+
+Status EmbreeScene::Create(const Scene& scene, std::unique_ptr<EmbreeScene>* out, Seconds t0) {
+  ROTOLIDAR_CHECK(out != nullptr, "EmbreeScene::Create needs an output");
+  const TriangleMesh mesh = BuildMesh(scene);
+  if (scene.dynamic_objects.empty()) return Create(mesh, out);
+  if (Status s = CheckMesh(mesh); !s) return s;
+  std::unique_ptr<EmbreeScene> es(new EmbreeScene());
+  es->device_ = rtcNewDevice(nullptr);
+  if (!es->device_) return DeviceStatus(nullptr, "rtcNewDevice");
+  rtcSetDeviceErrorFunction(es->device_, EmbreeErrorToLog, nullptr);
+  es->scene_ = NewScene(es->device_, true);
+  es->static_scene_ = NewScene(es->device_, false);
+  if (Status s = es->AddTriangles(es->static_scene_, mesh, &es->static_part_); !s) return s;
+  es->static_instance_id_ = AttachInstance(es->device_, es->scene_, es->static_scene_, Eigen::Isometry3d::Identity());
+  es->object_of_instance_.assign(es->static_instance_id_ + 1, -1);
+  es->objects_.reserve(scene.dynamic_objects.size());
+  for (const DynamicObject& object : scene.dynamic_objects) {
+    if (Status s = es->AddObject(scene, object); !s) return s;
+  }
+  es->materials_ = mesh.materials;
+  es->SetTime(t0);
+  if (Status s = DeviceStatus(es->device_, "top-level commit"); !s) return s;
+  *out = std::move(es);
+  return Status::Ok();
+}
+
+void EmbreeScene::SetTime(Seconds t) {
+  time_s_ = t;
+  if (objects_.empty()) return;
+  for (Object& o : objects_) {
+    o.T_world_body = DynamicObjectPose(o.description, t);
+    SetTransform(rtcGetGeometry(scene_, o.instance_id), o.T_world_body);
+  }
+  rtcCommitScene(scene_);
+}
+
+std::size_t EmbreeScene::num_triangles() const {
+  std::size_t n = static_part_.front_normals.size();
+  for (const Object& o : objects_) n += o.part.front_normals.size();
+  return n;
+}
+
 EmbreeScene::~EmbreeScene() {
   if (scene_) rtcReleaseScene(scene_);
+  if (static_scene_) rtcReleaseScene(static_scene_);
+  for (Object& o : objects_) {
+    if (o.scene) rtcReleaseScene(o.scene);
+  }
   if (device_) rtcReleaseDevice(device_);
 }
 
 void EmbreeScene::FillHit(const RTCRayHit& rh, const Eigen::Vector3d& dir_unit, RayHit* out) const {
   *out = RayHit();
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return;
-  const int tri = static_cast<int>(rh.hit.primID);
-  const Eigen::Vector3d& n = front_normals_[static_cast<std::size_t>(tri)];
+  const unsigned instance = rh.hit.instID[0];
+  const int object = instance == RTC_INVALID_GEOMETRY_ID ? -1 : object_of_instance_[instance];
+  const Part& part = object < 0 ? static_part_ : objects_[static_cast<std::size_t>(object)].part;
+  const std::size_t tri = rh.hit.primID;
+  Eigen::Vector3d n = part.front_normals[tri];
+  if (object >= 0) n = objects_[static_cast<std::size_t>(object)].T_world_body.linear() * n;
   out->hit = true;
   out->distance_m = rh.ray.tfar;
   out->front_face = n.dot(dir_unit) < 0.0;
   out->normal_world = out->front_face ? n : Eigen::Vector3d(-n);
-  out->material_id = material_ids_[static_cast<std::size_t>(tri)];
-  out->triangle_id = tri;
+  out->material_id = part.material_ids[tri];
+  out->triangle_id = static_cast<int>(tri);
+  out->object_id = object;
 }
 
 RayHit EmbreeScene::Intersect(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& dir_world,

@@ -1,16 +1,28 @@
 #pragma once
-// Ray casting against the scene's triangle mesh with Embree 3 (the LiDAR's geometry engine).
+// Ray casting against the scene's triangles with Embree 3 (the LiDAR's geometry engine), including dynamic
+// objects (people, cars) that move with time.
 //
 // Precision: Embree works in float; in a room-sized scene (|coordinates| < 100 m) hit distances are good to
-// ~1e-5 m, far below the VLP-16's 2 mm distance unit.
-// Thread safety: after Create, Intersect and IntersectBatch are const and may run concurrently from any threads.
+// ~1e-5 m, far below the VLP-16's 2 mm distance unit (at 500 m from the origin: ~5e-5 m).
+//
+// Dynamic objects: each object's body mesh is its own Embree scene, instanced into the top-level scene with its
+// pose at the current time; the static world is one more instance (identity) so that moving an object never
+// rebuilds the static BVH. SetTime(t) recomputes every object's pose (scene_dynamic.hpp), updates the instance
+// transforms and recommits the top level: a rebuild over (objects + 1) instances, O(N log N) in the number of
+// objects and independent of the triangle count (measured ~10-30 us for 10 objects; see docs/scene_format.md).
+// A scene without dynamic objects is one flat triangle geometry, as fast as before.
+//
+// Thread safety: after Create, Intersect and IntersectBatch are const and may run concurrently from any
+// threads; SetTime must not run concurrently with them (call it between packets).
 #include <cstddef>
 #include <memory>
 #include <vector>
 
 #include <embree3/rtcore.h>
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
+#include "core/types/time.hpp"
 #include "core/util/log.hpp"
 #include "sim/world/scene.hpp"
 
@@ -23,7 +35,10 @@ struct RayHit {
   Eigen::Vector3d normal_world = Eigen::Vector3d::Zero();  ///< unit, turned to face the ray origin (n . dir <= 0)
   bool front_face = false;  ///< the ray struck the triangle's front side (mesh winding), e.g. a room wall's inside
   int material_id = -1;     ///< index into materials(); -1 when no hit
-  int triangle_id = -1;     ///< index into the mesh's triangles; -1 when no hit
+  /// -1 when no hit; the static mesh's triangle index when object_id == -1, else the index into that object's
+  /// body mesh (BuildObjectMesh).
+  int triangle_id = -1;
+  int object_id = -1;  ///< -1: the static world (or no hit); k: Scene::dynamic_objects[k]
 };
 
 /// One ray for the batched call. `dir_world` need not be unit; it is normalised.
@@ -33,17 +48,29 @@ struct RayQuery {
   double t_max_m = 1e3;  ///< hits farther than this are ignored
 };
 
-/// Owns an RTCDevice and a committed RTCScene built from one TriangleMesh. Not copyable or movable
-/// (hand it around by reference or unique_ptr). Embree errors are logged through rotolidar's logging.
+/// Owns an RTCDevice and a committed RTCScene. Not copyable or movable (hand it around by reference or
+/// unique_ptr). Embree errors are logged through rotolidar's logging.
 class EmbreeScene {
  public:
-  /// Builds the acceleration structure. Fails (with the triangle/vertex index named) on an empty mesh,
-  /// out-of-range indices or material ids, non-finite vertices, or an Embree device/scene error.
+  /// Builds the acceleration structure of a static mesh. Fails (with the triangle/vertex index named) on an
+  /// empty mesh, out-of-range indices or material ids, non-finite vertices, degenerate triangles, or an Embree
+  /// device/scene error.
   static Status Create(const TriangleMesh& mesh, std::unique_ptr<EmbreeScene>* out);
+
+  /// The scene's static world (BuildMesh) plus its dynamic objects, posed at time t0. The scene must be valid.
+  static Status Create(const Scene& scene, std::unique_ptr<EmbreeScene>* out, Seconds t0 = 0.0);
 
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  /// Moves every dynamic object to its pose at time t and recommits (no-op without dynamic objects).
+  /// Not thread-safe against Intersect/IntersectBatch.
+  void SetTime(Seconds t);
+  Seconds time() const { return time_s_; }
+  std::size_t num_dynamic_objects() const { return objects_.size(); }
+  /// T_world_body of dynamic object k at the current time.
+  const Eigen::Isometry3d& object_pose(std::size_t k) const { return objects_.at(k).T_world_body; }
 
   /// Closest hit along origin + t * dir for t in (0, t_max_m]. `dir_world` need not be unit (it is normalised);
   /// a zero direction or non-positive t_max gives no hit.
@@ -55,17 +82,37 @@ class EmbreeScene {
 
   const Material& material(int id) const { return materials_.at(static_cast<std::size_t>(id)); }
   const std::vector<Material>& materials() const { return materials_; }
-  std::size_t num_triangles() const { return front_normals_.size(); }
+  /// Static triangles plus every dynamic object's body triangles.
+  std::size_t num_triangles() const;
 
  private:
+  /// A triangle set with its per-triangle data (the static world or one object's body, in its own frame).
+  struct Part {
+    std::vector<Eigen::Vector3d> front_normals;  ///< per triangle, unit, by winding, in the part's frame
+    std::vector<int> material_ids;
+  };
+  struct Object {
+    DynamicObject description;
+    RTCScene scene = nullptr;
+    unsigned instance_id = 0;  ///< geometry id of its instance in the top-level scene
+    Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+    Part part;
+  };
+
   EmbreeScene() = default;
+  Status AddTriangles(RTCScene target, const TriangleMesh& mesh, Part* part);
+  Status AddObject(const Scene& scene, const DynamicObject& object);
   void FillHit(const RTCRayHit& rh, const Eigen::Vector3d& dir_unit, RayHit* out) const;
 
   RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
-  std::vector<Eigen::Vector3d> front_normals_;  ///< per triangle, unit, by winding
-  std::vector<int> material_ids_;
+  RTCScene scene_ = nullptr;          ///< what rays traverse
+  RTCScene static_scene_ = nullptr;   ///< with dynamic objects: the static world, instanced with identity
+  unsigned static_instance_id_ = RTC_INVALID_GEOMETRY_ID;
+  Part static_part_;
+  std::vector<Object> objects_;
+  std::vector<int> object_of_instance_;  ///< top-level geometry id -> object index (-1: the static world)
   std::vector<Material> materials_;
+  Seconds time_s_ = 0.0;
 };
 
 }  // namespace rotolidar::sim

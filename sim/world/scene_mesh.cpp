@@ -1,8 +1,9 @@
-// Scene validation and tessellation into the shared triangle mesh.
+// Scene validation and tessellation into the shared triangle mesh (static world, dynamic objects posed at t).
 #include <cmath>
 #include <sstream>
 
 #include "sim/world/scene.hpp"
+#include "sim/world/scene_dynamic.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -14,16 +15,17 @@ bool Fail(std::string* error, const std::string& message) {
   return false;
 }
 
-bool ValidMaterialRef(int id, const Scene& scene, bool optional) {
+bool ValidMaterialRef(int id, const std::vector<Material>& materials, bool optional) {
   if (optional && id == -1) return true;
-  return id >= 0 && id < static_cast<int>(scene.materials.size());
+  return id >= 0 && id < static_cast<int>(materials.size());
 }
 
-bool ValidatePrimitive(const Primitive& p, const Scene& scene, std::string* error) {
+bool ValidatePrimitive(const Primitive& p, const std::vector<Material>& materials, std::size_t num_meshes,
+                       std::string* error) {
   const std::string where = "primitive '" + p.name + "': ";
   if (!p.center_m.allFinite() || !p.rpy_rad.allFinite()) return Fail(error, where + "non-finite center/rpy");
-  if (!ValidMaterialRef(p.material_id, scene, false) || !ValidMaterialRef(p.floor_material_id, scene, true) ||
-      !ValidMaterialRef(p.ceiling_material_id, scene, true)) {
+  if (!ValidMaterialRef(p.material_id, materials, false) || !ValidMaterialRef(p.floor_material_id, materials, true) ||
+      !ValidMaterialRef(p.ceiling_material_id, materials, true)) {
     return Fail(error, where + "unknown material");
   }
   switch (p.type) {
@@ -38,6 +40,64 @@ bool ValidatePrimitive(const Primitive& p, const Scene& scene, std::string* erro
       if (!(p.height_m > 0.0)) return Fail(error, where + "height must be > 0");
       if (p.segments < 3 || p.segments > 1024) return Fail(error, where + "segments must be in [3, 1024]");
       break;
+    case PrimitiveType::kMesh:
+      if (p.mesh_id < 0 || p.mesh_id >= static_cast<int>(num_meshes)) return Fail(error, where + "unknown mesh");
+      if (!(p.scale.minCoeff() > 0.0) || !p.scale.allFinite()) return Fail(error, where + "scale must be > 0");
+      break;
+  }
+  return true;
+}
+
+bool ValidateMaterial(const Material& m, const std::vector<TextureSpec>& textures, std::string* error) {
+  const std::string where = "material '" + m.name + "': ";
+  if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return Fail(error, where + "albedo not in [0, 1]");
+  if (!(m.color_rgb.minCoeff() >= 0.0 && m.color_rgb.maxCoeff() <= 1.0)) {
+    return Fail(error, where + "color entries not in [0, 1]");
+  }
+  if (!m.texture.empty() && !FindTexture(textures, m.texture)) {
+    return Fail(error, where + "unknown texture '" + m.texture + "'");
+  }
+  return true;
+}
+
+bool ValidateElement(const AnnotatedElement& e, std::string* error) {
+  const std::string where = "element '" + e.name + "': ";
+  if (e.type != "door" && e.type != "window" && e.type != "column") {
+    return Fail(error, where + "type must be door, window or column");
+  }
+  if (!(e.width_m > 0.0 && e.height_m > 0.0)) return Fail(error, where + "width/height <= 0");
+  if (!(e.depth_m >= 0.0) || !e.center_m.allFinite() || !std::isfinite(e.yaw_rad)) {
+    return Fail(error, where + "depth < 0 or non-finite pose");
+  }
+  return true;
+}
+
+bool ValidatePath(const std::string& carrier, const std::vector<Waypoint2d>& path, const Eigen::AlignedBox3d& bounds,
+                  std::string* error) {
+  const std::string where = "path '" + carrier + "': ";
+  if (carrier != "handheld" && carrier != "wheeled" && carrier != "car") {
+    return Fail(error, where + "carrier must be handheld, wheeled or car");
+  }
+  if (path.size() < 2) return Fail(error, where + "needs >= 2 waypoints");
+  for (size_t i = 0; i < path.size(); ++i) {
+    const Waypoint2d& w = path[i];
+    const Eigen::Vector2d xy(w.x_m, w.y_m);
+    if (!xy.allFinite() || !(w.dwell_s >= 0.0)) return Fail(error, where + "waypoint " + std::to_string(i) + " bad");
+    if ((xy.array() < bounds.min().head<2>().array()).any() || (xy.array() > bounds.max().head<2>().array()).any()) {
+      return Fail(error, where + "waypoint " + std::to_string(i) + " is outside the bounds");
+    }
+  }
+  return true;
+}
+
+bool ValidateLighting(const SceneLighting& l, std::string* error) {
+  const auto unit = [](double x) { return x >= 0.0 && x <= 1.0; };
+  if (!unit(l.ambient) || !unit(l.headlight)) return Fail(error, "lighting: ambient/headlight not in [0, 1]");
+  if (!(l.sky_rgb.minCoeff() >= 0.0 && l.sky_rgb.maxCoeff() <= 1.0)) return Fail(error, "lighting: sky not in [0, 1]");
+  for (const SceneLight& light : l.lights) {
+    if (!unit(light.intensity) || !(light.direction.norm() > 1e-9) || !light.position_m.allFinite()) {
+      return Fail(error, "lighting: a light has intensity outside [0, 1], no direction or a bad position");
+    }
   }
   return true;
 }
@@ -53,6 +113,15 @@ void AppendQuad(const Primitive& p, int primitive_id, TriangleMesh* mesh) {
   // Front side = local +z.
   mesh->AddTriangle(base, base + 1, base + 2, p.material_id, primitive_id);
   mesh->AddTriangle(base, base + 2, base + 3, p.material_id, primitive_id);
+}
+
+void AppendMeshAsset(const Primitive& p, const MeshAsset& asset, int primitive_id, TriangleMesh* mesh) {
+  const Eigen::Matrix3d R = p.Rotation();
+  const int base = static_cast<int>(mesh->vertices_m.size());
+  for (const Eigen::Vector3d& v : asset.vertices_m) mesh->vertices_m.push_back(p.center_m + R * p.scale.cwiseProduct(v));
+  for (const Eigen::Vector3i& t : asset.triangles) {
+    mesh->AddTriangle(base + t[0], base + t[1], base + t[2], p.material_id, primitive_id);
+  }
 }
 
 void AppendCylinder(const Primitive& p, int primitive_id, TriangleMesh* mesh) {
@@ -95,27 +164,44 @@ int Scene::FindMaterial(const std::string& material_name) const {
   return -1;
 }
 
+Eigen::Isometry3d AnnotatedElement::T_world_element() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = center_m;
+  return T;
+}
+
 bool Scene::Validate(std::string* error) const {
   if (materials.empty()) return Fail(error, "scene has no materials");
   for (size_t i = 0; i < materials.size(); ++i) {
-    const Material& m = materials[i];
-    if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return Fail(error, "material '" + m.name + "': albedo not in [0, 1]");
+    if (!ValidateMaterial(materials[i], textures, error)) return false;
     for (size_t j = 0; j < i; ++j) {
-      if (materials[j].name == m.name) return Fail(error, "material '" + m.name + "' defined twice");
+      if (materials[j].name == materials[i].name) {
+        return Fail(error, "material '" + materials[i].name + "' defined twice");
+      }
     }
   }
+  for (const TextureSpec& t : textures) {
+    if (!t.Validate(error)) return false;
+  }
   if (primitives.empty()) return Fail(error, "scene has no primitives");
+  for (const MeshAsset& m : meshes) {
+    if (m.triangles.empty()) return Fail(error, "mesh '" + m.file + "' has no triangles");
+  }
   for (const Primitive& p : primitives) {
-    if (!ValidatePrimitive(p, *this, error)) return false;
+    if (!ValidatePrimitive(p, materials, meshes.size(), error)) return false;
   }
   if (bounds.isEmpty()) return Fail(error, "bounds: min must be < max");
   for (const AnnotatedElement& e : elements) {
-    if (e.type != "door" && e.type != "window" && e.type != "column") {
-      return Fail(error, "element '" + e.name + "': type must be door, window or column");
-    }
-    if (!(e.width_m > 0.0 && e.height_m > 0.0)) return Fail(error, "element '" + e.name + "': width/height <= 0");
+    if (!ValidateElement(e, error)) return false;
   }
-  return true;
+  for (const DynamicObject& o : dynamic_objects) {
+    if (!ValidateDynamicObject(o, *this, error)) return false;
+  }
+  for (const auto& [carrier, path] : default_paths) {
+    if (!ValidatePath(carrier, path, bounds, error)) return false;
+  }
+  return ValidateLighting(lighting, error);
 }
 
 void TriangleMesh::AddTriangle(int a, int b, int c, int material_id, int primitive_id) {
@@ -162,12 +248,11 @@ Primitive MakeRoom(const std::string& name, const Eigen::Vector3d& center_m, con
   return p;
 }
 
-TriangleMesh BuildMesh(const Scene& scene) {
-  TriangleMesh mesh;
-  mesh.materials = scene.materials;
-  for (size_t i = 0; i < scene.primitives.size(); ++i) {
-    const Primitive& p = scene.primitives[i];
-    ROTOLIDAR_CHECK(p.material_id >= 0 && p.material_id < static_cast<int>(scene.materials.size()),
+void AppendPrimitives(const std::vector<Primitive>& primitives, const std::vector<MeshAsset>& meshes,
+                      TriangleMesh* mesh) {
+  for (size_t i = 0; i < primitives.size(); ++i) {
+    const Primitive& p = primitives[i];
+    ROTOLIDAR_CHECK(p.material_id >= 0 && p.material_id < static_cast<int>(mesh->materials.size()),
                     "primitive '" << p.name << "' has material id " << p.material_id);
     const int id = static_cast<int>(i);
     switch (p.type) {
@@ -175,14 +260,47 @@ TriangleMesh BuildMesh(const Scene& scene) {
         const int floor = p.floor_material_id >= 0 ? p.floor_material_id : p.material_id;
         const int ceiling = p.ceiling_material_id >= 0 ? p.ceiling_material_id : p.material_id;
         const std::array<int, 6> faces{p.material_id, p.material_id, p.material_id, p.material_id, floor, ceiling};
-        AppendBox(p.center_m, p.Rotation(), p.size_m, p.inward, faces, id, &mesh);
+        AppendBox(p.center_m, p.Rotation(), p.size_m, p.inward, faces, id, mesh);
         break;
       }
-      case PrimitiveType::kQuad: AppendQuad(p, id, &mesh); break;
-      case PrimitiveType::kCylinder: AppendCylinder(p, id, &mesh); break;
+      case PrimitiveType::kQuad: AppendQuad(p, id, mesh); break;
+      case PrimitiveType::kCylinder: AppendCylinder(p, id, mesh); break;
+      case PrimitiveType::kMesh:
+        ROTOLIDAR_CHECK(p.mesh_id >= 0 && p.mesh_id < static_cast<int>(meshes.size()),
+                        "primitive '" << p.name << "' has mesh id " << p.mesh_id);
+        AppendMeshAsset(p, meshes[static_cast<size_t>(p.mesh_id)], id, mesh);
+        break;
+    }
+  }
+}
+
+TriangleMesh BuildMesh(const Scene& scene) {
+  TriangleMesh mesh;
+  mesh.materials = scene.materials;
+  AppendPrimitives(scene.primitives, scene.meshes, &mesh);
+  return mesh;
+}
+
+TriangleMesh BuildMeshAt(const Scene& scene, Seconds t) {
+  TriangleMesh mesh = BuildMesh(scene);
+  for (size_t k = 0; k < scene.dynamic_objects.size(); ++k) {
+    const DynamicObject& object = scene.dynamic_objects[k];
+    const TriangleMesh body = BuildObjectMesh(scene, object);
+    const Eigen::Isometry3d T_world_body = DynamicObjectPose(object, t);
+    const int base = static_cast<int>(mesh.vertices_m.size());
+    for (const Eigen::Vector3d& v : body.vertices_m) mesh.vertices_m.push_back(T_world_body * v);
+    for (size_t i = 0; i < body.triangles.size(); ++i) {
+      const Eigen::Vector3i& tri = body.triangles[i];
+      mesh.AddTriangle(base + tri[0], base + tri[1], base + tri[2], body.material_ids[i], -1 - static_cast<int>(k));
     }
   }
   return mesh;
+}
+
+Eigen::AlignedBox3d TriangleMesh::Bounds() const {
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& v : vertices_m) box.extend(v);
+  return box;
 }
 
 }  // namespace rotolidar::sim

@@ -1,0 +1,1 @@
+#include "bench/perf/lidar_perf.hpp"

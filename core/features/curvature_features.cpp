@@ -1,0 +1,318 @@
+#include "core/features/curvature_features.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <thread>
+
+#include "core/util/log.hpp"
+
+namespace rotolidar {
+namespace {
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// Azimuth advance [deg] from a point fired earlier to one fired later on the same ring, in [0, 360).
+float StepDeg(float from_deg, float to_deg) {
+  const float d = to_deg - from_deg;
+  return d < 0.f ? d + 360.f : d;
+}
+
+/// One ring in firing order. Stage 1 (one task per ring) fills it; stage 2 (one task per sector) reads it and
+/// writes `picked` and the labels only at the positions of its own sector, so no two tasks share a written byte.
+struct Ring {
+  std::vector<int> index;        ///< input indices, by firing time
+  std::vector<uint8_t> step_ok;  ///< step_ok[j]: positions j and j+1 are neighbours
+  std::vector<float> c;          ///< Eq. 3 per position, NaN without a window
+  std::vector<int> sector;       ///< sector per position
+  std::vector<uint8_t> picked;   ///< LOAM's "neighbour picked": not selectable any more
+};
+
+struct Context {
+  const std::vector<ScanPoint>& points;
+  const FeatureConfig& config;
+  std::vector<Ring> rings;
+  std::vector<FeatureLabel> labels;  ///< per input point
+};
+
+struct SectorOutput {
+  pcl::PointCloud<pcl::PointXYZI> edge, planar, less_sharp, less_flat;
+};
+
+/// Runs fn(0..n-1) on up to `threads` threads. Each call must write only its own outputs; the first exception
+/// thrown by any call is rethrown here after all threads joined.
+void ParallelFor(int n, int threads, const std::function<void(int)>& fn) {
+  const int workers = std::max(1, std::min(threads, n));
+  if (workers == 1) {
+    for (int i = 0; i < n; ++i) fn(i);
+    return;
+  }
+  std::atomic<int> next{0};
+  std::vector<std::exception_ptr> errors(workers);
+  auto work = [&](int w) {
+    try {
+      for (int i = next++; i < n; i = next++) fn(i);
+    } catch (...) {
+      errors[w] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
+  work(0);
+  for (auto& t : pool) t.join();
+  for (auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+/// A depth jump between two neighbouring returns (occlusion boundary or a surface almost along the beam).
+bool IsDepthJump(const FeatureConfig& cfg, float r_a, float r_b) {
+  const double jump = std::abs(double(r_a) - double(r_b));
+  return jump > std::max(cfg.occlusion_min_jump_m, cfg.occlusion_jump_ratio * std::min(r_a, r_b));
+}
+
+/// Eq. 3 over positions of `index` (firing order); step_ok as in Ring.
+std::vector<float> CurvatureOf(const std::vector<ScanPoint>& points, const std::vector<int>& index,
+                               const std::vector<uint8_t>& step_ok, int n_side) {
+  const int n = static_cast<int>(index.size());
+  std::vector<int> bad_before(n + 1, 0);  // bad_before[j]: number of bad steps among steps 0..j-1
+  for (int j = 0; j + 1 < n; ++j) bad_before[j + 1] = bad_before[j] + (step_ok[j] ? 0 : 1);
+  std::vector<float> c(n, kNaN);
+  for (int i = n_side; i + n_side < n; ++i) {
+    if (bad_before[i + n_side] != bad_before[i - n_side]) continue;  // the window crosses a gap
+    const Eigen::Vector3f& x_i = points[index[i]].p_base;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int j = i - n_side; j <= i + n_side; ++j) sum += (x_i - points[index[j]].p_base).cast<double>();
+    c[i] = static_cast<float>(sum.norm() / (2.0 * n_side * points[index[i]].range_m));
+  }
+  return c;
+}
+
+std::vector<uint8_t> StepsOk(const std::vector<ScanPoint>& points, const std::vector<int>& index, double max_deg) {
+  std::vector<uint8_t> ok(index.empty() ? 0 : index.size() - 1);
+  for (std::size_t j = 0; j < ok.size(); ++j)
+    ok[j] = StepDeg(points[index[j]].azimuth_deg, points[index[j + 1]].azimuth_deg) <= max_deg;
+  return ok;
+}
+
+/// LOAM's occluded-point rule: at a depth jump between neighbours, the N+1 points on the far side next to it.
+void MarkOccluded(const Context& ctx, const Ring& ring, std::vector<uint8_t>* occluded) {
+  const int n = static_cast<int>(ring.index.size()), n_side = ctx.config.neighbours;
+  for (int j = 0; j + 1 < n; ++j) {
+    if (!ring.step_ok[j]) continue;
+    const float r_a = ctx.points[ring.index[j]].range_m, r_b = ctx.points[ring.index[j + 1]].range_m;
+    if (!IsDepthJump(ctx.config, r_a, r_b)) continue;
+    const int first = r_a > r_b ? j - n_side : j + 1, last = r_a > r_b ? j : j + 1 + n_side;
+    for (int q = std::max(0, first); q <= std::min(n - 1, last); ++q) (*occluded)[q] = 1;
+  }
+}
+
+/// LOAM's beam-parallel rule, noise-robust: the incidence from the range slope over N steps, on both sides.
+bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
+  const int n_side = ctx.config.neighbours;
+  const double tan_max = std::tan(ctx.config.beam_parallel_max_incidence_deg * kDegToRad);
+  const ScanPoint& p = ctx.points[ring.index[i]];
+  for (const int q : {i - n_side, i + n_side}) {
+    const ScanPoint& o = ctx.points[ring.index[q]];
+    const double gamma_rad = (q < i ? StepDeg(o.azimuth_deg, p.azimuth_deg) : StepDeg(p.azimuth_deg, o.azimuth_deg)) *
+                             kDegToRad;  // angle between the rays (ignores cos(elevation) <= 3.5 %)
+    if (std::abs(double(o.range_m) - double(p.range_m)) <= tan_max * p.range_m * gamma_rad) return false;
+  }
+  return true;
+}
+
+// Stage 1, one ring: firing order, steps, curvature, sectors and the rejection labels.
+void AnalyseRing(Context* ctx, Ring* ring) {
+  const std::vector<ScanPoint>& pts = ctx->points;
+  const FeatureConfig& cfg = ctx->config;
+  std::sort(ring->index.begin(), ring->index.end(), [&](int a, int b) {
+    return pts[a].t_s < pts[b].t_s || (pts[a].t_s == pts[b].t_s && a < b);
+  });
+  const int n = static_cast<int>(ring->index.size());
+  ring->step_ok = StepsOk(pts, ring->index, cfg.max_neighbour_step_deg);
+  ring->c = CurvatureOf(pts, ring->index, ring->step_ok, cfg.neighbours);
+  ring->picked.assign(n, 0);
+  ring->sector.resize(n);
+  const double sector_deg = 360.0 / cfg.sectors;
+  std::vector<uint8_t> occluded(n, 0);
+  if (cfg.reject_occluded) MarkOccluded(*ctx, *ring, &occluded);
+  for (int i = 0; i < n; ++i) {
+    const int s = static_cast<int>(std::floor(pts[ring->index[i]].azimuth_deg / sector_deg));
+    ring->sector[i] = std::clamp(s, 0, cfg.sectors - 1);
+    FeatureLabel& label = ctx->labels[ring->index[i]];
+    if (std::isnan(ring->c[i])) label = FeatureLabel::kNoWindow;
+    else if (occluded[i]) label = FeatureLabel::kOccluded;
+    else if (cfg.reject_beam_parallel && IsBeamParallel(*ctx, *ring, i)) label = FeatureLabel::kBeamParallel;
+    else label = FeatureLabel::kUnused;
+  }
+}
+
+/// Marks the +-N neighbours of a pick in the same sector as picked, up to a gap or a depth jump (LOAM).
+void Suppress(const Context& ctx, int sector, int p, Ring* ring) {
+  const int n = static_cast<int>(ring->index.size());
+  for (const int dir : {-1, 1}) {
+    for (int s = 1; s <= ctx.config.neighbours; ++s) {
+      const int q = p + dir * s, prev = q - dir;
+      if (q < 0 || q >= n || ring->sector[q] != sector || !ring->step_ok[std::min(q, prev)]) break;
+      if (IsDepthJump(ctx.config, ctx.points[ring->index[q]].range_m, ctx.points[ring->index[prev]].range_m)) break;
+      ring->picked[q] = 1;
+    }
+  }
+}
+
+pcl::PointXYZI ToPcl(const ScanPoint& p, float c) {
+  pcl::PointXYZI out;
+  out.x = p.p_base.x(), out.y = p.p_base.y(), out.z = p.p_base.z();
+  out.intensity = c;
+  return out;
+}
+
+// Stage 2, one (ring, sector) cell: LOAM's selection, sharpest first, then flattest, then the less-flat set.
+void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
+  const FeatureConfig& cfg = ctx->config;
+  std::vector<int> cand;  // selectable positions of this cell
+  for (int i = 0; i < static_cast<int>(ring->index.size()); ++i)
+    if (ring->sector[i] == sector && ctx->labels[ring->index[i]] == FeatureLabel::kUnused) cand.push_back(i);
+  std::sort(cand.begin(), cand.end(), [&](int a, int b) {
+    return ring->c[a] > ring->c[b] || (ring->c[a] == ring->c[b] && a < b);
+  });
+  int n_edge = 0, n_sharp = 0, n_planar = 0;
+  auto take = [&](int p, FeatureLabel label, pcl::PointCloud<pcl::PointXYZI>* cloud) {
+    ctx->labels[ring->index[p]] = label;
+    cloud->push_back(ToPcl(ctx->points[ring->index[p]], ring->c[p]));
+    ring->picked[p] = 1;
+    Suppress(*ctx, sector, p, ring);
+  };
+  for (const int p : cand) {
+    if (n_sharp >= cfg.less_sharp_per_sector || !(ring->c[p] > cfg.edge_threshold)) break;
+    if (ring->picked[p]) continue;
+    const bool edge = n_edge < cfg.edges_per_sector;
+    take(p, edge ? FeatureLabel::kEdge : FeatureLabel::kLessSharp, &out->less_sharp);
+    if (edge) {
+      out->edge.push_back(out->less_sharp.back());
+      ++n_edge;
+    }
+    ++n_sharp;
+  }
+  for (auto it = cand.rbegin(); it != cand.rend(); ++it) {
+    if (n_planar >= cfg.planars_per_sector || !(ring->c[*it] < cfg.planar_threshold)) break;
+    if (ring->picked[*it]) continue;
+    take(*it, FeatureLabel::kPlanar, &out->planar);
+    ++n_planar;
+  }
+  std::sort(cand.begin(), cand.end());  // firing order for the less-flat set
+  for (const int p : cand) {
+    FeatureLabel& label = ctx->labels[ring->index[p]];
+    if ((label != FeatureLabel::kUnused && label != FeatureLabel::kPlanar) || !(ring->c[p] < cfg.edge_threshold))
+      continue;
+    if (label == FeatureLabel::kUnused) label = FeatureLabel::kLessFlat;
+    out->less_flat.push_back(ToPcl(ctx->points[ring->index[p]], ring->c[p]));
+  }
+}
+
+pcl::PointCloud<pcl::PointXYZI> Downsample(const pcl::PointCloud<pcl::PointXYZI>& cloud, double voxel_m) {
+  if (voxel_m <= 0.0) return cloud;
+  std::vector<Eigen::Vector3f> positions(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) positions[i] = cloud[i].getVector3fMap();
+  pcl::PointCloud<pcl::PointXYZI> out;
+  for (const std::size_t i : VoxelRepresentatives(positions, voxel_m)) out.push_back(cloud[i]);
+  return out;
+}
+
+FeatureStats CountLabels(const std::vector<FeatureLabel>& labels, const FeatureSet& set, std::size_t less_flat_raw) {
+  FeatureStats s;
+  s.num_input = labels.size();
+  for (const FeatureLabel l : labels) {
+    s.num_invalid += l == FeatureLabel::kInvalid;
+    s.num_no_window += l == FeatureLabel::kNoWindow;
+    s.num_occluded += l == FeatureLabel::kOccluded;
+    s.num_beam_parallel += l == FeatureLabel::kBeamParallel;
+  }
+  s.num_edge = set.edge.size(), s.num_planar = set.planar.size(), s.num_less_sharp = set.less_sharp.size();
+  s.num_less_flat_raw = less_flat_raw, s.num_less_flat = set.less_flat.size();
+  return s;
+}
+
+}  // namespace
+
+bool FeatureConfig::Validate(std::string* error) const {
+  auto fail = [&](const std::string& field, const std::string& rule, double got) {
+    if (error) {
+      std::ostringstream os;
+      os << "features." << field << " must be " << rule << " (got " << got << ")";
+      *error = os.str();
+    }
+    return false;
+  };
+  if (sectors < 1 || sectors > 360) return fail("sectors", "in [1, 360]", sectors);
+  if (edges_per_sector < 0) return fail("edges_per_sector", ">= 0", edges_per_sector);
+  if (planars_per_sector < 0) return fail("planars_per_sector", ">= 0", planars_per_sector);
+  if (less_sharp_per_sector < edges_per_sector)
+    return fail("less_sharp_per_sector", ">= edges_per_sector", less_sharp_per_sector);
+  if (neighbours < 1) return fail("neighbours", ">= 1", neighbours);
+  if (!(edge_threshold > 0.0) || !std::isfinite(edge_threshold)) return fail("edge_threshold", "finite and > 0", edge_threshold);
+  if (!(planar_threshold > 0.0) || !(planar_threshold <= edge_threshold))
+    return fail("planar_threshold", "> 0 and <= edge_threshold", planar_threshold);
+  if (!(max_neighbour_step_deg > 0.0) || !(max_neighbour_step_deg < 180.0))
+    return fail("max_neighbour_step_deg", "in (0, 180)", max_neighbour_step_deg);
+  if (!(occlusion_min_jump_m >= 0.0)) return fail("occlusion_min_jump_m", ">= 0", occlusion_min_jump_m);
+  if (!(occlusion_jump_ratio >= 0.0)) return fail("occlusion_jump_ratio", ">= 0", occlusion_jump_ratio);
+  if (!(beam_parallel_max_incidence_deg > 0.0) || !(beam_parallel_max_incidence_deg < 90.0))
+    return fail("beam_parallel_max_incidence_deg", "in (0, 90)", beam_parallel_max_incidence_deg);
+  if (!(less_flat_voxel_m >= 0.0) || !std::isfinite(less_flat_voxel_m))
+    return fail("less_flat_voxel_m", "finite and >= 0", less_flat_voxel_m);
+  if (threads < 0) return fail("threads", ">= 0", threads);
+  return true;
+}
+
+std::vector<float> RingCurvature(const std::vector<ScanPoint>& ring, int neighbours, double max_step_deg) {
+  ROTOLIDAR_CHECK(neighbours >= 1, "neighbours = " << neighbours);
+  std::vector<int> index(ring.size());
+  for (std::size_t i = 0; i < ring.size(); ++i) index[i] = static_cast<int>(i);
+  return CurvatureOf(ring, index, StepsOk(ring, index, max_step_deg), neighbours);
+}
+
+FeatureResult ExtractFeatures(const std::vector<ScanPoint>& points, Seconds t_scan_start_s,
+                              const FeatureConfig& config) {
+  std::string why;
+  ROTOLIDAR_CHECK(config.Validate(&why), why);
+  Context ctx{points, config, {}, std::vector<FeatureLabel>(points.size(), FeatureLabel::kInvalid)};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const ScanPoint& p = points[i];
+    if (!p.p_base.allFinite() || !(p.range_m > 0.f) || !std::isfinite(p.range_m) || !std::isfinite(p.azimuth_deg))
+      continue;
+    if (p.ring >= ctx.rings.size()) ctx.rings.resize(p.ring + 1u);
+    ctx.rings[p.ring].index.push_back(static_cast<int>(i));
+  }
+  const int threads =
+      config.threads > 0 ? config.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int n_rings = static_cast<int>(ctx.rings.size());
+  ParallelFor(n_rings, threads, [&](int r) { AnalyseRing(&ctx, &ctx.rings[r]); });
+  std::vector<SectorOutput> sectors(config.sectors);
+  ParallelFor(config.sectors, threads, [&](int s) {
+    for (int r = 0; r < n_rings; ++r) SelectCell(&ctx, s, &ctx.rings[r], &sectors[s]);
+  });
+
+  FeatureResult result;
+  result.features.t_s = t_scan_start_s;
+  pcl::PointCloud<pcl::PointXYZI> less_flat_raw;
+  for (const SectorOutput& s : sectors) {  // sector order, then ring order inside: thread-count independent
+    result.features.edge += s.edge;
+    result.features.planar += s.planar;
+    result.features.less_sharp += s.less_sharp;
+    less_flat_raw += s.less_flat;
+  }
+  result.features.less_flat = Downsample(less_flat_raw, config.less_flat_voxel_m);
+  result.curvature.assign(points.size(), kNaN);
+  for (const Ring& ring : ctx.rings)
+    for (std::size_t i = 0; i < ring.index.size(); ++i) result.curvature[ring.index[i]] = ring.c[i];
+  result.stats = CountLabels(ctx.labels, result.features, less_flat_raw.size());
+  result.labels = std::move(ctx.labels);
+  return result;
+}
+
+}  // namespace rotolidar

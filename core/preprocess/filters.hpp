@@ -1,0 +1,89 @@
+#pragma once
+// Scan preprocessing before feature extraction (seed Section 3.1): a range gate in the sensor frame, statistical
+// outlier removal (seed Eq. 1-2, PCL's StatisticalOutlierRemoval) and an attribute-preserving voxel filter.
+// Every stage keeps the surviving points in their input order (so rings stay in firing order) and reports how many
+// points it removed: nothing is dropped silently. Maths and defaults: docs/features.md.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/types/messages.hpp"
+#include "core/types/time.hpp"
+
+namespace rotolidar {
+
+/// One deskewed LiDAR return with the sensor attributes the front end needs (LOAM's ring order, occlusion and
+/// beam-parallel tests work in the sensor frame; the geometry works in the base frame).
+struct ScanPoint {
+  Eigen::Vector3f p_base = Eigen::Vector3f::Zero();  ///< position in the base frame at the scan's start time [m]
+  float range_m = 0.f;      ///< distance from the lidar origin at firing time, |p_lidar| [m]
+  float azimuth_deg = 0.f;  ///< head azimuth at firing, [0, 360), as LidarPoint::azimuth_deg
+  float intensity = 0.f;    ///< reflectivity byte 0..255
+  uint8_t ring = 0;         ///< 0..15 sorted by elevation (LidarPoint::ring)
+  Seconds t_s = 0.0;        ///< firing time on the rig clock
+};
+
+/// Pairs a scan's points with their deskewed base-frame positions (`p_base_start[i]` belongs to `scan.points[i]`;
+/// the sizes must match: ROTOLIDAR_CHECK). range_m = |p_lidar| of the decoded point.
+std::vector<ScanPoint> MakeScanPoints(const LidarScan& scan, const std::vector<Eigen::Vector3d>& p_base_start);
+
+/// Preprocessing stages and their parameters. Stages run in the order range -> SOR -> voxel.
+struct PreprocessConfig {
+  bool enable_range = true;
+  double min_range_m = 0.8;   ///< drop returns closer to the lidar than this (rig body, operator) [m]
+  double max_range_m = 60.0;  ///< drop returns farther than this [m]
+  bool enable_sor = true;
+  int sor_k = 20;             ///< K: neighbours whose mean distance is each point's statistic
+  double sor_std_mul = 3.0;   ///< a point is an outlier when its statistic > mu + sor_std_mul * sigma
+  /// Statistic = mean K-NN distance / range_m (scale-free: a LiDAR's point spacing grows with range). false = PCL's
+  /// plain StatisticalOutlierRemoval, the seed's rule, which on a real indoor VLP-16 scan removes nearly every
+  /// return beyond 8 m and none of the near ones (docs/features.md).
+  bool sor_range_normalized = true;
+  bool enable_voxel = false;  ///< off by default: downsampling before Eq. 3 distorts curvature (docs/features.md)
+  double voxel_m = 0.1;       ///< voxel edge length [m]
+  /// False (and *error names the field, e.g. "preprocess.sor_k must be >= 1 (got 0)") if a value is invalid;
+  /// all values are checked, enabled or not.
+  bool Validate(std::string* error) const;
+};
+
+/// Kept points plus what each stage removed. num_input = sum of all removed counts + points.size().
+struct PreprocessResult {
+  std::vector<ScanPoint> points;  ///< survivors, in input order
+  std::size_t num_input = 0;
+  std::size_t removed_nonfinite = 0;  ///< non-finite position or range (always removed: no stage accepts them)
+  std::size_t removed_range = 0;
+  std::size_t removed_sor = 0;
+  std::size_t removed_voxel = 0;
+};
+
+/// Runs the enabled stages. ROTOLIDAR_CHECKs config.Validate() (an invalid config is a programmer error here:
+/// validate configs where they are loaded). A deterministic pure function: safe to call concurrently.
+PreprocessResult Preprocess(const std::vector<ScanPoint>& points, const PreprocessConfig& config);
+
+// ---- single stages: each compacts *points in place (order kept) and returns the number removed ----
+
+/// Removes points with a non-finite position or range.
+std::size_t RemoveNonFinite(std::vector<ScanPoint>* points);
+
+/// Keeps min_range_m <= range_m <= max_range_m (sensor-frame range, so rig self-hits go whatever the rotor angle).
+std::size_t RangeFilter(double min_range_m, double max_range_m, std::vector<ScanPoint>* points);
+
+/// Statistical outlier removal on p_base (seed Eq. 1-2): d_i = mean distance to the K nearest neighbours, divided
+/// by range_m when range_normalized; mu and sigma (sample) over all d_i; removes d_i > mu + std_mul * sigma (PCL's
+/// one-sided rule; see docs/features.md for the seed's two-sided wording). range_normalized = false runs PCL's
+/// StatisticalOutlierRemoval itself; true uses PCL's kd-tree with the same statistics. With K >= the number of
+/// points every point is kept (no statistic). Finite positions required; normalised, a range <= 0 is an outlier.
+std::size_t StatisticalOutlierFilter(int k, double std_mul, bool range_normalized, std::vector<ScanPoint>* points);
+
+/// One real point per occupied voxel of edge voxel_m (grid aligned at the origin): the point nearest the voxel's
+/// centroid (what PCL's VoxelGrid would output), ties to the lower index. Keeps ring, time and range attributes.
+std::size_t VoxelFilter(double voxel_m, std::vector<ScanPoint>* points);
+
+/// The index selection behind VoxelFilter, for any position list: ascending indices of the kept points.
+/// Non-finite positions are never kept. voxel_m must be > 0 (ROTOLIDAR_CHECK).
+std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>& positions, double voxel_m);
+
+}  // namespace rotolidar

@@ -1,0 +1,68 @@
+#include "core/registration/degeneracy.hpp"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "core/util/log.hpp"
+
+namespace rotolidar {
+
+bool DegeneracyConfig::Validate(std::string* error) const {
+  if (!(min_eigenvalue >= 0.0) || !std::isfinite(min_eigenvalue)) {
+    if (error) *error = "degeneracy.min_eigenvalue must be a finite value >= 0 (got " +
+                        std::to_string(min_eigenvalue) + ")";
+    return false;
+  }
+  return true;
+}
+
+Matrix6d DisplacementMetric(const std::vector<Eigen::Vector3d>& lever_arms_m) {
+  if (lever_arms_m.empty()) return Matrix6d::Identity();
+  // Sum of A^T A with A = [I, -[r]x]: [[I, -[r]x], [[r]x, |r|^2 I - r r^T]] (since -[r]x^T = [r]x).
+  Eigen::Vector3d sum_r = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum_rr = Eigen::Matrix3d::Zero();
+  for (const auto& r : lever_arms_m) {
+    sum_r += r;
+    sum_rr += r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose();
+  }
+  const double n = double(lever_arms_m.size());
+  const Eigen::Vector3d m = sum_r / n;
+  Eigen::Matrix3d skew_m;
+  skew_m << 0.0, -m.z(), m.y(), m.z(), 0.0, -m.x(), -m.y(), m.x(), 0.0;
+  Matrix6d G;
+  G << Eigen::Matrix3d::Identity(), -skew_m, skew_m, sum_rr / n;
+  return G;
+}
+
+DegeneracyInfo AnalyzeDegeneracy(const Matrix6d& hessian, const Matrix6d& displacement_metric,
+                                 int num_correspondences, const DegeneracyConfig& config) {
+  ROTOLIDAR_CHECK(num_correspondences >= 1, "num_correspondences = " << num_correspondences);
+  const Matrix6d G = 0.5 * (displacement_metric + displacement_metric.transpose());
+  ROTOLIDAR_CHECK(G.llt().info() == Eigen::Success, "displacement metric is not positive definite:\n" << G);
+  const Matrix6d A = 0.5 * (hessian + hessian.transpose()) / double(num_correspondences);
+  // A v = lambda G v; Eigen returns ascending eigenvalues and G-orthonormal eigenvectors (V^T G V = I).
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Matrix6d> eig(A, G, Eigen::ComputeEigenvectors | Eigen::Ax_lBx);
+  DegeneracyInfo info;
+  info.eigenvalues = eig.eigenvalues();
+  info.eigenvectors = eig.eigenvectors();
+  // Zhang et al.: keep the eigen-directions that pass the threshold; the update loses its components along the
+  // others. With G-orthonormal V, sum_i v_i v_i^T G = I, so the kept part is sum_good v v^T G.
+  Matrix6d P = Matrix6d::Zero();
+  for (int i = 0; i < 6; ++i) {
+    const Vector6d v = info.eigenvectors.col(i);
+    if (info.eigenvalues(i) < config.min_eigenvalue) {
+      info.degenerate = true;
+      info.degenerate_directions.push_back(v.normalized());
+    } else {
+      P += v * (v.transpose() * G);
+    }
+  }
+  info.projection = info.degenerate ? P : Matrix6d::Identity();
+  return info;
+}
+
+Vector6d RemapUpdate(const DegeneracyInfo& info, const Vector6d& delta) { return info.projection * delta; }
+
+}  // namespace rotolidar

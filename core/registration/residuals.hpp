@@ -1,0 +1,78 @@
+#pragma once
+// LOAM-style geometric residuals for scan-to-map registration (seed Sec. 3, LOAM's edge and planar terms), as
+// Ceres cost functions with analytic Jacobians.
+//
+// Pose block (7 doubles): T_map_scan = [tx ty tz qx qy qz qw] (translation [m], then an Eigen-ordered unit
+// quaternion, scalar last) on `PoseManifold` = ProductManifold<EuclideanManifold<3>, EigenQuaternionManifold>.
+// Ceres only needs d r / d[t, q] (the ambient 7-column Jacobian); it chains it with the manifold's PlusJacobian.
+//
+// Tangent ordering used everywhere else in core/registration (Hessian, degeneracy, PoseBoxPlus/Minus):
+//   delta = [dt (3, metres, map frame); dtheta (3, rad, rotation vector in the map frame)],
+//   T [+] delta:  t <- t + dt,  R <- Exp(dtheta) * R.
+// NOTE: Ceres 2.1's own quaternion tangent is HALF of this dtheta (its Plus is q <- [cos|d|, sin|d| d/|d|] * q,
+// a rotation by 2|d|; residuals_test pins this), which is why the Hessian is computed from EvaluateTangent below
+// and never taken from Ceres' tangent-space Jacobian.
+//
+// Thread-safety: cost functions are immutable after construction; Evaluate is const and re-entrant.
+#include <array>
+
+#include <ceres/manifold.h>
+#include <ceres/product_manifold.h>
+#include <ceres/sized_cost_function.h>
+#include <Eigen/Core>
+
+#include "core/registration/degeneracy.hpp"  // Vector6d, Matrix6d
+#include "core/types/geometry.hpp"
+
+namespace rotolidar {
+
+using PoseManifold = ceres::ProductManifold<ceres::EuclideanManifold<3>, ceres::EigenQuaternionManifold>;
+using PoseParameters = std::array<double, 7>;  ///< [tx ty tz qx qy qz qw]
+
+/// T -> [t, q(x y z w)] with a normalised quaternion.
+PoseParameters PoseToParameters(const Pose3& T);
+/// [t, q] -> T (the quaternion is normalised here).
+Pose3 ParametersToPose(const double* parameters);
+/// T [+] delta with delta = [dt; dtheta] as above (t + dt, Exp(dtheta) R).
+Pose3 PoseBoxPlus(const Pose3& T, const Vector6d& delta);
+/// The delta with T_x [+] delta = T_y: [t_y - t_x; Log(R_y R_x^T)] (|dtheta| <= pi).
+Vector6d PoseBoxMinus(const Pose3& T_y, const Pose3& T_x);
+
+/// d(R(q) p)/d[qx qy qz qw] (3x4) for a unit quaternion q, evaluated on the extension
+/// R(q) p = p + 2 w (v x p) + 2 v x (v x p), v = [qx qy qz]. Only its projection onto the unit sphere's tangent
+/// matters to Ceres (it multiplies the manifold's PlusJacobian), so the extension off the sphere is irrelevant.
+Eigen::Matrix<double, 3, 4> RotatedPointQuaternionJacobian(const Eigen::Quaterniond& q, const Eigen::Vector3d& p);
+
+/// Point-to-plane residual (1 row, metres): r = n . (R p_scan + t) + d, the signed distance of the transformed
+/// scan point to the map plane {x : n . x + d = 0}. `n_map` must be unit length (checked).
+class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
+ public:
+  PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+  /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [n^T, -n^T [R p]x].
+  double EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 1, 6>* J) const;
+
+ private:
+  Eigen::Vector3d p_scan_;
+  Eigen::Vector3d n_map_;
+  double d_m_;
+};
+
+/// Point-to-line residual (2 rows, metres): r = B^T (R p_scan + t - a_map), where B = [b1 b2] is an orthonormal
+/// basis of the plane perpendicular to the map line's unit direction u_map. |r| is the point's distance to the
+/// line through a_map; unlike the scalar distance, r is smooth at zero, so Gauss-Newton sees a full-rank 2-row
+/// Jacobian. `u_map` must be unit length (checked).
+class PointToLineResidual final : public ceres::SizedCostFunction<2, 7> {
+ public:
+  PointToLineResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+  /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [B^T, -B^T [R p]x].
+  Eigen::Vector2d EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 2, 6>* J) const;
+
+ private:
+  Eigen::Vector3d p_scan_;
+  Eigen::Vector3d a_map_;
+  Eigen::Matrix<double, 2, 3> Bt_;  ///< rows b1^T, b2^T
+};
+
+}  // namespace rotolidar

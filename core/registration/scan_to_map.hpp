@@ -1,0 +1,75 @@
+#pragma once
+// Feature-based scan-to-map registration (seed Sec. 3 / LOAM mapping): scan edge points are matched to lines and
+// scan planar points to planes fitted to their k nearest map features, and T_map_scan is solved with Ceres
+// (analytic point-to-line / point-to-plane Jacobians, core/registration/residuals.hpp) under a robust loss.
+// Outer loop: find correspondences at the current pose -> Ceres solve -> (optional) degeneracy remapping of the
+// update (core/registration/degeneracy.hpp) -> repeat until the update is small.
+//
+// Frames: scan features are in the scan frame (base at scan start, FeatureSet); the map is in the map (world)
+// frame; the result is T_map_scan. Tangent ordering of the Hessian: [dt (m, map frame); dtheta (rad, map frame)],
+// the manifold's Plus t <- t + dt, R <- Exp(dtheta) R. Thread-safety: Register is re-entrant for distinct maps;
+// LocalMap itself is not thread-safe. Failure: result.converged = false with result.message; never throws on
+// data (an invalid config is a programmer error: ROTOLIDAR_CHECK).
+#include <string>
+#include <vector>
+
+#include "core/features/feature_set.hpp"
+#include "core/registration/degeneracy.hpp"
+#include "core/registration/local_map.hpp"
+#include "core/types/geometry.hpp"
+
+namespace rotolidar {
+
+enum class RobustLoss { kNone, kHuber, kCauchy };
+
+struct ScanToMapConfig {
+  int max_solver_iterations = 8;          ///< Ceres Levenberg-Marquardt iterations per correspondence set
+  int max_correspondence_rebuilds = 12;   ///< outer iterations (correspondences re-found at the current pose)
+  int num_neighbours = 5;                 ///< k map neighbours per scan point (LOAM: 5)
+  double max_neighbour_distance_m = 1.0;  ///< the k-th neighbour must be this close to the transformed point [m]
+  double min_line_eigen_ratio = 3.0;      ///< edge: lambda_max >= ratio * lambda_mid of the neighbours (LOAM: 3)
+  double max_plane_eigen_ratio = 0.25;    ///< plane: lambda_min <= ratio * lambda_mid (rejects collinear sets)
+  double max_plane_deviation_m = 0.2;     ///< plane: every neighbour within this of the fitted plane (LOAM: 0.2)
+  RobustLoss loss = RobustLoss::kHuber;
+  double loss_scale_m = 0.1;              ///< residual [m] where the robust loss departs from least squares
+  double convergence_translation_m = 1e-3;  ///< converged when one outer update moves less than this ...
+  double convergence_rotation_rad = 1e-4;   ///< ... and turns less than this
+  int min_correspondences = 20;           ///< fewer edge + planar matches -> not converged
+  int num_threads = 1;                    ///< Ceres evaluation threads
+  DegeneracyConfig degeneracy;
+  bool Validate(std::string* error) const;  ///< false with the offending field named in *error
+};
+
+struct ScanToMapResult {
+  bool converged = false;    ///< an outer update fell below the convergence thresholds
+  int iterations = 0;        ///< outer iterations (correspondence rebuilds) run
+  int solver_iterations = 0; ///< Ceres iterations, summed
+  int edge_inliers = 0;      ///< accepted point-to-line correspondences of the last rebuild
+  int planar_inliers = 0;    ///< accepted point-to-plane correspondences of the last rebuild
+  double initial_cost = 0.0; ///< Ceres cost 1/2 sum rho(|r|^2) at the guess, first correspondences [m^2]
+  double final_cost = 0.0;   ///< the same at the solution, last correspondences [m^2]
+  double rmse_m = 0.0;       ///< RMS residual (no robust loss) of the last correspondences at the solution [m]
+  Pose3 T_map_scan = Pose3::Identity();
+  /// J^T J at the solution (robust-weighted as Ceres applies the loss), 6x6 in the tangent [dt; dtheta].
+  /// Residuals are metres, so information = hessian / sigma_point^2 for a point noise sigma_point [m].
+  Matrix6d hessian = Matrix6d::Zero();
+  /// Eigen-analysis of `hessian` at the solution. (The remapping applied during the solve, when enabled, was
+  /// decided from the first correspondence set, as in LOAM; both agree unless the first guess was far off.)
+  DegeneracyInfo degeneracy;
+  std::string message;        ///< empty on success; otherwise why it failed
+};
+
+/// Registers the scan's edge and planar points (scan frame) against `map`, starting from T_map_scan_guess.
+ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan_guess,
+                         const ScanToMapConfig& config);
+
+/// LOAM line fit of neighbours (map frame): true when lambda_max >= min_ratio * lambda_mid of their covariance;
+/// *point = centroid, *direction = unit principal axis.
+bool FitLine(const std::vector<Eigen::Vector3d>& points, double min_ratio, Eigen::Vector3d* point,
+             Eigen::Vector3d* direction);
+/// Plane fit of neighbours: true when lambda_min <= max_ratio * lambda_mid and every point lies within
+/// max_deviation_m of the plane; the plane is {x : normal . x + d = 0}, |normal| = 1.
+bool FitPlane(const std::vector<Eigen::Vector3d>& points, double max_ratio, double max_deviation_m,
+              Eigen::Vector3d* normal, double* d_m);
+
+}  // namespace rotolidar

@@ -1,0 +1,263 @@
+// Residual Jacobians against numeric differentiation, the pose manifold's tangent convention, and the
+// degeneracy analysis on Hessians with known structure.
+#include <cmath>
+#include <vector>
+
+#include <ceres/gradient_checker.h>
+#include <gtest/gtest.h>
+
+#include "core/registration/degeneracy.hpp"
+#include "core/registration/residuals.hpp"
+#include "core/util/rng.hpp"
+
+namespace rotolidar {
+namespace {
+
+Eigen::Vector3d RandomVector(RandomStream& rng, double sigma) {
+  return Eigen::Vector3d(rng.Normal(0.0, sigma), rng.Normal(0.0, sigma), rng.Normal(0.0, sigma));
+}
+
+Pose3 RandomPose(RandomStream& rng) {
+  // Rotations up to ~pi (sigma 1 rad per axis) and translations of metres: far from identity on purpose.
+  return MakePose(RandomVector(rng, 5.0), Eigen::Quaterniond(ExpSO3(RandomVector(rng, 1.0))));
+}
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return S;
+}
+
+/// Central differences of a cost function's residual along the manifold's tangent at pose T (h in tangent units).
+Eigen::MatrixXd NumericTangentJacobian(const ceres::CostFunction& f, const Pose3& T, double h) {
+  const int m = f.num_residuals();
+  Eigen::MatrixXd J(m, 6);
+  for (int k = 0; k < 6; ++k) {
+    Vector6d d = Vector6d::Zero();
+    d(k) = h;
+    const PoseParameters xp = PoseToParameters(PoseBoxPlus(T, d)), xm = PoseToParameters(PoseBoxPlus(T, -d));
+    Eigen::VectorXd rp(m), rm(m);
+    const double* pp[] = {xp.data()};
+    const double* pm[] = {xm.data()};
+    f.Evaluate(pp, rp.data(), nullptr);
+    f.Evaluate(pm, rm.data(), nullptr);
+    J.col(k) = (rp - rm) / (2.0 * h);
+  }
+  return J;
+}
+
+/// Analytic ambient Jacobian (m x 7) times the manifold's PlusJacobian (7 x 6).
+Eigen::MatrixXd AnalyticTangentJacobian(const ceres::CostFunction& f, const Pose3& T) {
+  const int m = f.num_residuals();
+  const PoseParameters x = PoseToParameters(T);
+  Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J(m, 7);
+  Eigen::VectorXd r(m);
+  const double* p[] = {x.data()};
+  double* jac[] = {J.data()};
+  f.Evaluate(p, r.data(), jac);
+  Eigen::Matrix<double, 7, 6, Eigen::RowMajor> plus;
+  PoseManifold().PlusJacobian(x.data(), plus.data());
+  return J * plus;
+}
+
+TEST(PoseManifold, BoxPlusIsLeftRotationAndBoxMinusInvertsIt) {
+  RandomStream rng(7, "test.registration.manifold");
+  for (int trial = 0; trial < 20; ++trial) {
+    const Pose3 T = RandomPose(rng);
+    Vector6d delta;
+    delta << RandomVector(rng, 0.5), RandomVector(rng, 0.3);
+    const Pose3 Tp = PoseBoxPlus(T, delta);
+    EXPECT_LT((Tp.translation() - (T.translation() + delta.head<3>())).norm(), 1e-12);
+    EXPECT_LT((Tp.linear() - ExpSO3(delta.tail<3>()) * T.linear()).norm(), 1e-12);
+    EXPECT_LT((PoseBoxMinus(Tp, T) - delta).norm(), 1e-9);
+  }
+}
+
+TEST(PoseManifold, CeresQuaternionTangentIsHalfTheRotationVector) {
+  // Pins the Ceres 2.1 convention the registration relies on (and works around): its Plus(x, [dt; d]) equals
+  // our T [+] [dt; 2 d]. If a Ceres upgrade changes this, this test says so before any Hessian goes wrong.
+  RandomStream rng(7, "test.registration.ceres_manifold");
+  const PoseManifold manifold;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Pose3 T = RandomPose(rng);
+    Vector6d d;
+    d << RandomVector(rng, 0.5), RandomVector(rng, 0.3);
+    const PoseParameters x = PoseToParameters(T);
+    PoseParameters y;
+    ASSERT_TRUE(manifold.Plus(x.data(), d.data(), y.data()));
+    Vector6d ours = d;
+    ours.tail<3>() *= 2.0;
+    const Pose3 expected = PoseBoxPlus(T, ours);
+    EXPECT_LT((ParametersToPose(y.data()).matrix() - expected.matrix()).norm(), 1e-12);
+  }
+}
+
+TEST(Residuals, QuaternionJacobianMatchesCentralDifferences) {
+  RandomStream rng(7, "test.registration.quat_jacobian");
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Quaterniond q(ExpSO3(RandomVector(rng, 1.0)));
+    const Eigen::Vector3d p = RandomVector(rng, 10.0);
+    const Eigen::Matrix<double, 3, 4> J = RotatedPointQuaternionJacobian(q, p);
+    // Off-sphere perturbations of the coefficients: the extension R(q)p = p + 2w v x p + 2 v x (v x p) is what
+    // Eigen's q * p evaluates, so the full 3x4 (not only its tangent part) must agree.
+    const double h = 1e-6;
+    for (int k = 0; k < 4; ++k) {
+      Eigen::Quaterniond qp = q, qm = q;
+      qp.coeffs()(k) += h;
+      qm.coeffs()(k) -= h;
+      const Eigen::Vector3d numeric = (qp * p - qm * p) / (2.0 * h);
+      EXPECT_LT((J.col(k) - numeric).norm(), 1e-7 * (1.0 + p.norm())) << "coefficient " << k;
+    }
+  }
+}
+
+TEST(Residuals, GradientCheckerAcceptsBothResidualsAtRandomPoses) {
+  RandomStream rng(7, "test.registration.gradient_checker");
+  PoseManifold manifold;
+  const std::vector<const ceres::Manifold*> manifolds = {&manifold};
+  ceres::NumericDiffOptions numeric;
+  for (int trial = 0; trial < 25; ++trial) {
+    const Pose3 T = RandomPose(rng);
+    const PoseParameters x = PoseToParameters(T);
+    const double* params[] = {x.data()};
+    const PointToPlaneResidual plane(RandomVector(rng, 10.0), RandomVector(rng, 1.0).normalized(), rng.Normal());
+    const PointToLineResidual line(RandomVector(rng, 10.0), RandomVector(rng, 10.0),
+                                   RandomVector(rng, 1.0).normalized());
+    ceres::GradientChecker::ProbeResults results;
+    // 1e-6 relative: Ceres' central differences on O(10 m) lever arms are accurate to ~1e-8 here; a wrong
+    // Jacobian term (sign, factor 2, transposed skew) shows up as O(1) relative error.
+    EXPECT_TRUE(ceres::GradientChecker(&plane, &manifolds, numeric).Probe(params, 1e-6, &results))
+        << results.error_log;
+    EXPECT_TRUE(ceres::GradientChecker(&line, &manifolds, numeric).Probe(params, 1e-6, &results))
+        << results.error_log;
+  }
+}
+
+TEST(Residuals, TangentJacobiansMatchClosedFormCentralDifferencesAndCeresChain) {
+  RandomStream rng(7, "test.registration.tangent");
+  Vector6d twice;  // Ceres' Plus(x, d) = ours with 2 d: d r/d(ceres) = d r/d(ours) * 2 on rotation columns
+  twice << 1, 1, 1, 2, 2, 2;
+  for (int trial = 0; trial < 25; ++trial) {
+    const Pose3 T = RandomPose(rng);
+    const Eigen::Vector3d p = RandomVector(rng, 10.0), n = RandomVector(rng, 1.0).normalized();
+    const PointToPlaneResidual plane(p, n, 0.3);
+    Eigen::Matrix<double, 1, 6> Jp;
+    const double r = plane.EvaluateTangent(T, &Jp);
+    EXPECT_NEAR(r, n.dot(T * p) + 0.3, 1e-12);
+    // Closed form under the left perturbation: d r / d[dt, dtheta] = [n^T, -n^T [R p]x].
+    Eigen::Matrix<double, 1, 6> expected;
+    expected << n.transpose(), -n.transpose() * Skew(T.linear() * p);
+    EXPECT_LT((Jp - expected).norm(), 1e-9);
+    // 1e-6: central differences with h = 1e-6 on O(10 m) lever arms are accurate to ~1e-8.
+    EXPECT_LT((Jp - NumericTangentJacobian(plane, T, 1e-6)).norm(), 1e-6);
+    // The ambient (Ceres) Jacobian chained with Ceres' PlusJacobian is the same derivative in half-angle units.
+    EXPECT_LT((AnalyticTangentJacobian(plane, T) - Jp * twice.asDiagonal()).norm(), 1e-9);
+
+    const PointToLineResidual line(p, RandomVector(rng, 5.0), n);
+    Eigen::Matrix<double, 2, 6> Jl;
+    line.EvaluateTangent(T, &Jl);
+    EXPECT_LT((Jl - NumericTangentJacobian(line, T, 1e-6)).norm(), 1e-6);
+    EXPECT_LT((AnalyticTangentJacobian(line, T) - Jl * twice.asDiagonal()).norm(), 1e-9);
+  }
+}
+
+TEST(Residuals, ValuesAreSignedPlaneDistanceAndLineDistance) {
+  const Pose3 T = MakePose(Eigen::Vector3d(1.0, 2.0, 3.0), Eigen::Quaterniond(ExpSO3(Eigen::Vector3d(0, 0, 0.5))));
+  const PoseParameters x = PoseToParameters(T);
+  const double* params[] = {x.data()};
+  const Eigen::Vector3d p_scan(0.4, -0.7, 0.2);
+  const Eigen::Vector3d p_map = T * p_scan;
+  // Plane z = 2 (n = +z, d = -2): the residual is p_map.z - 2.
+  double r_plane = 0.0;
+  PointToPlaneResidual(p_scan, Eigen::Vector3d::UnitZ(), -2.0).Evaluate(params, &r_plane, nullptr);
+  EXPECT_NEAR(r_plane, p_map.z() - 2.0, 1e-12);
+  // Line through a along u: |r| is the perpendicular distance.
+  const Eigen::Vector3d a(0.0, 1.0, 0.0), u = Eigen::Vector3d(1.0, 1.0, 0.0).normalized();
+  double r_line[2];
+  PointToLineResidual(p_scan, a, u).Evaluate(params, r_line, nullptr);
+  const double distance = ((p_map - a) - u.dot(p_map - a) * u).norm();
+  EXPECT_NEAR(std::hypot(r_line[0], r_line[1]), distance, 1e-12);
+}
+
+TEST(Degeneracy, DisplacementMetricIsTheMeanSquaredPointMotion) {
+  RandomStream rng(7, "test.registration.metric");
+  std::vector<Eigen::Vector3d> levers;
+  for (int i = 0; i < 50; ++i) levers.push_back(RandomVector(rng, 8.0) + Eigen::Vector3d(3.0, -1.0, 0.5));
+  const Matrix6d G = DisplacementMetric(levers);
+  for (int trial = 0; trial < 10; ++trial) {
+    Vector6d delta;
+    delta << RandomVector(rng, 0.1), RandomVector(rng, 0.02);
+    double mean_sq = 0.0;  // first-order motion of each point: dt + dtheta x r
+    for (const auto& r : levers) mean_sq += (delta.head<3>() + delta.tail<3>().cross(r)).squaredNorm();
+    mean_sq /= double(levers.size());
+    EXPECT_NEAR(delta.dot(G * delta), mean_sq, 1e-12 * (1.0 + mean_sq));
+  }
+}
+
+TEST(Degeneracy, FindsTheWeakDirectionAndProjectsItOut) {
+  // Points spread around the origin with E[r] = 0 and E[|r|^2 I - r r^T] = L^2 I; information per correspondence
+  // is strong along everything but translation x.
+  const int n = 1000;
+  const double L = 5.0;
+  Vector6d g, info;
+  g << 1, 1, 1, L * L, L * L, L * L;
+  info << 1e-3, 0.5, 0.8, 0.3 * L * L, 0.4 * L * L, 0.6 * L * L;
+  const Matrix6d G = g.asDiagonal();
+  const Matrix6d H = (info * n).asDiagonal();
+  DegeneracyConfig config;
+  const DegeneracyInfo d = AnalyzeDegeneracy(H, G, n, config);
+  ASSERT_TRUE(d.degenerate);
+  ASSERT_EQ(d.degenerate_directions.size(), 1u);
+  EXPECT_NEAR(std::abs(d.degenerate_directions[0](0)), 1.0, 1e-12);
+  EXPECT_NEAR(d.eigenvalues(0), 1e-3, 1e-12);
+  EXPECT_NEAR(d.eigenvalues(1), 0.3, 1e-12);  // rotations measured by the motion they cause at lever L
+  Vector6d delta;
+  delta << 0.5, 0.1, -0.2, 0.01, 0.02, -0.03;
+  const Vector6d remapped = RemapUpdate(d, delta);
+  EXPECT_NEAR(remapped(0), 0.0, 1e-12);
+  EXPECT_LT((remapped.tail<5>() - delta.tail<5>()).norm(), 1e-12);
+  EXPECT_LT((d.projection * d.projection - d.projection).norm(), 1e-12);  // a projector
+  config.min_eigenvalue = 1e-4;  // below the weak eigenvalue: nothing degenerate, identity remapping
+  const DegeneracyInfo none = AnalyzeDegeneracy(H, G, n, config);
+  EXPECT_FALSE(none.degenerate);
+  EXPECT_LT((RemapUpdate(none, delta) - delta).norm(), 1e-15);
+}
+
+TEST(Degeneracy, CoupledWeakDirectionIsFoundAndRemovedInTheMetric) {
+  // Points off-centre (E[r] != 0) make G couple translation and rotation; the weak direction mixes translation x
+  // with yaw. Build H = N (G - c G w w^T G) with G-unit w: then H w = N (1 - c) G w, i.e. lambda = 1 - c for w,
+  // and lambda = 1 for every G-orthogonal direction.
+  RandomStream rng(7, "test.registration.coupled");
+  std::vector<Eigen::Vector3d> levers;
+  for (int i = 0; i < 40; ++i) levers.push_back(RandomVector(rng, 4.0) + Eigen::Vector3d(6.0, 2.0, 0.0));
+  const Matrix6d G = DisplacementMetric(levers);
+  Vector6d w;
+  w << 1.0, 0.0, 0.0, 0.0, 0.0, 0.2;
+  w /= std::sqrt(w.dot(G * w));
+  const int n = 40;
+  const double c = 0.99;
+  const Matrix6d H = n * (G - c * G * w * w.transpose() * G);
+  const DegeneracyInfo d = AnalyzeDegeneracy(H, G, n, DegeneracyConfig());
+  ASSERT_EQ(d.degenerate_directions.size(), 1u);
+  EXPECT_NEAR(d.eigenvalues(0), 1.0 - c, 1e-9);
+  EXPECT_NEAR(d.eigenvalues(1), 1.0, 1e-9);
+  EXPECT_NEAR(std::abs(d.degenerate_directions[0].dot(w.normalized())), 1.0, 1e-9);
+  Vector6d delta;
+  delta << 0.3, -0.1, 0.2, 0.01, -0.02, 0.05;
+  const Vector6d remapped = RemapUpdate(d, delta);
+  EXPECT_NEAR(remapped.dot(G * w), 0.0, 1e-12);  // nothing left along w (in the metric)
+  const Vector6d removed = delta - remapped;     // and what was removed lies along w
+  EXPECT_NEAR(std::abs(removed.normalized().dot(w.normalized())), 1.0, 1e-9);
+}
+
+TEST(Degeneracy, ValidateNamesTheField) {
+  DegeneracyConfig config;
+  std::string error;
+  EXPECT_TRUE(config.Validate(&error));
+  config.min_eigenvalue = -1.0;
+  EXPECT_FALSE(config.Validate(&error));
+  EXPECT_NE(error.find("degeneracy.min_eigenvalue"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace rotolidar

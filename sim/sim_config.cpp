@@ -1,5 +1,6 @@
 #include "sim/sim_config.hpp"
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -12,16 +13,6 @@
 namespace rotolidar::sim {
 namespace {
 
-Pose3 PoseFromRpy(const Eigen::Vector3d& t_m, double roll_rad, double pitch_rad, double yaw_rad) {
-  Pose3 T = Pose3::Identity();
-  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
-                  .toRotationMatrix();
-  T.translation() = t_m;
-  return T;
-}
-
 const char* ReturnModeName(Vlp16ReturnMode mode) {
   switch (mode) {
     case Vlp16ReturnMode::kLast: return "last";
@@ -30,32 +21,129 @@ const char* ReturnModeName(Vlp16ReturnMode mode) {
   }
 }
 
+void ParseLidar(const std::string& path, const YAML::Node& n, Vlp16CasterConfig* c) {
+  using yaml::Get;
+  yaml::CheckKeys(path, n,
+                  {"rpm", "rpm_jitter_frac", "rpm_jitter_tau_s", "range_noise_sigma_m", "min_range_m", "max_range_m",
+                   "grazing_cutoff_deg", "min_intensity_for_return", "intensity_attenuation_per_m", "beam_rings",
+                   "beam_divergence_horizontal_mrad", "beam_divergence_vertical_mrad", "echo_separation_m",
+                   "material_transmittance", "max_surfaces_per_ray", "pose_per_firing"},
+                  "lidar");
+  Get(path, n, "rpm", &c->rpm);
+  Get(path, n, "rpm_jitter_frac", &c->rpm_jitter_frac);
+  Get(path, n, "rpm_jitter_tau_s", &c->rpm_jitter_tau_s);
+  Get(path, n, "range_noise_sigma_m", &c->range_noise_sigma_m);
+  Get(path, n, "min_range_m", &c->min_range_m);
+  Get(path, n, "max_range_m", &c->max_range_m);
+  Get(path, n, "grazing_cutoff_deg", &c->grazing_cutoff_deg);
+  Get(path, n, "min_intensity_for_return", &c->min_intensity_for_return);
+  Get(path, n, "intensity_attenuation_per_m", &c->intensity_attenuation_per_m);
+  Get(path, n, "beam_rings", &c->beam_rings);
+  Get(path, n, "beam_divergence_horizontal_mrad", &c->beam_divergence_horizontal_mrad);
+  Get(path, n, "beam_divergence_vertical_mrad", &c->beam_divergence_vertical_mrad);
+  Get(path, n, "echo_separation_m", &c->echo_separation_m);
+  Get(path, n, "max_surfaces_per_ray", &c->max_surfaces_per_ray);
+  Get(path, n, "pose_per_firing", &c->pose_per_firing);
+  if (const YAML::Node m = n["material_transmittance"]) {
+    if (!m.IsMap()) throw yaml::ParseError(yaml::Where(path, m) + "lidar.material_transmittance: a map name -> fraction");
+    c->material_transmittance.clear();
+    for (const auto& kv : m) {
+      double fraction = 0.0;
+      Get(path, m, kv.first.as<std::string>(), &fraction);
+      c->material_transmittance.emplace_back(kv.first.as<std::string>(), fraction);
+    }
+  }
+}
+
+void EmitLidar(YAML::Emitter& out, const Vlp16CasterConfig& c) {
+  out << YAML::BeginMap;
+  out << YAML::Key << "rpm" << YAML::Value << c.rpm;
+  out << YAML::Key << "rpm_jitter_frac" << YAML::Value << c.rpm_jitter_frac;
+  out << YAML::Key << "rpm_jitter_tau_s" << YAML::Value << c.rpm_jitter_tau_s;
+  out << YAML::Key << "range_noise_sigma_m" << YAML::Value << c.range_noise_sigma_m;
+  out << YAML::Key << "min_range_m" << YAML::Value << c.min_range_m;
+  out << YAML::Key << "max_range_m" << YAML::Value << c.max_range_m;
+  out << YAML::Key << "grazing_cutoff_deg" << YAML::Value << c.grazing_cutoff_deg;
+  out << YAML::Key << "min_intensity_for_return" << YAML::Value << c.min_intensity_for_return;
+  out << YAML::Key << "intensity_attenuation_per_m" << YAML::Value << c.intensity_attenuation_per_m;
+  out << YAML::Key << "beam_rings" << YAML::Value << c.beam_rings;
+  out << YAML::Key << "beam_divergence_horizontal_mrad" << YAML::Value << c.beam_divergence_horizontal_mrad;
+  out << YAML::Key << "beam_divergence_vertical_mrad" << YAML::Value << c.beam_divergence_vertical_mrad;
+  out << YAML::Key << "echo_separation_m" << YAML::Value << c.echo_separation_m;
+  out << YAML::Key << "material_transmittance" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, fraction] : c.material_transmittance) out << YAML::Key << name << YAML::Value << fraction;
+  out << YAML::EndMap;
+  out << YAML::Key << "max_surfaces_per_ray" << YAML::Value << c.max_surfaces_per_ray;
+  out << YAML::Key << "pose_per_firing" << YAML::Value << c.pose_per_firing;
+  out << YAML::EndMap;
+}
+
+void ParseRigModelSection(const std::string& path, const YAML::Node& n, RigModelConfig* c) {
+  if (!n.IsScalar()) {
+    ParseRigModelConfig(path, n, c);
+    return;
+  }
+  std::filesystem::path file = n.as<std::string>();
+  if (file.is_relative()) file = std::filesystem::path(path).parent_path() / file;
+  if (Status s = LoadRigModelConfig(file.string(), c); !s)
+    throw yaml::ParseError(yaml::Where(path, n) + "rig_model: " + s.message);
+}
+
+void ParseTop(const std::string& path, const YAML::Node& root, SimConfig* c) {
+  using yaml::Get;
+  yaml::CheckKeys(path, root,
+                  {"seed", "duration_s", "scene", "truth_rate_hz", "return_mode", "rig_model", "carrier", "motor",
+                   "imu", "lidar", "clocks"},
+                  "sim");
+  Get(path, root, "seed", &c->seed);
+  Get(path, root, "duration_s", &c->duration_s);
+  Get(path, root, "scene", &c->scene);
+  Get(path, root, "truth_rate_hz", &c->truth_rate_hz);
+  std::string mode = ReturnModeName(c->return_mode);
+  Get(path, root, "return_mode", &mode);
+  if (mode == "strongest") c->return_mode = Vlp16ReturnMode::kStrongest;
+  else if (mode == "last") c->return_mode = Vlp16ReturnMode::kLast;
+  else if (mode == "dual") c->return_mode = Vlp16ReturnMode::kDual;
+  else throw yaml::ParseError(yaml::Where(path, root["return_mode"]) + "return_mode: strongest, last or dual");
+  c->lidar.return_mode = c->return_mode;
+  if (const YAML::Node n = root["clocks"]) {
+    yaml::CheckKeys(path, n, {"lidar_offset_s", "encoder_offset_s"}, "clocks");
+    Get(path, n, "lidar_offset_s", &c->clocks.lidar_offset_s);
+    Get(path, n, "encoder_offset_s", &c->clocks.encoder_offset_s);
+  }
+}
+
 }  // namespace
+
+bool ClockConfig::Validate(std::string* error) const {
+  for (const auto& [name, v] : {std::pair{"lidar_offset_s", lidar_offset_s}, {"encoder_offset_s", encoder_offset_s}}) {
+    if (!std::isfinite(v) || std::abs(v) > 1.0) {
+      if (error) *error = std::string("clocks.") + name + " must be finite with |offset| <= 1 s";
+      return false;
+    }
+  }
+  return true;
+}
 
 RigCalib DefaultRigCalib() {
   RigCalib c;
-  // Motor frame: z (the motor axis) along base +x, 12 cm ahead of the base origin (the seed's forward scanner).
-  c.T_base_motor = PoseFromRpy({0.12, 0.0, 0.0}, 0.0, M_PI / 2, 0.0);
-  // The VLP-16 sits 8 cm out along the motor axis, its spin axis (lidar z) along rotor +x, across the motor axis.
-  c.T_rotor_lidar = PoseFromRpy({0.0, 0.0, 0.08}, 0.0, M_PI / 2, 0.0);
-  // IMU on the platform, slightly offset and rotated (a real board is never perfectly aligned).
-  c.T_base_imu = PoseFromRpy({-0.05, 0.03, -0.04}, 0.01, -0.02, 0.03);
-  // Forward-looking camera: cam z = base x, cam x = -base y, cam y = -base z.
-  Pose3 T_base_cam = Pose3::Identity();
-  T_base_cam.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
-  T_base_cam.translation() = Eigen::Vector3d(0.05, 0.0, 0.10);
-  c.T_base_cam = T_base_cam;
-  c.motor_speed_radps = 2.6;
+  FillRigGeometry(RigModelConfig{}, &c);  // the MJCF's default geometry (docs/frames.md, docs/rig_model.md)
+  c.motor_speed_radps = MotorProfileConfig{}.speed_radps;
   return c;
 }
 
-SimConfig DefaultSimConfig() {
-  SimConfig c;
-  c.rig = DefaultRigCalib();
-  c.motor.speed_radps = c.rig.motor_speed_radps;
-  c.encoder.counts_per_rev = c.rig.encoder.counts_per_rev;
+RigCalib SimConfig::TrueCalib() const {
+  RigCalib c;
+  FillRigGeometry(rig_model, &c);
+  c.lidar = lidar_intrinsics;
+  c.imu = imu.noise;
+  c.encoder = motor.encoder.ToCalib();
+  c.motor_speed_radps = motor.profile.speed_radps;
+  c.lidar_clock_offset_s = clocks.lidar_offset_s;
   return c;
 }
+
+SimConfig DefaultSimConfig() { return SimConfig{}; }
 
 bool SimConfig::Validate(std::string* error) const {
   auto fail = [&](const std::string& m) {
@@ -66,13 +154,20 @@ bool SimConfig::Validate(std::string* error) const {
   if (!(truth_rate_hz > 0)) return fail("truth_rate_hz must be > 0");
   if (scene.empty()) return fail("scene must name a scene");
   std::string why;
-  if (!rig.Validate(&why)) return fail("rig: " + why);
-  if (!motion.Validate(&why)) return fail("motion: " + why);
+  if (!rig_model.Validate(&why)) return fail("rig_model: " + why);
+  if (!carrier.Validate(&why)) return fail("carrier: " + why);
   if (!motor.Validate(&why)) return fail("motor: " + why);
-  if (!encoder.Validate(&why)) return fail("encoder: " + why);
-  if (!imu_bias.Validate(&why)) return fail("imu_bias: " + why);
+  if (!imu.Validate(&why)) return fail("imu: " + why);
   if (!lidar.Validate(&why)) return fail("lidar: " + why);
-  if (encoder.counts_per_rev != rig.encoder.counts_per_rev) return fail("encoder.counts_per_rev != rig's");
+  if (!clocks.Validate(&why)) return fail(why);
+  if (lidar.return_mode != return_mode) return fail("lidar.return_mode must equal return_mode");
+  // The physics loop samples the IMU at step boundaries: its period must be a whole number of steps.
+  const double steps_per_imu = 1.0 / (imu.noise.rate_hz * rig_model.physics.timestep_s);
+  if (std::abs(steps_per_imu - std::round(steps_per_imu)) > 1e-9 || std::round(steps_per_imu) < 1)
+    return fail("imu.rate_hz must divide the physics rate 1 / rig_model.physics.timestep_s");
+  if (!(rig_model.physics.timestep_s * truth_rate_hz <= 1.0)) return fail("truth_rate_hz must not exceed the physics rate");
+  RigCalib calib = TrueCalib();
+  if (!calib.Validate(&why)) return fail("calibration: " + why);
   return true;
 }
 
@@ -85,67 +180,15 @@ std::string ResolveScenePath(const std::string& scene) {
 }
 
 Status LoadSimConfig(const std::string& path, SimConfig* config) {
-  using yaml::Get;
   SimConfig c = *config;
   try {
     const YAML::Node root = yaml::LoadFile(path);
-    yaml::CheckKeys(path, root,
-                    {"seed", "duration_s", "scene", "truth_rate_hz", "return_mode", "motor", "encoder", "motion",
-                     "lidar", "imu"},
-                    "sim");
-    Get(path, root, "seed", &c.seed);
-    Get(path, root, "duration_s", &c.duration_s);
-    Get(path, root, "scene", &c.scene);
-    Get(path, root, "truth_rate_hz", &c.truth_rate_hz);
-    std::string mode = ReturnModeName(c.return_mode);
-    Get(path, root, "return_mode", &mode);
-    if (mode == "strongest") c.return_mode = Vlp16ReturnMode::kStrongest;
-    else if (mode == "last") c.return_mode = Vlp16ReturnMode::kLast;
-    else if (mode == "dual") c.return_mode = Vlp16ReturnMode::kDual;
-    else throw yaml::ParseError(yaml::Where(path, root["return_mode"]) + "return_mode: strongest, last or dual");
-    if (const YAML::Node n = root["motor"]) {
-      yaml::CheckKeys(path, n, {"speed_radps", "theta0_rad"}, "motor");
-      Get(path, n, "speed_radps", &c.motor.speed_radps);
-      Get(path, n, "theta0_rad", &c.motor.theta0_rad);
-      c.rig.motor_speed_radps = c.motor.speed_radps;
-    }
-    if (const YAML::Node n = root["encoder"]) {
-      yaml::CheckKeys(path, n, {"counts_per_rev", "noise_sigma_counts", "latency_s", "rate_hz"}, "encoder");
-      Get(path, n, "counts_per_rev", &c.encoder.counts_per_rev);
-      Get(path, n, "noise_sigma_counts", &c.encoder.noise_sigma_counts);
-      Get(path, n, "latency_s", &c.encoder.latency_s);
-      Get(path, n, "rate_hz", &c.encoder.rate_hz);
-      c.rig.encoder = c.encoder.ToCalib();
-    }
-    if (const YAML::Node n = root["motion"]) {
-      yaml::CheckKeys(path, n,
-                      {"center_x_m", "center_y_m", "radius_x_m", "radius_y_m", "height_m", "loop_period_s",
-                       "bounce_amplitude_m", "bounce_hz"},
-                      "motion");
-      Get(path, n, "center_x_m", &c.motion.center_x_m);
-      Get(path, n, "center_y_m", &c.motion.center_y_m);
-      Get(path, n, "radius_x_m", &c.motion.radius_x_m);
-      Get(path, n, "radius_y_m", &c.motion.radius_y_m);
-      Get(path, n, "height_m", &c.motion.height_m);
-      Get(path, n, "loop_period_s", &c.motion.loop_period_s);
-      Get(path, n, "bounce_amplitude_m", &c.motion.bounce_amplitude_m);
-      Get(path, n, "bounce_hz", &c.motion.bounce_hz);
-    }
-    if (const YAML::Node n = root["lidar"]) {
-      yaml::CheckKeys(path, n, {"rpm", "rpm_jitter_frac", "range_noise_sigma_m", "max_range_m"}, "lidar");
-      Get(path, n, "rpm", &c.lidar.rpm);
-      Get(path, n, "rpm_jitter_frac", &c.lidar.rpm_jitter_frac);
-      Get(path, n, "range_noise_sigma_m", &c.lidar.range_noise_sigma_m);
-      Get(path, n, "max_range_m", &c.lidar.max_range_m);
-    }
-    if (const YAML::Node n = root["imu"]) {
-      yaml::CheckKeys(path, n, {"gyro_noise_density", "gyro_random_walk", "accel_noise_density", "accel_random_walk"},
-                      "imu");
-      Get(path, n, "gyro_noise_density", &c.rig.imu.gyro_noise_density);
-      Get(path, n, "gyro_random_walk", &c.rig.imu.gyro_random_walk);
-      Get(path, n, "accel_noise_density", &c.rig.imu.accel_noise_density);
-      Get(path, n, "accel_random_walk", &c.rig.imu.accel_random_walk);
-    }
+    ParseTop(path, root, &c);
+    if (const YAML::Node n = root["rig_model"]) ParseRigModelSection(path, n, &c.rig_model);
+    if (const YAML::Node n = root["carrier"]) ParseCarrierConfig(path, n, &c.carrier);
+    if (const YAML::Node n = root["motor"]) ParseMotorDriveConfig(path, n, &c.motor);
+    if (const YAML::Node n = root["imu"]) ParseImuConfig(path, n, &c.imu);
+    if (const YAML::Node n = root["lidar"]) ParseLidar(path, n, &c.lidar);
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   }
@@ -162,27 +205,19 @@ void EmitSimConfig(YAML::Emitter& out, const SimConfig& c) {
   out << YAML::Key << "scene" << YAML::Value << c.scene;
   out << YAML::Key << "truth_rate_hz" << YAML::Value << c.truth_rate_hz;
   out << YAML::Key << "return_mode" << YAML::Value << ReturnModeName(c.return_mode);
-  out << YAML::Key << "motor" << YAML::Value << YAML::BeginMap << YAML::Key << "speed_radps" << YAML::Value
-      << c.motor.speed_radps << YAML::Key << "theta0_rad" << YAML::Value << c.motor.theta0_rad << YAML::EndMap;
-  out << YAML::Key << "encoder" << YAML::Value << YAML::BeginMap << YAML::Key << "counts_per_rev" << YAML::Value
-      << c.encoder.counts_per_rev << YAML::Key << "noise_sigma_counts" << YAML::Value << c.encoder.noise_sigma_counts
-      << YAML::Key << "latency_s" << YAML::Value << c.encoder.latency_s << YAML::Key << "rate_hz" << YAML::Value
-      << c.encoder.rate_hz << YAML::EndMap;
-  const auto& m = c.motion;
-  out << YAML::Key << "motion" << YAML::Value << YAML::BeginMap << YAML::Key << "center_x_m" << YAML::Value
-      << m.center_x_m << YAML::Key << "center_y_m" << YAML::Value << m.center_y_m << YAML::Key << "radius_x_m"
-      << YAML::Value << m.radius_x_m << YAML::Key << "radius_y_m" << YAML::Value << m.radius_y_m << YAML::Key
-      << "height_m" << YAML::Value << m.height_m << YAML::Key << "loop_period_s" << YAML::Value << m.loop_period_s
-      << YAML::Key << "bounce_amplitude_m" << YAML::Value << m.bounce_amplitude_m << YAML::Key << "bounce_hz"
-      << YAML::Value << m.bounce_hz << YAML::EndMap;
-  out << YAML::Key << "lidar" << YAML::Value << YAML::BeginMap << YAML::Key << "rpm" << YAML::Value << c.lidar.rpm
-      << YAML::Key << "rpm_jitter_frac" << YAML::Value << c.lidar.rpm_jitter_frac << YAML::Key
-      << "range_noise_sigma_m" << YAML::Value << c.lidar.range_noise_sigma_m << YAML::Key << "max_range_m"
-      << YAML::Value << c.lidar.max_range_m << YAML::EndMap;
-  out << YAML::Key << "imu" << YAML::Value << YAML::BeginMap << YAML::Key << "gyro_noise_density" << YAML::Value
-      << c.rig.imu.gyro_noise_density << YAML::Key << "gyro_random_walk" << YAML::Value << c.rig.imu.gyro_random_walk
-      << YAML::Key << "accel_noise_density" << YAML::Value << c.rig.imu.accel_noise_density << YAML::Key
-      << "accel_random_walk" << YAML::Value << c.rig.imu.accel_random_walk << YAML::EndMap;
+  out << YAML::Key << "rig_model" << YAML::Value;
+  EmitRigModelConfig(out, c.rig_model);
+  out << YAML::Key << "carrier" << YAML::Value;
+  EmitCarrierConfig(out, c.carrier);
+  out << YAML::Key << "motor" << YAML::Value;
+  EmitMotorDriveConfig(out, c.motor);
+  out << YAML::Key << "imu" << YAML::Value;
+  EmitImuConfig(out, c.imu);
+  out << YAML::Key << "lidar" << YAML::Value;
+  EmitLidar(out, c.lidar);
+  out << YAML::Key << "clocks" << YAML::Value << YAML::BeginMap << YAML::Key << "lidar_offset_s" << YAML::Value
+      << c.clocks.lidar_offset_s << YAML::Key << "encoder_offset_s" << YAML::Value << c.clocks.encoder_offset_s
+      << YAML::EndMap;
   out << YAML::EndMap;
 }
 

@@ -1,14 +1,16 @@
 #pragma once
-// Configuration of one simulation run: the scene, the rig, its motion and its sensors. Plain structs with
-// defaults; YAML I/O at the edge (LoadSimConfig / EmitSimConfig). Unknown keys are errors naming file:line.
+// Configuration of one simulation run: the scene, the rig model, how its carrier moves, the motor drive, and the
+// sensors. Plain structs with defaults; YAML I/O at the edge (LoadSimConfig / EmitSimConfig). Unknown keys are
+// errors naming file:line. The sections reuse each module's own parser (rig_model, carrier, motor, imu).
 #include <cstdint>
 #include <string>
 
 #include "core/io/vlp16.hpp"
 #include "core/types/calib.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
-#include "sim/rig/base_motion.hpp"
-#include "sim/rig/motor.hpp"
+#include "sim/rig/carrier_paths.hpp"
+#include "sim/rig/rig_model.hpp"
+#include "sim/rig/stepper.hpp"
 #include "sim/sensors/imu_model.hpp"
 
 namespace YAML {
@@ -17,24 +19,35 @@ class Emitter;
 
 namespace rotolidar::sim {
 
+/// Sensor clock errors for fault studies (all 0 by default). The IMU's own offset lives in ImuErrorConfig.
+struct ClockConfig {
+  double lidar_offset_s = 0.0;    ///< VLP-16 clock: sensor time = rig time - lidar_offset_s (calib.yaml's sign)
+  double encoder_offset_s = 0.0;  ///< encoder stamps written = true rig time + encoder_offset_s
+  bool Validate(std::string* error) const;  ///< finite, |offset| <= 1 s
+};
+
 struct SimConfig {
   uint64_t seed = 1;                 ///< run seed: every random stream derives from it plus its name
   double duration_s = 20.0;          ///< simulated time [s]
   std::string scene = "box_room";    ///< a name in scenes/ (scenes/<name>.yaml) or a path to a scene file
-  double truth_rate_hz = 200.0;      ///< rate of base/lidar/rotor/bias truth samples [Hz]
+  double truth_rate_hz = 200.0;      ///< rate of base/lidar/rotor truth samples [Hz]
   Vlp16ReturnMode return_mode = Vlp16ReturnMode::kStrongest;
-  RigCalib rig;                      ///< the TRUE rig geometry and sensor parameters (written to calib.yaml)
-  ScriptedBaseMotionConfig motion;
-  MotorConfig motor;
-  EncoderConfig encoder;
-  ImuBiasConfig imu_bias;
+  RigModelConfig rig_model;          ///< the MuJoCo rig: platform, motor axis, masses, sites, physics step
+  CarrierConfig carrier;             ///< how the base moves (a target the physics body tracks)
+  MotorDriveConfig motor;            ///< command profile, stepper, closed-loop PID, encoder
+  ImuConfig imu;                     ///< IMU noise (TRUE values) and per-run errors
   Vlp16CasterConfig lidar;
+  LidarIntrinsics lidar_intrinsics;  ///< the VLP-16's laser table (manual's values by default)
+  ClockConfig clocks;
 
   bool Validate(std::string* error) const;
+  /// The rig's TRUE calibration, as written to calib.yaml: geometry from rig_model, IMU noise, encoder
+  /// resolution and zero, the nominal motor speed (the uniform-rotation fallback) and the LiDAR clock offset.
+  RigCalib TrueCalib() const;
 };
 
 /// The built-in default: the seed's forward-scanning rig (motor axis along base +x, the VLP-16's spin axis
-/// across it), handheld through the box room at walking speed, motor at 2.6 rad/s.
+/// across it), handheld through the box room at walking speed, motor at 2.6 rad/s (docs/motor_model.md).
 SimConfig DefaultSimConfig();
 
 /// The rig geometry of the default rig (docs/frames.md draws it).
@@ -44,7 +57,8 @@ RigCalib DefaultRigCalib();
 /// scenes_dir from $ROTOLIDAR_SCENES or the source tree's scenes/.
 std::string ResolveScenePath(const std::string& scene);
 
-/// Reads a YAML file whose keys override DefaultSimConfig() (only the keys given change).
+/// Reads a YAML file whose keys override DefaultSimConfig() (only the keys given change). `rig_model` may be a
+/// mapping of overrides or a path to a rig parameter file (relative paths resolve against the config's folder).
 Status LoadSimConfig(const std::string& path, SimConfig* config);
 /// Writes every field: the resolved config of a run.
 void EmitSimConfig(YAML::Emitter& out, const SimConfig& config);

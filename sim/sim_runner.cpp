@@ -8,6 +8,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/io/recording.hpp"
+#include "sim/lidar/position_source.hpp"
+#include "sim/rig/rig_physics.hpp"
+#include "sim/rig/rig_trace.hpp"
 #include "sim/truth/truth.hpp"
 #include "sim/world/embree_scene.hpp"
 #include "sim/world/scene.hpp"
@@ -15,11 +18,14 @@
 namespace rotolidar::sim {
 namespace {
 
-/// Everything one run owns, built from the config.
+/// Everything one run owns, built from the config: the world (scene + Embree), the rig model and its physics
+/// state, the carrier's target path, the motor drive and the sensor models.
 struct SimWorld {
   Scene scene;
   std::unique_ptr<EmbreeScene> embree;
   size_t triangles = 0;
+  std::unique_ptr<RigModel> rig;
+  std::unique_ptr<BaseMotion> carrier;
 };
 
 Status BuildWorld(const SimConfig& config, SimWorld* world) {
@@ -27,74 +33,167 @@ Status BuildWorld(const SimConfig& config, SimWorld* world) {
   if (Status s = LoadScene(path, &world->scene); !s) return s;
   const TriangleMesh mesh = BuildMesh(world->scene);
   world->triangles = mesh.triangles.size();
-  return EmbreeScene::Create(mesh, &world->embree);
+  if (Status s = EmbreeScene::Create(mesh, &world->embree); !s) return s;
+  if (Status s = RigModel::Create(config.rig_model, &world->rig); !s) return s;
+  return MakeCarrierMotion(config.carrier, &world->carrier);
 }
 
-Status WriteResolvedConfig(const SimConfig& config, const std::string& dir) {
-  YAML::Emitter out;
-  out.SetDoublePrecision(17);
-  EmitSimConfig(out, config);
-  const std::string path = dir + "/sim_config.yaml";
+Status WriteText(const std::string& path, const std::string& text) {
   std::ofstream file(path);
-  file << "# Resolved configuration of this simulation run (rotolidar sim).\n" << out.c_str() << "\n";
+  file << text;
   return file ? Status::Ok() : Status::Error(path + ": write failed");
 }
 
-/// The LiDAR stream: fires the head packet by packet along the true lidar pose and writes VLP-16 packets.
-Status SimulateLidar(const SimConfig& config, const SimWorld& world, const BaseMotion& motion,
-                     const RotorMotion& rotor, RecordingWriter* writer, SimSummary* summary,
-                     const ProgressFn& progress) {
-  Vlp16Caster caster(*world.embree, config.rig.lidar, config.lidar, config.seed);
-  Vlp16PacketEncoder encoder(config.return_mode, config.rig.lidar_clock_offset_s);
-  const auto T_world_lidar_at = [&](Seconds t) {
-    return motion.At(t).T_world_base * config.rig.T_base_lidar(rotor.AngleAt(t));
-  };
-  std::vector<Vlp16FiringSequence> sequences;
-  const int per_packet = encoder.SequencesPerPacket();
-  double next_progress_s = 1.0;
-  while (caster.FiringTime(caster.sequences_fired() + per_packet, 0) <= config.duration_s) {
-    sequences.clear();
-    caster.Fire(per_packet, T_world_lidar_at, &sequences, nullptr);
-    for (const Vlp16FiringSequence& seq : sequences) {
-      for (uint16_t d : seq.distance_2mm) summary->lidar_returns += d != 0;
-      summary->lidar_rays += 16;
-      if (auto packet = encoder.Add(seq)) {
-        if (Status s = writer->Write(*packet); !s) return s;
-        ++summary->lidar_packets;
-      }
-    }
-    if (progress && sequences.back().t_s >= next_progress_s) {
-      progress(sequences.back().t_s / config.duration_s);
-      next_progress_s += 1.0;
-    }
-  }
-  return Status::Ok();
+Status WriteResolvedConfig(const SimConfig& config, const RigModel& rig, const std::string& dir) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  EmitSimConfig(out, config);
+  if (Status s = WriteText(dir + "/sim_config.yaml", std::string("# Resolved configuration of this simulation "
+                                                                  "run (rotolidar sim).\n") + out.c_str() + "\n");
+      !s)
+    return s;
+  return WriteText(dir + "/rig_model.xml", rig.mjcf());  // the exact MJCF the physics ran
 }
 
-/// IMU, encoder and truth streams on their own clocks (each sensor samples at its own rate).
-Status SimulateRig(const SimConfig& config, const BaseMotion& motion, const RotorMotion& rotor,
-                   RecordingWriter* writer, TruthWriter* truth, SimSummary* summary) {
-  ImuModel imu(config.rig.imu, config.rig.T_base_imu, config.seed, config.imu_bias);
-  const long n_imu = long(std::floor(config.duration_s * config.rig.imu.rate_hz));
-  for (long i = 0; i <= n_imu; ++i) {
-    const Seconds t = double(i) / config.rig.imu.rate_hz;
-    if (Status s = writer->Write(imu.Sample(motion.At(t), t)); !s) return s;
-    if (Status s = truth->WriteImuBias({t, imu.Bias().gyro_radps, imu.Bias().accel_mps2}); !s) return s;
-    ++summary->imu_samples;
+/// The LiDAR stream: fires the head packet by packet along the true lidar pose (interpolated from the physics
+/// trace) and writes VLP-16 data packets plus position packets. Fires every packet whose last firing lies within
+/// the trace; returns the time before which the trace is no longer needed.
+class LidarStream {
+ public:
+  LidarStream(const SimConfig& config, const SimWorld& world, const RigCalib& calib)
+      : config_(config),
+        calib_(calib),
+        embree_(*world.embree),
+        caster_(*world.embree, calib.lidar, config.lidar, config.seed),
+        encoder_(config.return_mode, calib.lidar_clock_offset_s),
+        positions_(PositionConfig(calib)) {}
+
+  Status FireCovered(const RigTrace& trace, RecordingWriter* writer, SimSummary* summary) {
+    const int per_packet = encoder_.SequencesPerPacket();
+    const auto T_world_lidar_at = [&](Seconds t) {
+      const RigTraceSample s = trace.At(t);
+      return s.T_world_base * calib_.T_base_lidar(s.theta_rad);
+    };
+    while (true) {
+      // The caster may ask for the pose up to the start of the sequence after the packet (it interpolates within one).
+      const Seconds t_last = caster_.FiringTime(caster_.sequences_fired() + per_packet, 0);
+      if (t_last > config_.duration_s || !trace.Covers(NextFiringTime(), t_last)) break;
+      embree_.SetTime(NextFiringTime());  // dynamic objects at the packet's time (moving < 1 mm in 1.3 ms)
+      sequences_.clear();
+      caster_.Fire(per_packet, T_world_lidar_at, &sequences_, nullptr);
+      for (const Vlp16FiringSequence& seq : sequences_) {
+        for (uint16_t d : seq.distance_2mm) summary->lidar_returns += d != 0;
+        summary->lidar_rays += 16;
+        if (auto packet = encoder_.Add(seq)) {
+          if (Status s = WritePositionsUntil(packet->t_capture_s, writer); !s) return s;
+          if (Status s = writer->Write(*packet); !s) return s;
+          ++summary->lidar_packets;
+        }
+      }
+    }
+    return Status::Ok();
   }
-  EncoderModel encoder(config.encoder, config.seed);
-  for (const EncoderSample& e : encoder.SampleRange(rotor, 0.0, config.duration_s)) {
-    if (Status s = writer->Write(e); !s) return s;
-    ++summary->encoder_samples;
+  Seconds NextFiringTime() const { return caster_.FiringTime(caster_.sequences_fired(), 0); }
+
+ private:
+  static Vlp16PositionConfig PositionConfig(const RigCalib& calib) {
+    Vlp16PositionConfig c;
+    c.epoch_unix_s = calib.epoch_unix_s;
+    c.lidar_clock_offset_s = calib.lidar_clock_offset_s;
+    c.pps_status = 0;  // the twin's VLP-16 has no GPS receiver wired: its clock free-runs (no PPS)
+    c.gps_fix = false;
+    return c;
   }
-  const long n_truth = long(std::floor(config.duration_s * config.truth_rate_hz));
-  for (long i = 0; i <= n_truth; ++i) {
-    const Seconds t = double(i) / config.truth_rate_hz;
-    const Pose3 T_world_base = motion.At(t).T_world_base;
-    const double theta = rotor.AngleAt(t);
-    if (Status s = truth->WriteBase({t, T_world_base}); !s) return s;
-    if (Status s = truth->WriteLidar({t, T_world_base * config.rig.T_base_lidar(theta)}); !s) return s;
-    if (Status s = truth->WriteRotor({t, theta}); !s) return s;
+  Status WritePositionsUntil(Seconds t_s, RecordingWriter* writer) {
+    position_packets_.clear();
+    positions_.EmitUntil(t_s - Vlp16PositionConfig{}.transmit_latency_s, &position_packets_);
+    for (const LidarPacket& p : position_packets_)
+      if (Status s = writer->Write(p); !s) return s;
+    return Status::Ok();
+  }
+
+  const SimConfig& config_;
+  const RigCalib& calib_;
+  EmbreeScene& embree_;
+  Vlp16Caster caster_;
+  Vlp16PacketEncoder encoder_;
+  Vlp16PositionSource positions_;
+  std::vector<Vlp16FiringSequence> sequences_;
+  std::vector<LidarPacket> position_packets_;
+};
+
+/// Truth on its own channel at truth_rate_hz, interpolated from the physics trace.
+class TruthStream {
+ public:
+  TruthStream(const SimConfig& config, const RigCalib& calib, TruthWriter* writer)
+      : config_(config), calib_(calib), writer_(writer) {}
+
+  Status WriteCovered(const RigTrace& trace) {
+    while (true) {
+      const Seconds t = double(next_) / config_.truth_rate_hz;
+      if (t > config_.duration_s || !trace.Covers(t, t)) return Status::Ok();
+      const RigTraceSample s = trace.At(t);
+      if (Status st = writer_->WriteBase({t, s.T_world_base}); !st) return st;
+      if (Status st = writer_->WriteLidar({t, s.T_world_base * calib_.T_base_lidar(s.theta_rad)}); !st) return st;
+      if (Status st = writer_->WriteRotor({t, s.theta_rad}); !st) return st;
+      ++next_;
+    }
+  }
+  Seconds NextTime() const { return double(next_) / config_.truth_rate_hz; }
+
+ private:
+  const SimConfig& config_;
+  const RigCalib& calib_;
+  TruthWriter* writer_;
+  long next_ = 0;
+};
+
+/// The physics loop: steps the rig at its timestep; samples the IMU every whole number of steps; streams the
+/// encoder samples the drive produced; feeds the trace that the LiDAR and truth streams read behind it.
+Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& calib, RecordingWriter* writer,
+                  TruthWriter* truth_writer, SimSummary* summary, const ProgressFn& progress) {
+  RigState state(*world.rig);
+  StepperDrive drive(config.motor, config.seed);
+  ImuModel imu(config.imu.noise, calib.T_base_imu, config.seed, config.imu.errors);
+  const MotorReference ref0 = drive.profile().Reference(0.0);
+  state.Reset(world.carrier->At(0.0), ref0.theta_rad, ref0.omega_radps);
+  RigTrace trace;
+  trace.Append({0.0, state.T_world_base(), state.rotor_angle_rad()});
+  LidarStream lidar(config, world, calib);
+  TruthStream truth(config, calib, truth_writer);
+  const long steps_per_imu = std::lround(1.0 / (config.imu.noise.rate_hz * state.timestep_s()));
+  const long n_steps = long(std::ceil(config.duration_s / state.timestep_s() - 1e-9)) + 1;
+  std::vector<EncoderSample> encoder_samples;
+  double next_progress_s = 1.0;
+  for (long k = 0; k < n_steps; ++k) {
+    const Seconds t = state.time_s();
+    if (Status s = state.Step(world.carrier->At(t).T_world_base, &drive); !s) return s;
+    trace.Append({state.time_s(), state.T_world_base(), state.rotor_angle_rad()});
+    if (k % steps_per_imu == 0 && t <= config.duration_s) {  // imu() describes the start of this step: t
+      const ImuTruth true_imu = state.imu();
+      if (Status s = writer->Write(imu.SampleFromTruth(true_imu.angular_rate_imu_radps,
+                                                       true_imu.specific_force_imu_mps2, true_imu.t_s));
+          !s)
+        return s;
+      if (Status s = truth_writer->WriteImuBias({true_imu.t_s, imu.Bias().gyro_radps, imu.Bias().accel_mps2}); !s)
+        return s;
+      ++summary->imu_samples;
+    }
+    encoder_samples.clear();
+    drive.DrainEncoderSamples(&encoder_samples);
+    for (EncoderSample e : encoder_samples) {
+      if (e.t_s > config.duration_s) continue;
+      e.t_s += config.clocks.encoder_offset_s;
+      if (Status s = writer->Write(e); !s) return s;
+      ++summary->encoder_samples;
+    }
+    if (Status s = truth.WriteCovered(trace); !s) return s;
+    if (Status s = lidar.FireCovered(trace, writer, summary); !s) return s;
+    trace.DropBefore(std::min(lidar.NextFiringTime(), truth.NextTime()));
+    if (progress && state.time_s() >= next_progress_s) {
+      progress(std::min(1.0, state.time_s() / config.duration_s));
+      next_progress_s += 1.0;
+    }
   }
   return Status::Ok();
 }
@@ -112,19 +211,13 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
   summary->scene_triangles = world.triangles;
   summary->recording_dir = recording_dir;
 
-  RigCalib calib = config.rig;  // what the rig's owner would have calibrated: here, the truth
-  calib.encoder = config.encoder.ToCalib();
-  calib.motor_speed_radps = config.motor.speed_radps;
+  const RigCalib calib = config.TrueCalib();  // what the rig's owner would have calibrated: here, the truth
   RecordingWriter writer;
   if (Status s = writer.Open(recording_dir, calib); !s) return s;
   TruthWriter truth;
   if (Status s = truth.Open(recording_dir); !s) return s;
-  if (Status s = WriteResolvedConfig(config, recording_dir); !s) return s;
-
-  const ScriptedBaseMotion motion(config.motion);
-  const ConstantSpeedRotor rotor(config.motor);
-  if (Status s = SimulateRig(config, motion, rotor, &writer, &truth, summary); !s) return s;
-  if (Status s = SimulateLidar(config, world, motion, rotor, &writer, summary, progress); !s) return s;
+  if (Status s = WriteResolvedConfig(config, *world.rig, recording_dir); !s) return s;
+  if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress); !s) return s;
   if (Status s = writer.Close(); !s) return s;
   if (Status s = truth.Close(); !s) return s;
   summary->sim_duration_s = config.duration_s;

@@ -43,6 +43,16 @@ Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
   if (p.IsSet("duration"))
     if (Status s = p.GetDouble("duration", &config->duration_s); !s) return s;
   if (p.IsSet("scene")) config->scene = p.Get("scene");
+  if (p.IsSet("motor-speed"))
+    if (Status s = p.GetDouble("motor-speed", &config->motor.profile.speed_radps); !s) return s;
+  if (p.IsSet("profile") && !sim::ParseMotorProfileType(p.Get("profile"), &config->motor.profile.type))
+    return Status::Error("--profile: constant, trapezoid, nodding or stop_and_go");
+  if (p.IsSet("axis")) {
+    bool known = false;
+    for (sim::MotorAxis a : {sim::MotorAxis::kHorizontal, sim::MotorAxis::kVertical, sim::MotorAxis::kTilted})
+      if (p.Get("axis") == sim::MotorAxisName(a)) config->rig_model.motor.axis = a, known = true;
+    if (!known) return Status::Error("--axis: horizontal, vertical or tilted");
+  }
   std::string why;
   if (!config->Validate(&why)) return Status::Error("sim config: " + why);
   return Status::Ok();
@@ -53,6 +63,9 @@ void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
   p->Add("scene", d.scene, "-", "scene name in scenes/ or a scene file path");
   p->Add("duration", std::to_string(int(d.duration_s)), "s", "simulated time");
   p->Add("seed", std::to_string(d.seed), "-", "run seed (every random stream derives from it)");
+  p->Add("motor-speed", std::to_string(d.motor.profile.speed_radps), "rad/s", "rotor speed (the seed's 2.6)");
+  p->Add("profile", sim::ToString(d.motor.profile.type), "-", "motor profile: constant|trapezoid|nodding|stop_and_go");
+  p->Add("axis", sim::MotorAxisName(d.rig_model.motor.axis), "-", "motor axis: horizontal|vertical|tilted");
 }
 
 }  // namespace

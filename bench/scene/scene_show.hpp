@@ -25,6 +25,7 @@ struct SceneInfo {
   std::vector<std::string> carriers;   ///< keys of default_paths
   double load_ms = 0.0;     ///< LoadScene (YAML + mesh files)
   double embree_ms = 0.0;   ///< BuildMesh + EmbreeScene::Create (with dynamic instances)
+  double set_time_us = 0.0; ///< median EmbreeScene::SetTime (move all dynamic objects, recommit); 0 without any
 };
 
 /// Loads and measures one scene file (never fails: errors land in SceneInfo::error).
@@ -40,6 +41,7 @@ struct SceneShowOptions {
   double time_s = 0.0;        ///< where dynamic objects are drawn
   int multisamples = 4;       ///< anti-aliasing samples of the offscreen buffer (0..16)
   bool shadows = false;
+  int color_bits = 8;         ///< bits kept per colour channel in the PNGs (1..8); fewer = smaller files
 };
 
 struct SceneShowResult {

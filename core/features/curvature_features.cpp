@@ -164,6 +164,13 @@ void Suppress(const Context& ctx, int sector, int p, Ring* ring) {
   }
 }
 
+/// The edge threshold at range r [m]: the fixed Eq. 3 threshold or the noise gate, whichever is higher.
+double EdgeThresholdAt(const FeatureConfig& cfg, float range_m) {
+  const double n = cfg.neighbours;
+  const double sigma_c = cfg.range_sigma_m * std::sqrt(4.0 * n * n + 2.0 * n) / (2.0 * n * range_m);
+  return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
+}
+
 pcl::PointXYZI ToPcl(const ScanPoint& p, float c) {
   pcl::PointXYZI out;
   out.x = p.p_base.x(), out.y = p.p_base.y(), out.z = p.p_base.z();
@@ -187,9 +194,10 @@ void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
     ring->picked[p] = 1;
     Suppress(*ctx, sector, p, ring);
   };
-  for (const int p : cand) {
+  auto sharp = [&](int p) { return ring->c[p] > EdgeThresholdAt(cfg, ctx->points[ring->index[p]].range_m); };
+  for (const int p : cand) {  // c falls along cand, the gate's threshold does not: test each
     if (n_sharp >= cfg.less_sharp_per_sector || !(ring->c[p] > cfg.edge_threshold)) break;
-    if (ring->picked[p]) continue;
+    if (ring->picked[p] || !sharp(p)) continue;
     const bool edge = n_edge < cfg.edges_per_sector;
     take(p, edge ? FeatureLabel::kEdge : FeatureLabel::kLessSharp, &out->less_sharp);
     if (edge) {
@@ -207,8 +215,7 @@ void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
   std::sort(cand.begin(), cand.end());  // firing order for the less-flat set
   for (const int p : cand) {
     FeatureLabel& label = ctx->labels[ring->index[p]];
-    if ((label != FeatureLabel::kUnused && label != FeatureLabel::kPlanar) || !(ring->c[p] < cfg.edge_threshold))
-      continue;
+    if ((label != FeatureLabel::kUnused && label != FeatureLabel::kPlanar) || sharp(p)) continue;
     if (label == FeatureLabel::kUnused) label = FeatureLabel::kLessFlat;
     out->less_flat.push_back(ToPcl(ctx->points[ring->index[p]], ring->c[p]));
   }
@@ -254,7 +261,8 @@ bool FeatureConfig::Validate(std::string* error) const {
   if (less_sharp_per_sector < edges_per_sector)
     return fail("less_sharp_per_sector", ">= edges_per_sector", less_sharp_per_sector);
   if (neighbours < 1) return fail("neighbours", ">= 1", neighbours);
-  if (!(edge_threshold > 0.0) || !std::isfinite(edge_threshold)) return fail("edge_threshold", "finite and > 0", edge_threshold);
+  if (!(edge_threshold > 0.0) || !std::isfinite(edge_threshold))
+    return fail("edge_threshold", "finite and > 0", edge_threshold);
   if (!(planar_threshold > 0.0) || !(planar_threshold <= edge_threshold))
     return fail("planar_threshold", "> 0 and <= edge_threshold", planar_threshold);
   if (!(max_neighbour_step_deg > 0.0) || !(max_neighbour_step_deg < 180.0))
@@ -265,6 +273,10 @@ bool FeatureConfig::Validate(std::string* error) const {
     return fail("beam_parallel_max_incidence_deg", "in (0, 90)", beam_parallel_max_incidence_deg);
   if (!(less_flat_voxel_m >= 0.0) || !std::isfinite(less_flat_voxel_m))
     return fail("less_flat_voxel_m", "finite and >= 0", less_flat_voxel_m);
+  if (!(range_sigma_m >= 0.0) || !std::isfinite(range_sigma_m))
+    return fail("range_sigma_m", "finite and >= 0", range_sigma_m);
+  if (!(edge_min_snr >= 0.0) || !std::isfinite(edge_min_snr))
+    return fail("edge_min_snr", "finite and >= 0", edge_min_snr);
   if (threads < 0) return fail("threads", ">= 0", threads);
   return true;
 }

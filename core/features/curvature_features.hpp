@@ -25,6 +25,12 @@ struct FeatureConfig {
   /// 15 deg 0.0014. Scale both linearly with the head's spin rate.
   double edge_threshold = 0.004;     ///< c above: edge candidate (a 45 deg bend at 0.2 deg steps)
   double planar_threshold = 0.0014;  ///< c below: planar candidate (a 15 deg bend at 0.2 deg steps)
+  /// Noise gate: range noise sigma_r makes c noisy with sigma_c(r) = sigma_r sqrt(4N^2 + 2N) / (2N r), so an edge
+  /// (and a less-sharp point) also needs c > edge_min_snr * sigma_c(r); below that a point counts as not-sharp.
+  /// 1 cm = the real VLP-16's noise measured on $ROTOLIDAR_DATA/vlp16_einride (docs/features.md); the sim's default
+  /// is 3 cm. 0 disables the gate (the seed's fixed threshold only).
+  double range_sigma_m = 0.01;
+  double edge_min_snr = 3.0;  ///< with 1 cm this is A-LOAM's unnormalised |sum|^2 > 0.1 m^2 rule
   /// Consecutive same-ring points farther apart in azimuth are not neighbours (dropouts, the scan seam): no window
   /// crosses such a gap, no occlusion is declared across it. 2.5x the step at the VLP-16's fastest 1200 rpm.
   double max_neighbour_step_deg = 1.0;
@@ -38,8 +44,8 @@ struct FeatureConfig {
   /// (tan(beta) = dr / (r dgamma)), exceeds this. A-LOAM's 0.0002 r^2 gap rule is 75.7 deg at 0.2 deg steps.
   double beam_parallel_max_incidence_deg = 75.0;
   double less_flat_voxel_m = 0.2;  ///< map-side planar set downsampling (LOAM: 0.2 m); 0 keeps every point
-  int threads = 0;                 ///< worker threads; 0 = std::thread::hardware_concurrency(); results never depend on it
-  /// False (and *error names the field, e.g. "features.sectors must be >= 1 (got 0)") if a value is invalid.
+  int threads = 0;  ///< worker threads; 0 = std::thread::hardware_concurrency(); results never depend on it
+  /// False (and *error names the field, e.g. "features.sectors must be in [1, 360] (got 0)") if a value is invalid.
   bool Validate(std::string* error) const;
 };
 
@@ -53,7 +59,7 @@ enum class FeatureLabel : uint8_t {
   kEdge,           ///< in edge (and in less_sharp)
   kLessSharp,      ///< in less_sharp only
   kPlanar,         ///< in planar (and in the less_flat input)
-  kLessFlat,       ///< in the less_flat input only (c < edge_threshold)
+  kLessFlat,       ///< in the less_flat input only (c below the edge threshold at its range)
 };
 
 struct FeatureStats {

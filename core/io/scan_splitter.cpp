@@ -11,30 +11,36 @@ RevolutionSplitter::RevolutionSplitter(double cut_azimuth_deg) {
 }
 
 double RevolutionSplitter::RelativeAzimuth(float azimuth_deg) const {
-  double rel = std::fmod(static_cast<double>(azimuth_deg) - cut_deg_, 360.0);
+  double rel = static_cast<double>(azimuth_deg) - cut_deg_;  // decoded azimuths lie in [0, 360): one wrap at most
   if (rel < 0.0) rel += 360.0;
+  if (rel >= 360.0) rel = std::fmod(rel, 360.0);  // only for out-of-contract input
   return rel;
 }
 
-std::optional<LidarScan> RevolutionSplitter::Add(const LidarPoint& point) {
+bool RevolutionSplitter::Append(const LidarPoint& point) {
   const double rel = RelativeAzimuth(point.azimuth_deg);
-  std::optional<LidarScan> finished;
-  if (last_rel_deg_ >= 0.0 && last_rel_deg_ - rel > 180.0 && !current_.points.empty()) {
+  const bool crossed = last_rel_deg_ >= 0.0 && last_rel_deg_ - rel > 180.0 && !current_.points.empty();
+  if (crossed) {
     ++crossings_;
-    finished = std::move(current_);
+    finished_ = std::move(current_);
     current_ = LidarScan();
+    current_.points.reserve(finished_.points.size() + finished_.points.size() / 8);  // the next one is similar
   }
   last_rel_deg_ = rel;
   if (current_.points.empty()) current_.t_start_s = point.t_s;
   current_.t_end_s = point.t_s;
   current_.points.push_back(point);
-  return finished;
+  return crossed;
+}
+
+std::optional<LidarScan> RevolutionSplitter::Add(const LidarPoint& point) {
+  if (!Append(point)) return std::nullopt;
+  return std::move(finished_);
 }
 
 void RevolutionSplitter::Add(const std::vector<LidarPoint>& points, std::vector<LidarScan>* finished) {
   for (const LidarPoint& p : points) {
-    std::optional<LidarScan> scan = Add(p);
-    if (scan) finished->push_back(std::move(*scan));
+    if (Append(p)) finished->push_back(std::move(finished_));
   }
 }
 

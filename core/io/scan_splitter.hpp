@@ -28,9 +28,12 @@ class RevolutionSplitter {
 
  private:
   double RelativeAzimuth(float azimuth_deg) const;
+  /// Adds the point; true when it crossed the cut (the finished scan is then in finished_).
+  bool Append(const LidarPoint& point);
 
   double cut_deg_;
   LidarScan current_;
+  LidarScan finished_;
   double last_rel_deg_ = -1.0;  // < 0: no point yet
   std::size_t crossings_ = 0;
 };

@@ -113,9 +113,10 @@ uint32_t Vlp16TimestampUs(Seconds t_s, double lidar_clock_offset_s);
 /// utc_unix_s must be >= 0 (dates from 1970 on).
 std::string FormatGprmc(double utc_unix_s, bool valid, double latitude_deg, double longitude_deg);
 /// UTC [Unix seconds] of an RMC sentence ($GPRMC, $GNRMC, ...): time hhmmss[.ss] (field 1), date ddmmyy (field 9;
-/// yy < 80 is 20yy). A present checksum must match. Fails naming the field; *utc_unix_s is written only on success.
+/// yy < 80 is 20yy: years 1980..2079). A present checksum must match. Fails naming the field; *utc_unix_s is
+/// written only on success.
 Status ParseGprmcUtc(const std::string& sentence, double* utc_unix_s);
-/// Unix seconds at 00:00:00 UTC of a proleptic Gregorian date (the civil-from-days algorithm, no time zone).
+/// Days from 1970-01-01 to a proleptic Gregorian date (H. Hinnant's days_from_civil; no time zone).
 int64_t UnixDaysFromCivil(int year, int month, int day);
 
 // ---------------------------------------------------------------------------------------------------------------

@@ -54,8 +54,8 @@ std::vector<uint8_t> RangeNormalizedSorKeep(const pcl::PointCloud<pcl::PointXYZ>
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!(points[i].range_m > 0.f)) continue;  // no statistic: removed below, outside mu and sigma
     const int found = tree.nearestKSearch(static_cast<pcl::index_t>(i), k + 1, nn, nn_sq);
-    double dist_sum = 0.0;
-    for (int j = 1; j < found; ++j) dist_sum += std::sqrt(double(nn_sq[j]));  // j = 0 is the query point
+    double dist_sum = 0.0;  // over all k + 1 results: the query itself adds 0 wherever the search ranks it
+    for (int j = 0; j < found; ++j) dist_sum += std::sqrt(double(nn_sq[j]));
     stat[i] = dist_sum / k / points[i].range_m;
     sum += stat[i], sq_sum += stat[i] * stat[i];
   }

@@ -47,20 +47,27 @@ DegeneracyInfo AnalyzeDegeneracy(const Matrix6d& hessian, const Matrix6d& displa
   DegeneracyInfo info;
   info.eigenvalues = eig.eigenvalues();
   info.eigenvectors = eig.eigenvectors();
+  info.displacement_metric = G;
   // Zhang et al.: keep the eigen-directions that pass the threshold; the update loses its components along the
-  // others. With G-orthonormal V, sum_i v_i v_i^T G = I, so the kept part is sum_good v v^T G.
-  Matrix6d P = Matrix6d::Zero();
-  for (int i = 0; i < 6; ++i) {
-    const Vector6d v = info.eigenvectors.col(i);
-    if (info.eigenvalues(i) < config.min_eigenvalue) {
-      info.degenerate = true;
-      info.degenerate_directions.push_back(v.normalized());
-    } else {
-      P += v * (v.transpose() * G);
-    }
+  // others. Eigenvalues ascend, so the degenerate ones are the first few.
+  int num_degenerate = 0;
+  while (num_degenerate < 6 && info.eigenvalues(num_degenerate) < config.min_eigenvalue) {
+    info.degenerate_directions.push_back(info.eigenvectors.col(num_degenerate).normalized());
+    ++num_degenerate;
   }
-  info.projection = info.degenerate ? P : Matrix6d::Identity();
+  info.degenerate = num_degenerate > 0;
+  info.projection = ProjectionWithout(info, num_degenerate);
   return info;
+}
+
+Matrix6d ProjectionWithout(const DegeneracyInfo& info, int num_smallest) {
+  ROTOLIDAR_CHECK(num_smallest >= 0 && num_smallest <= 6, "num_smallest = " << num_smallest);
+  if (num_smallest == 0) return Matrix6d::Identity();
+  // With G-orthonormal eigenvectors, sum_i v_i v_i^T G = I: the kept part is the sum over the kept directions.
+  Matrix6d P = Matrix6d::Zero();
+  for (int i = num_smallest; i < 6; ++i)
+    P += info.eigenvectors.col(i) * (info.eigenvectors.col(i).transpose() * info.displacement_metric);
+  return P;
 }
 
 Vector6d RemapUpdate(const DegeneracyInfo& info, const Vector6d& delta) { return info.projection * delta; }

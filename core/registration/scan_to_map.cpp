@@ -194,16 +194,17 @@ bool FitPlane(const std::vector<Eigen::Vector3d>& points, double max_ratio, doub
   return true;
 }
 
-ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan_guess,
-                         const ScanToMapConfig& config) {
-  std::string error;
-  ROTOLIDAR_CHECK(config.Validate(&error), error);
+namespace {
+
+/// One outer loop from `guess`. With num_degenerate > 0, every update is remapped: its components along the
+/// num_degenerate weakest eigen-directions of the current linearisation are removed.
+ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& guess, const ScanToMapConfig& config,
+                      int num_degenerate) {
   ScanToMapResult result;
-  result.T_map_scan = T_map_scan_guess;
-  PoseParameters x = PoseToParameters(T_map_scan_guess);
+  result.T_map_scan = guess;
+  PoseParameters x;
   std::unique_ptr<MatchProblem> problem;
   Matches matches;
-  DegeneracyInfo remap;
   for (int it = 0; it < config.max_correspondence_rebuilds; ++it) {
     matches = FindMatches(scan, map, result.T_map_scan, config);
     if (int(matches.size()) < config.min_correspondences) {
@@ -219,15 +220,14 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
     if (it == 0) result.initial_cost = summary.initial_cost;
     result.solver_iterations += int(summary.iterations.size());
     result.iterations = it + 1;
-    // Solution remapping (Zhang et al., as in LOAM's mapping): the degenerate subspace is decided once, from the
-    // first correspondence set, and every later update is projected onto its well-observed complement.
-    if (it == 0) {
-      const Pose3 T = ParametersToPose(x.data());
-      const Evaluation e = Evaluate(matches, T, problem->loss());
-      remap = AnalyzeDegeneracy(e.hessian, MetricOf(matches, T), int(matches.size()), config.degeneracy);
+    const Pose3 solved = ParametersToPose(x.data());
+    Vector6d delta = PoseBoxMinus(solved, result.T_map_scan);
+    if (num_degenerate > 0) {  // re-linearised every iteration: the weak directions turn with the rotation
+      const Evaluation e = Evaluate(matches, solved, problem->loss());
+      const DegeneracyInfo here =
+          AnalyzeDegeneracy(e.hessian, MetricOf(matches, solved), int(matches.size()), config.degeneracy);
+      delta = ProjectionWithout(here, num_degenerate) * delta;
     }
-    Vector6d delta = PoseBoxMinus(ParametersToPose(x.data()), result.T_map_scan);
-    if (config.degeneracy.remap) delta = RemapUpdate(remap, delta);
     result.T_map_scan = PoseBoxPlus(result.T_map_scan, delta);
     if (delta.head<3>().norm() < config.convergence_translation_m &&
         delta.tail<3>().norm() < config.convergence_rotation_rad) {
@@ -248,6 +248,27 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   if (!result.converged && result.message.empty())
     result.message = "no convergence in " + std::to_string(config.max_correspondence_rebuilds) + " rebuilds";
   return result;
+}
+
+}  // namespace
+
+ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan_guess,
+                         const ScanToMapConfig& config) {
+  std::string error;
+  ROTOLIDAR_CHECK(config.Validate(&error), error);
+  // Phase 1: the full solve. Its converged correspondences tell which directions the scene observes; deciding
+  // that at the guess instead (as LOAM does at its first iteration) misjudges a far guess (KITTI 0->1 from
+  // identity, 0.7 m off, looks degenerate there and would freeze the very direction it has to move along).
+  ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0);
+  if (!config.degeneracy.remap || !full.degeneracy.degenerate) return full;
+  // Phase 2 (Zhang et al.'s solution remapping): solve again from the guess with every update projected onto
+  // the well-observed subspace, so the degenerate directions keep the guess (the prior / IMU's value).
+  ScanToMapResult remapped =
+      Solve(scan, map, T_map_scan_guess, config, int(full.degeneracy.degenerate_directions.size()));
+  remapped.remapped = true;
+  remapped.iterations += full.iterations;
+  remapped.solver_iterations += full.solver_iterations;
+  return remapped;
 }
 
 }  // namespace rotolidar

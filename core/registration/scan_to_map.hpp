@@ -2,8 +2,10 @@
 // Feature-based scan-to-map registration (seed Sec. 3 / LOAM mapping): scan edge points are matched to lines and
 // scan planar points to planes fitted to their k nearest map features, and T_map_scan is solved with Ceres
 // (analytic point-to-line / point-to-plane Jacobians, core/registration/residuals.hpp) under a robust loss.
-// Outer loop: find correspondences at the current pose -> Ceres solve -> (optional) degeneracy remapping of the
-// update (core/registration/degeneracy.hpp) -> repeat until the update is small.
+// Outer loop: find correspondences at the current pose -> Ceres solve -> repeat until the update is small.
+// Degeneracy (core/registration/degeneracy.hpp): the converged full solve's Hessian is analysed; if a direction
+// is degenerate and remapping is enabled, the outer loop runs again from the guess with every update projected
+// onto the well-observed subspace (solution remapping), so degenerate directions keep the guess's value.
 //
 // Frames: scan features are in the scan frame (base at scan start, FeatureSet); the map is in the map (world)
 // frame; the result is T_map_scan. Tangent ordering of the Hessian: [dt (m, map frame); dtheta (rad, map frame)],
@@ -42,7 +44,8 @@ struct ScanToMapConfig {
 
 struct ScanToMapResult {
   bool converged = false;    ///< an outer update fell below the convergence thresholds
-  int iterations = 0;        ///< outer iterations (correspondence rebuilds) run
+  bool remapped = false;     ///< the result of the second, remapped solve (degenerate scene, remap enabled)
+  int iterations = 0;        ///< outer iterations (correspondence rebuilds) run, both solves summed
   int solver_iterations = 0; ///< Ceres iterations, summed
   int edge_inliers = 0;      ///< accepted point-to-line correspondences of the last rebuild
   int planar_inliers = 0;    ///< accepted point-to-plane correspondences of the last rebuild
@@ -53,8 +56,7 @@ struct ScanToMapResult {
   /// J^T J at the solution (robust-weighted as Ceres applies the loss), 6x6 in the tangent [dt; dtheta].
   /// Residuals are metres, so information = hessian / sigma_point^2 for a point noise sigma_point [m].
   Matrix6d hessian = Matrix6d::Zero();
-  /// Eigen-analysis of `hessian` at the solution. (The remapping applied during the solve, when enabled, was
-  /// decided from the first correspondence set, as in LOAM; both agree unless the first guess was far off.)
+  /// Eigen-analysis of `hessian` at the solution (for a remapped result: at the remapped solution).
   DegeneracyInfo degeneracy;
   std::string message;        ///< empty on success; otherwise why it failed
 };

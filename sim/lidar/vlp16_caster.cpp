@@ -19,6 +19,12 @@ bool Fail(std::string* error, const std::string& message) {
   return false;
 }
 
+/// Room for `more` elements; grows at least 2x, so that callers appending packet by packet stay linear.
+template <typename T>
+void ReserveGeometric(std::vector<T>* v, std::size_t more) {
+  if (v->capacity() - v->size() < more) v->reserve(std::max(2 * v->capacity(), v->size() + more));
+}
+
 }  // namespace
 
 bool Vlp16CasterConfig::Validate(std::string* error) const {
@@ -69,11 +75,14 @@ bool Vlp16CasterConfig::Validate(std::string* error) const {
 }
 
 Status CheckCasterMaterials(const Vlp16CasterConfig& config, const std::vector<Material>& materials) {
-  for (const auto& entry : config.material_transmittance) {
-    const bool found = std::any_of(materials.begin(), materials.end(),
-                                   [&](const Material& m) { return m.name == entry.first; });
-    if (!found) {
-      return Status::Error("lidar.material_transmittance: material '" + entry.first + "' is not in the scene");
+  for (const auto& [name, t] : config.material_transmittance) {
+    const auto it = std::find_if(materials.begin(), materials.end(), [&](const Material& m) { return m.name == name; });
+    if (it == materials.end()) {
+      return Status::Error("lidar.material_transmittance: material '" + name + "' is not in the scene");
+    }
+    if (it->albedo + t > 1.0) {  // reflected + transmitted fractions of the incident power
+      return Status::Error("lidar.material_transmittance: material '" + name + "': albedo " +
+                           std::to_string(it->albedo) + " + transmittance " + std::to_string(t) + " exceeds 1");
     }
   }
   return Status::Ok();
@@ -130,16 +139,27 @@ void Vlp16Caster::AdvanceSpinRate() {
   spin_rate_degps_ = config_.rpm * 6.0 * (1.0 + config_.rpm_jitter_frac * spin_error_);
 }
 
-void Vlp16Caster::SequencePoses(const PoseFn& T_world_lidar_at) {
+// The interval the pose is interpolated over: from this sequence's start to the next one's (whose pose the next
+// sequence reuses), or, for the last sequence of a Fire call, to its own last firing, so that the pose function is
+// never asked about a time after the last firing it is covering (the sim's physics trace may end there).
+void Vlp16Caster::SequencePoses(const PoseFn& T_world_lidar_at, bool last_in_call) {
   if (config_.pose_per_firing) return;
   pose_start_ = have_next_pose_ ? pose_next_ : T_world_lidar_at(FiringTime(next_sequence_, 0));
-  pose_next_ = T_world_lidar_at(FiringTime(next_sequence_ + 1, 0));  // the next sequence's start pose
-  have_next_pose_ = true;
+  if (last_in_call) {
+    pose_next_ = T_world_lidar_at(FiringTime(next_sequence_, kLasers - 1));
+    pose_span_s_ = (kLasers - 1) * kVlp16FiringPeriodS;
+    have_next_pose_ = false;
+  } else {
+    pose_next_ = T_world_lidar_at(FiringTime(next_sequence_ + 1, 0));
+    pose_span_s_ = kVlp16SequencePeriodS;
+    have_next_pose_ = true;
+  }
 }
 
 // Head azimuth of laser i: a0 + w * i * 2.304 us; its cosine/sine by rotating the previous laser's by one step.
-void Vlp16Caster::PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequence* seq, Firing* firings,
-                               RayQuery* queries) {
+void Vlp16Caster::PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequence* seq, std::size_t s,
+                               bool last_in_call) {
+  Firing* firings = &firings_[s * kLasers];
   seq->t_s = FiringTime(next_sequence_, 0);
   seq->azimuth_centideg = static_cast<uint16_t>(std::llround(head_azimuth_deg_ * 100.0) % 36000);
   const double step_rad = spin_rate_degps_ * kVlp16FiringPeriodS * kDegToRad;
@@ -148,9 +168,9 @@ void Vlp16Caster::PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequen
   const double tan_h = std::tan(0.5e-3 * config_.beam_divergence_horizontal_mrad);
   const double tan_v = std::tan(0.5e-3 * config_.beam_divergence_vertical_mrad);
   const std::size_t k_rays = pattern_.size();
-  SequencePoses(T_world_lidar_at);
-  // Linear interpolation of the pose matrix over 55 us: the rotation is orthonormal to ~(w dt)^2 / 8 (< 1e-8 for
-  // w < 3 rad/s), far below the 2 mm range unit; directions are normalised below.
+  SequencePoses(T_world_lidar_at, last_in_call);
+  // Linear interpolation of the pose matrix over <= 55 us: the rotation is orthonormal to ~(w dt)^2 / 8 (< 1e-8
+  // for w < 3 rad/s), far below the 2 mm range unit; directions are normalised below.
   const Eigen::Matrix3d dR = pose_next_.linear() - pose_start_.linear();
   const Eigen::Vector3d dt = pose_next_.translation() - pose_start_.translation();
   Pose3 T_world_lidar = pose_start_;
@@ -160,21 +180,22 @@ void Vlp16Caster::PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequen
     if (config_.pose_per_firing) {
       T_world_lidar = T_world_lidar_at(f.t_s);
     } else {
-      const double s = i * (kVlp16FiringPeriodS / kVlp16SequencePeriodS);
-      T_world_lidar.linear() = pose_start_.linear() + s * dR;
-      T_world_lidar.translation() = pose_start_.translation() + s * dt;
+      const double frac = i * kVlp16FiringPeriodS / pose_span_s_;
+      T_world_lidar.linear() = pose_start_.linear() + frac * dR;
+      T_world_lidar.translation() = pose_start_.translation() + frac * dt;
     }
     f.origin_world = T_world_lidar * Vlp16RayOrigin(intrinsics_.vertical_offset_m[i]);
     const double ce = cos_elevation_[i], se = sin_elevation_[i];
     const Eigen::Vector3d dir_lidar(ce * cos_a, -ce * sin_a, se);  // = Vlp16RayDirection(elev_i, a_i)
     f.dir_world = (T_world_lidar.linear() * dir_lidar).normalized();
-    queries[i * k_rays] = RayQuery{f.origin_world, f.dir_world, config_.max_range_m};
+    RayQuery* queries = &queries_[QueryIndex(s * kLasers + static_cast<std::size_t>(i), 0)];
+    queries[0] = RayQuery{f.origin_world, f.dir_world, config_.max_range_m};
     if (k_rays > 1) {  // footprint axes: along the scan (d dir / d azimuth) and across it (d dir / d elevation)
       const Eigen::Vector3d u_h = T_world_lidar.linear() * Eigen::Vector3d(-sin_a, -cos_a, 0.0);
       const Eigen::Vector3d u_v = T_world_lidar.linear() * Eigen::Vector3d(-se * cos_a, se * sin_a, ce);
       for (std::size_t k = 1; k < k_rays; ++k) {
         const Eigen::Vector3d d = f.dir_world + pattern_[k].x * tan_h * u_h + pattern_[k].y * tan_v * u_v;
-        queries[i * k_rays + k] = RayQuery{f.origin_world, d.normalized(), config_.max_range_m};
+        queries[k] = RayQuery{f.origin_world, d.normalized(), config_.max_range_m};
       }
     }
     const double c = cos_a * cos_step - sin_a * sin_step;
@@ -204,7 +225,7 @@ void Vlp16Caster::CastBatch(std::size_t n_firings) {
       // Pass 0: query q is sub-ray q of the batch; later passes carry (sub-ray, path transmittance so far).
       const std::size_t ray = depth == 0 ? q : pass_info_[q].first;
       const double path_t = depth == 0 ? 1.0 : pass_info_[q].second;
-      const std::size_t firing = ray / k_rays;
+      const std::size_t firing = FiringOfQuery(ray);
       const RayQuery& query = queries[q];
       const double range_m =
           depth == 0 ? hit.distance_m : (query.origin_world - queries_[ray].origin_world).norm() + hit.distance_m;
@@ -216,8 +237,8 @@ void Vlp16Caster::CastBatch(std::size_t n_firings) {
       r.retroreflective = material.retroreflective;
       r.power = (cos_incidence < cos_grazing_cutoff_ || cos_incidence <= 0.0)
                     ? 0.0
-                    : pattern_[ray % k_rays].weight * path_t * path_t * (1.0 - t) * material.albedo *
-                          cos_incidence * std::exp(-config_.intensity_attenuation_per_m * range_m);
+                    : pattern_[ray % k_rays].weight * path_t * path_t * material.albedo * cos_incidence *
+                          std::exp(-config_.intensity_attenuation_per_m * range_m);
       if (t > 0.0 && depth + 1 < config_.max_surfaces_per_ray && range_m + kPassThroughM < config_.max_range_m) {
         next_info_.emplace_back(ray, path_t * t);
         next_queries_.push_back(RayQuery{query.origin_world + (hit.distance_m + kPassThroughM) * query.dir_world,
@@ -245,7 +266,7 @@ void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int la
   const std::size_t k_rays = pattern_.size();
   const std::size_t capacity = k_rays * static_cast<std::size_t>(config_.max_surfaces_per_ray);
   if (truth) {
-    const RayHit& central = hits_[firing_index * k_rays];
+    const RayHit& central = hits_[QueryIndex(firing_index, 0)];
     *truth = LidarTruthPoint();
     truth->t_s = firing.t_s;
     truth->laser_id = static_cast<uint8_t>(laser_id);
@@ -299,16 +320,16 @@ void Vlp16Caster::Fire(int num_sequences, const PoseFn& T_world_lidar_at, std::v
                        std::vector<LidarTruthPoint>* truth_out) {
   ROTOLIDAR_CHECK(out != nullptr, "Fire needs an output");
   ROTOLIDAR_CHECK(num_sequences >= 0, "num_sequences = " << num_sequences);
-  out->reserve(out->size() + static_cast<std::size_t>(num_sequences));
-  if (truth_out) truth_out->reserve(truth_out->size() + static_cast<std::size_t>(num_sequences) * kLasers);
-  const std::size_t k_rays = pattern_.size();
+  ReserveGeometric(out, static_cast<std::size_t>(num_sequences));
+  if (truth_out) ReserveGeometric(truth_out, static_cast<std::size_t>(num_sequences) * kLasers);
   for (int done = 0; done < num_sequences; done += kSequencesPerBatch) {
     const int n_seq = std::min(kSequencesPerBatch, num_sequences - done);
     const std::size_t first = out->size();
     out->resize(first + static_cast<std::size_t>(n_seq));
+    batch_sequences_ = static_cast<std::size_t>(n_seq);
     for (int s = 0; s < n_seq; ++s) {
-      const std::size_t f0 = static_cast<std::size_t>(s) * kLasers;
-      PlanSequence(T_world_lidar_at, &(*out)[first + s], &firings_[f0], &queries_[f0 * k_rays]);
+      const bool last_in_call = done + s + 1 == num_sequences;
+      PlanSequence(T_world_lidar_at, &(*out)[first + s], static_cast<std::size_t>(s), last_in_call);
     }
     CastBatch(static_cast<std::size_t>(n_seq) * kLasers);
     for (int s = 0; s < n_seq; ++s) {

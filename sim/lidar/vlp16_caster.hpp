@@ -10,8 +10,8 @@
 // cast at the exact a(t_k + i * 2.304 us), which the decoder's interpolation between sequences reproduces.
 // Central ray of laser i in the lidar frame: origin Vlp16RayOrigin(offset_i) + r * Vlp16RayDirection(elev_i, a)
 // (shared with the decoder in core/io/vlp16.hpp). Pose: T_world_lidar at each firing time, exactly
-// (pose_per_firing) or interpolated between the exact poses at the two sequence starts around it (55.296 us
-// apart; the default, measured against the exact poses in tests/sim/test_vlp16_caster.cpp).
+// (pose_per_firing) or interpolated between exact poses at most 55.296 us apart (the sequence starts around it;
+// the default, measured against the exact poses in tests/sim/test_vlp16_caster.cpp).
 //
 // Beam and echoes (vlp16_echoes.hpp): beam_rings = 0 casts the central ray only; > 0 samples the divergent beam
 // with sub-rays, so a spot straddling an edge returns a mixed (power-weighted) range or two echoes >= 1 m apart.
@@ -79,7 +79,8 @@ struct Vlp16CasterConfig {
   bool Validate(std::string* error) const;
 };
 
-/// Checks that every material_transmittance name exists among `materials` (message names the material).
+/// Checks that every material_transmittance name exists among `materials` and that its albedo (the diffusely
+/// reflected fraction) plus its transmittance is <= 1 (message names the material).
 Status CheckCasterMaterials(const Vlp16CasterConfig& config, const std::vector<Material>& materials);
 
 /// Ground truth of one laser firing (bench only). `hit`: the central ray met geometry within max_range_m (whether
@@ -109,10 +110,10 @@ class Vlp16Caster {
   Vlp16Caster(const EmbreeScene& scene, const LidarIntrinsics& intrinsics, const Vlp16CasterConfig& config,
               uint64_t run_seed);
 
-  /// Fires `num_sequences` sequences. T_world_lidar_at(t) is called with non-decreasing times: with
-  /// pose_per_firing once per laser firing, otherwise once per sequence start, including the start of the
-  /// sequence after the last one fired (55.296 us ahead). Appends to *out and (when not null) 16 truth points per
-  /// sequence to *truth_out.
+  /// Fires `num_sequences` sequences. T_world_lidar_at(t) is called with non-decreasing times between the first
+  /// and the last firing time of this call: with pose_per_firing once per laser firing, otherwise once per
+  /// sequence start plus once at the last firing. Appends to *out and (when not null) 16 truth points per sequence
+  /// to *truth_out.
   void Fire(int num_sequences, const std::function<Pose3(Seconds)>& T_world_lidar_at,
             std::vector<Vlp16FiringSequence>* out, std::vector<LidarTruthPoint>* truth_out);
 
@@ -129,8 +130,19 @@ class Vlp16Caster {
     Eigen::Vector3d dir_world;  // unit central ray
   };
   using PoseFn = std::function<Pose3(Seconds)>;
-  void PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequence* seq, Firing* firings, RayQuery* queries);
-  void SequencePoses(const PoseFn& T_world_lidar_at);  ///< pose_start_/pose_next_ of the sequence to plan
+  /// Plans sequence `s` of the batch: firings_[16 s + i] and their queries.
+  void PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequence* seq, std::size_t s, bool last_in_call);
+  // Queries are laid out laser-major ([laser][sequence][sub-ray]): neighbouring rays differ by one azimuth step
+  // (0.2 deg) instead of 2 deg of elevation, which Embree's coherent stream traverses faster.
+  std::size_t QueryIndex(std::size_t firing, std::size_t k) const {
+    return ((firing % 16) * batch_sequences_ + firing / 16) * pattern_.size() + k;
+  }
+  std::size_t FiringOfQuery(std::size_t q) const {
+    const std::size_t r = q / pattern_.size();
+    return (r % batch_sequences_) * 16 + r / batch_sequences_;
+  }
+  /// pose_start_ / pose_next_ / pose_span_s_ of the sequence to plan.
+  void SequencePoses(const PoseFn& T_world_lidar_at, bool last_in_call);
   void CastBatch(std::size_t n_firings);
   void Measure(const Firing& firing, std::size_t firing_index, int laser_id, Vlp16FiringSequence* seq,
                LidarTruthPoint* truth);
@@ -150,11 +162,14 @@ class Vlp16Caster {
   std::vector<BeamSample> pattern_;
   std::vector<double> transmittance_;  ///< per material id (0 = opaque)
   bool any_transmissive_ = false;
-  // Pose at the start of the sequence being planned and of the next one (interpolation mode).
+  // Interpolation mode: the pose at the start of the sequence being planned and pose_span_s_ later (the next
+  // sequence's start, or this sequence's last firing at the end of a Fire call).
   bool have_next_pose_ = false;
   Pose3 pose_start_ = Pose3::Identity(), pose_next_ = Pose3::Identity();
+  double pose_span_s_ = kVlp16SequencePeriodS;
   // Per-batch scratch, reused across calls: firings, queries (pattern_.size() per firing), and the surface
   // returns of each firing (capacity rays * max_surfaces_per_ray each).
+  std::size_t batch_sequences_ = 1;  ///< sequences in the batch being cast
   std::vector<Firing> firings_;
   std::vector<RayQuery> queries_;
   std::vector<RayHit> hits_;

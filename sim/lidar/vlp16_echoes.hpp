@@ -9,11 +9,12 @@
 // by the Gaussian profile exp(-2 r^2); weights sum to 1.
 //
 // Echoes: every surface a sub-ray meets returns power p = weight * albedo * cos(incidence) * exp(-k r) * T^2
-// (T = product of the transmittances of transmissive surfaces in front of it, crossed twice). The receiver cannot
-// separate returns closer than the echo separation (the manual: dual return records both only when the objects
-// are >= 1 m apart): sorted by range, returns within that distance of an echo's first return merge into it at
-// their power-weighted mean range (a "mixed edge point" when they come from different surfaces) with their summed
-// power. An echo is detected when 100 * power >= the intensity threshold.
+// (T = product of the transmittances of transmissive surfaces in front of it, crossed twice; a transmissive
+// surface's own albedo is the fraction it reflects diffusely, its transmittance the fraction it passes on).
+// The receiver cannot separate returns closer than the echo separation (Velodyne: dual return records both only
+// when the objects are >= 1 m apart): sorted by range, returns within that distance of an echo's first return
+// merge into it at their power-weighted mean range (a "mixed edge point" when they come from different surfaces)
+// with their summed power. An echo is detected when 100 * power >= the intensity threshold.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>

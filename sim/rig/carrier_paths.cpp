@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
-#include <sstream>
 
 namespace rotolidar::sim {
 namespace {
@@ -145,10 +143,11 @@ class SmoothedPlan {
   }
   std::array<Jet, 3> Eval(double t) const {
     const double hw = kernel_.half_width();
-    auto by_time = [](const Jump& j, double v) { return j.t_s < v; };
+    // [lo, hi): the jumps with |t - t_k| < w/2; those before lo are at or past w/2 behind t.
     const size_t lo = size_t(std::upper_bound(jumps_.begin(), jumps_.end(), t - hw,
                                               [](double v, const Jump& j) { return v < j.t_s; }) - jumps_.begin());
-    const size_t hi = size_t(std::lower_bound(jumps_.begin(), jumps_.end(), t + hw, by_time) - jumps_.begin());
+    const size_t hi = size_t(std::lower_bound(jumps_.begin(), jumps_.end(), t + hw,
+                                              [](const Jump& j, double v) { return j.t_s < v; }) - jumps_.begin());
     // Jumps at or before t - w/2 act as the plain polynomial (plus the kernel's variance for order 2).
     const Eigen::Vector3d &s0 = prefix_[0][lo], &s1 = prefix_[1][lo], &s2 = prefix_[2][lo];
     Eigen::Vector3d v[4] = {base_, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
@@ -219,7 +218,6 @@ class CubicSpline {
     }
     return out;
   }
-  double back() const { return x_.back(); }
 
  private:
   std::vector<double> x_;
@@ -227,7 +225,6 @@ class CubicSpline {
 };
 
 double WrapPi(double a) { return std::remainder(a, 2.0 * M_PI); }
-
 
 // ---- Waypoint plans (handheld, wheeled). ----
 
@@ -415,6 +412,26 @@ class KittiPath final : public BaseMotion {
   double duration_s_;
 };
 
+/// Gaussian-weighted moving average of the rows over time (sigma_s), the window symmetric about each frame and
+/// shrunk near the ends so that a uniformly moving sample stays put and the end frames are exact.
+Eigen::MatrixXd SmoothFrames(const std::vector<double>& t, const Eigen::MatrixXd& values, double sigma_s) {
+  const long n = values.rows();
+  Eigen::MatrixXd out(n, values.cols());
+  for (long k = 0; k < n; ++k) {
+    Eigen::RowVectorXd sum = values.row(k);
+    double weight = 1.0;
+    for (long r = 1; r <= std::min(k, n - 1 - k); ++r) {
+      const double dt = 0.5 * (t[size_t(k + r)] - t[size_t(k - r)]);
+      if (dt > 3.0 * sigma_s) break;
+      const double w = std::exp(-0.5 * dt * dt / (sigma_s * sigma_s));
+      sum += w * (values.row(k - r) + values.row(k + r));
+      weight += 2.0 * w;
+    }
+    out.row(k) = sum / weight;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::unique_ptr<BaseMotion> MakeHandheldWalk(const HandheldWalkConfig& config) {
@@ -507,6 +524,7 @@ Status MakeKittiPath(const KittiPathConfig& c, const std::vector<Pose3>& T_cam0s
     }
     values.row(long(k)) << T.translation().transpose(), yaw, pitch, roll;
   }
+  if (c.smoothing_s > 0) values = SmoothFrames(t, values, c.smoothing_s);
   *motion = std::make_unique<KittiPath>(CubicSpline(t, values), t.back());
   return Status::Ok();
 }

@@ -66,6 +66,7 @@ auto Fields(C& c) {
                                                   {"smoothing_s", &c.smoothing_s}};
   else if constexpr (std::is_same_v<std::remove_const_t<C>, KittiPathConfig>)
     return std::vector<std::pair<const char*, P>>{{"rate_hz", &c.rate_hz},     {"height_m", &c.height_m},
+                                                  {"smoothing_s", &c.smoothing_s},
                                                   {"start_x_m", &c.start_x_m}, {"start_y_m", &c.start_y_m},
                                                   {"start_yaw_rad", &c.start_yaw_rad}};
   else
@@ -203,6 +204,7 @@ bool CarConfig::Validate(std::string* error) const {
 bool KittiPathConfig::Validate(std::string* error) const {
   if (poses_file.empty()) return Fail(error, "kitti.poses_file: required");
   return InRange(error, "kitti.rate_hz", rate_hz, 1e-3, 1e4) && InRange(error, "kitti.height_m", height_m, -100, 100) &&
+         InRange(error, "kitti.smoothing_s", smoothing_s, 0.0, 10.0) &&
          InRange(error, "kitti.start_x_m", start_x_m, -1e6, 1e6) &&
          InRange(error, "kitti.start_y_m", start_y_m, -1e6, 1e6) &&
          InRange(error, "kitti.start_yaw_rad", start_yaw_rad, -10, 10);

@@ -51,10 +51,10 @@ std::string Quat(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-const char* CarrierTypeName(CarrierType type) {
+const char* PlatformTypeName(PlatformType type) {
   switch (type) {
-    case CarrierType::kWheeled: return "wheeled";
-    case CarrierType::kCar: return "car";
+    case PlatformType::kWheeled: return "wheeled";
+    case PlatformType::kCar: return "car";
     default: return "handheld";
   }
 }
@@ -67,13 +67,13 @@ const char* MotorAxisName(MotorAxis axis) {
   }
 }
 
-PlatformConfig DefaultPlatform(CarrierType type) {
+PlatformConfig DefaultPlatform(PlatformType type) {
   PlatformConfig p;  // handheld: frame, battery, computer, IMU and camera board around the hand grip
-  if (type == CarrierType::kWheeled) {  // Clearpath Jackal-class UGV: 17 kg, 508 x 430 x 250 mm; rig on its top
+  if (type == PlatformType::kWheeled) {  // Clearpath Jackal-class UGV: 17 kg, 508 x 430 x 250 mm; rig on its top
     p.mass_kg = 17.0;
     p.size_m = Eigen::Vector3d(0.508, 0.430, 0.250);
     p.center_m = Eigen::Vector3d(-0.15, 0.0, -0.185);
-  } else if (type == CarrierType::kCar) {  // compact car: 1500 kg, 4.5 x 1.8 x 1.4 m; rig above the windscreen
+  } else if (type == PlatformType::kCar) {  // compact car: 1500 kg, 4.5 x 1.8 x 1.4 m; rig above the windscreen
     p.mass_kg = 1500.0;
     p.size_m = Eigen::Vector3d(4.5, 1.8, 1.4);
     p.center_m = Eigen::Vector3d(-1.0, 0.0, -0.76);
@@ -174,15 +174,15 @@ std::string Geom(const std::string& name, const std::string& type, const std::st
 
 // The platform's geoms: a main box plus a grip (handheld) or four wheels about base y (wheeled, car). The
 // shares of the platform mass are stated in docs/rig_model.md.
-std::string PlatformGeoms(CarrierType type, const PlatformConfig& p) {
+std::string PlatformGeoms(PlatformType type, const PlatformConfig& p) {
   const Eigen::Vector3d c = p.center_m, s = p.size_m;
-  if (type == CarrierType::kHandheld) {
+  if (type == PlatformType::kHandheld) {
     const double grip_half_m = 0.06;  // a 12 cm grip under the frame
     return Geom("platform", "box", Vec(s / 2), c, 0.85 * p.mass_kg) +
            Geom("grip", "cylinder", "0.016 " + Num(grip_half_m), c - Eigen::Vector3d(0, 0, s.z() / 2 + grip_half_m),
                 0.15 * p.mass_kg);
   }
-  const bool car = type == CarrierType::kCar;
+  const bool car = type == PlatformType::kCar;
   const double wheel_share = car ? 0.015 : 0.05;          // of the platform mass, per wheel
   const double wheel_radius_m = (car ? 0.22 : 0.40) * s.z();
   const double wheel_half_width_m = (car ? 0.06 : 0.09) * s.y();
@@ -199,7 +199,7 @@ std::string PlatformGeoms(CarrierType type, const PlatformConfig& p) {
   return xml;
 }
 
-std::map<std::string, std::string> Placeholders(const RigModelConfig& c) {
+std::map<std::string, std::string> Placeholders(const RigModelConfig& c, double weld_torquescale_m) {
   RigCalib g;
   FillRigGeometry(c, &g);
   const RotorConfig& r = c.rotor;
@@ -248,12 +248,13 @@ std::map<std::string, std::string> Placeholders(const RigModelConfig& c) {
       Num(1.0 / (2.0 * M_PI * c.physics.tracking_natural_hz * c.physics.tracking_damping_ratio));
   v["weld_dampratio"] = Num(c.physics.tracking_damping_ratio);
   v["weld_impedance"] = Num(c.physics.tracking_impedance);
+  v["weld_torquescale"] = Num(weld_torquescale_m);
   return v;
 }
 
 }  // namespace
 
-std::string BuildRigMjcf(const RigModelConfig& config, std::string* error) {
+std::string BuildRigMjcf(const RigModelConfig& config, std::string* error, double weld_torquescale_m) {
   std::string why;
   if (!config.Validate(&why)) {
     *error = "rig model config: " + why;
@@ -268,7 +269,11 @@ std::string BuildRigMjcf(const RigModelConfig& config, std::string* error) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string text = buffer.str();
-  const std::map<std::string, std::string> values = Placeholders(config);
+  if (!(weld_torquescale_m > 0.0 && std::isfinite(weld_torquescale_m))) {
+    *error = "rig model: weld torquescale must be > 0";
+    return "";
+  }
+  const std::map<std::string, std::string> values = Placeholders(config, weld_torquescale_m);
   std::string out;
   size_t pos = 0;
   for (size_t open; (open = text.find("{{", pos)) != std::string::npos;) {
@@ -292,19 +297,32 @@ RigModel::~RigModel() {
 
 double RigModel::timestep_s() const { return model_->opt.timestep; }
 
+// Two passes: MuJoCo 2.2.2 regularises all six weld rows with the base's translational weight (1/kg), so the
+// rotational rows (1/(kg m^2)) would be far stiffer than asked and, with a soft weld, unstable. The first
+// compile gives the base's mean translational and rotational inverse weights; the weld's torquescale
+// 2 sqrt(w_trn / w_rot) [m] (2: MuJoCo's rotational rows act on half-angles) then equalises them.
 Status RigModel::Create(const RigModelConfig& config, std::unique_ptr<RigModel>* model) {
   std::unique_ptr<RigModel> m(new RigModel());
   m->config_ = config;
   std::string error;
-  m->mjcf_ = BuildRigMjcf(config, &error);
-  if (m->mjcf_.empty()) return Status::Error(error);
-  Status status = LoadMjcfFromString(m->mjcf_, "rig.xml", &m->model_);
-  if (!status) return status;
-  if (!(status = m->LookUpIds())) return status;
+  double torquescale_m = 1.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (m->model_) mj_deleteModel(m->model_);
+    m->model_ = nullptr;
+    m->mjcf_ = BuildRigMjcf(config, &error, torquescale_m);
+    if (m->mjcf_.empty()) return Status::Error(error);
+    Status status = LoadMjcfFromString(m->mjcf_, "rig.xml", &m->model_);
+    if (!status) return status;
+    if (!(status = m->LookUpIds())) return status;
+    const mjtNum* w = m->model_->body_invweight0 + 2 * m->base_body_;
+    torquescale_m = 2.0 * std::sqrt(w[0] / w[1]);
+  }
   FillRigGeometry(config, &m->geometry_);
   *model = std::move(m);
   return Status::Ok();
 }
+
+double RigModel::weld_torquescale_m() const { return model_->eq_data[mjNEQDATA * weld_ + 10]; }
 
 Status RigModel::LookUpIds() {
   const struct {

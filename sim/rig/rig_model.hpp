@@ -16,7 +16,7 @@
 #include "core/types/geometry.hpp"
 #include "core/util/log.hpp"
 
-typedef struct mjModel_ mjModel;  // MuJoCo's model (mujoco/mjmodel.h); only sim/rig/*.cpp include MuJoCo
+typedef struct mjModel_ mjModel;  // MuJoCo's model (mujoco/mjmodel.h); this header stays MuJoCo-free
 namespace YAML {
 class Node;
 class Emitter;
@@ -24,16 +24,16 @@ class Emitter;
 
 namespace rotolidar::sim {
 
-enum class CarrierType { kHandheld, kWheeled, kCar };
+enum class PlatformType { kHandheld, kWheeled, kCar };
 enum class MotorAxis {
   kHorizontal,  ///< motor z along base +x (the seed's forward scanner; the default)
   kVertical,    ///< motor z along base +z
   kTilted,      ///< motor z in the base x-z plane, tilt_deg above base +x towards +z
 };
-const char* CarrierTypeName(CarrierType type);  ///< "handheld", "wheeled", "car"
+const char* PlatformTypeName(PlatformType type);  ///< "handheld", "wheeled", "car"
 const char* MotorAxisName(MotorAxis axis);      ///< "horizontal", "vertical", "tilted"
 
-/// The carrier's platform: a box (plus a handle or wheels by carrier type, see docs/rig_model.md) that carries
+/// The carrier's platform: a box (plus a grip or wheels by carrier type, see docs/rig_model.md) that carries
 /// the rig. Everything on the base that is not the motor (frame, battery, computer, IMU, camera, chassis).
 struct PlatformConfig {
   double mass_kg = 1.5;                                   ///< total mass of the platform's geoms
@@ -41,7 +41,7 @@ struct PlatformConfig {
   Eigen::Vector3d center_m = Eigen::Vector3d(-0.04, 0.0, -0.07);  ///< the main box's centre in the base frame
 };
 /// Defaults per carrier: handheld 1.5 kg frame; wheeled 17 kg (Clearpath Jackal-class UGV); car 1500 kg.
-PlatformConfig DefaultPlatform(CarrierType type);
+PlatformConfig DefaultPlatform(PlatformType type);
 
 /// The stepper on the base and the rig geometry along its axis.
 struct MotorMountConfig {
@@ -92,7 +92,7 @@ struct RigPhysicsConfig {
 };
 
 struct RigModelConfig {
-  CarrierType carrier = CarrierType::kHandheld;
+  PlatformType carrier = PlatformType::kHandheld;
   PlatformConfig platform;  ///< DefaultPlatform(carrier) unless overridden
   MotorMountConfig motor;
   RotorConfig rotor;
@@ -121,13 +121,16 @@ Eigen::Matrix3d MotorAxisRotation(const MotorMountConfig& motor);
 /// geometry bit for bit.
 void FillRigGeometry(const RigModelConfig& config, RigCalib* calib);
 
-/// The resolved MJCF: the template with every {{placeholder}} filled from `config` (which must Validate).
+/// The resolved MJCF: the template with every {{placeholder}} filled from `config` (which must Validate) and
+/// the weld's torquescale [m] (RigModel::Create derives it from the compiled masses; 1 is only a first guess).
 /// Returns "" and sets *error (naming the template file or placeholder) on failure.
-std::string BuildRigMjcf(const RigModelConfig& config, std::string* error);
+std::string BuildRigMjcf(const RigModelConfig& config, std::string* error, double weld_torquescale_m = 1.0);
 
 /// YAML (rig_model/rig.yaml layout, docs/rig_model.md). Unknown keys are errors naming file:line. Setting
 /// `carrier:` resets `platform` to DefaultPlatform(carrier) before `platform:` overrides are read.
-void ParseRigModelConfig(const std::string& file, const YAML::Node& node, RigModelConfig* config);  // throws yaml::ParseError
+/// ParseRigModelConfig reads `node` (a map, e.g. nested in the sim config; null = keep *config) over *config and
+/// throws yaml::ParseError naming `file`:line; it does not Validate.
+void ParseRigModelConfig(const std::string& file, const YAML::Node& node, RigModelConfig* config);
 Status LoadRigModelConfig(const std::string& path, RigModelConfig* config);  ///< reads, parses and Validates
 void EmitRigModelConfig(YAML::Emitter& out, const RigModelConfig& config);   ///< a map (all fields)
 
@@ -146,6 +149,7 @@ class RigModel {
   /// The geometry the model was built with (FillRigGeometry on a default RigCalib; only geometry is meaningful).
   const RigCalib& geometry() const { return geometry_; }
   double timestep_s() const;
+  double weld_torquescale_m() const;  ///< the weld's torquescale Create chose (see rig_model.cpp)
 
   // MuJoCo ids (element index in its mjModel arrays).
   int target_body_id() const { return target_body_; }

@@ -37,9 +37,9 @@ void ParseCarrier(const std::string& file, const YAML::Node& root, RigModelConfi
   if (const YAML::Node n = root["carrier"]) {
     std::string name;
     Get(file, root, "carrier", &name);
-    if (name == "handheld") c->carrier = CarrierType::kHandheld;
-    else if (name == "wheeled") c->carrier = CarrierType::kWheeled;
-    else if (name == "car") c->carrier = CarrierType::kCar;
+    if (name == "handheld") c->carrier = PlatformType::kHandheld;
+    else if (name == "wheeled") c->carrier = PlatformType::kWheeled;
+    else if (name == "car") c->carrier = PlatformType::kCar;
     else throw ParseError(Where(file, n) + "carrier: expected handheld, wheeled or car, got '" + name + "'");
     c->platform = DefaultPlatform(c->carrier);
   }
@@ -159,7 +159,7 @@ Status LoadRigModelConfig(const std::string& path, RigModelConfig* config) {
 
 void EmitRigModelConfig(YAML::Emitter& out, const RigModelConfig& c) {
   out << YAML::BeginMap;
-  EmitKV(out, "carrier", CarrierTypeName(c.carrier));
+  EmitKV(out, "carrier", PlatformTypeName(c.carrier));
   out << YAML::Key << "platform" << YAML::Value << YAML::BeginMap;
   EmitKV(out, "mass_kg", c.platform.mass_kg);
   EmitVec3(out, "size_m", c.platform.size_m);

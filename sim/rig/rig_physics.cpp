@@ -14,6 +14,10 @@ struct TargetRates {
   Eigen::Vector3d omega = Eigen::Vector3d::Zero(), alpha = Eigen::Vector3d::Zero();
 };
 
+Eigen::Matrix3d QuatToRotation(const mjtNum* wxyz) {
+  return Eigen::Quaterniond(wxyz[0], wxyz[1], wxyz[2], wxyz[3]).normalized().toRotationMatrix();
+}
+
 template <typename T>
 void AppendBytes(std::string* out, const T* values, int count) {
   out->append(reinterpret_cast<const char*>(values), sizeof(T) * static_cast<size_t>(count));
@@ -68,12 +72,19 @@ void DriveCarrier(const RigModel& model, mjData* d, const Pose3& T_world_target,
   const double lead_s = 2.0 * p.tracking_damping_ratio / (2.0 * M_PI * p.tracking_natural_hz);
   Pose3 T_mocap = T_world_target;
   T_mocap.translation() += lead_s * r.v;
-  T_mocap.linear() = ExpSO3(lead_s * r.omega) * T_world_target.linear();
+  // MuJoCo 2.2.2 scales the weld's rotational Jacobian by torquescale but not its rotational error, so the
+  // rotation spring would be 1/torquescale too stiff: scale the error instead, placing the mocap rotation only
+  // that fraction of the way from the base's present rotation (the state this step's constraint sees) to the lead.
+  const int b = model.base_body_id();
+  const int base_qpos = model.model()->jnt_qposadr[model.base_joint_id()];
+  const Eigen::Matrix3d R_world_base = QuatToRotation(d->qpos + base_qpos + 3);
+  const Eigen::Matrix3d R_lead = ExpSO3(lead_s * r.omega) * T_world_target.linear();
+  T_mocap.linear() =
+      R_world_base * ExpSO3(model.weld_torquescale_m() * LogSO3(R_world_base.transpose() * R_lead));
   const int mocap = model.target_mocap_id();
   PoseToMujoco(T_mocap, d->mocap_pos + 3 * mocap, d->mocap_quat + 4 * mocap);
 
   const mjModel* m = model.model();
-  const int b = model.base_body_id();
   const Eigen::Vector3d com(d->subtree_com + 3 * b), origin(d->xpos + 3 * b), ipos(d->xipos + 3 * b);
   const Eigen::Vector3d r_com = com - origin;
   const Eigen::Vector3d a_com = r.a + r.alpha.cross(r_com) + r.omega.cross(r.omega.cross(r_com));
@@ -130,7 +141,9 @@ void RigState::ResetTo(const BaseKinematics& base0, double theta0_rad, double om
 }
 
 Status RigState::Step(const Pose3& T_world_target, RotorDrive* drive) {
-  auto where = [&] { return "rig physics: step " + std::to_string(steps_) + " (t = " + std::to_string(time_s()) + " s)"; };
+  auto where = [&] {
+    return "rig physics: step " + std::to_string(steps_) + " (t = " + std::to_string(time_s()) + " s)";
+  };
   if (failed_) return Status::Error(where() + ": the state is invalid after an earlier error; Reset it first");
   const mjModel* m = model_.model();
   data_->time = time_s();

@@ -136,7 +136,9 @@ void StepperDrive::ControlTick(const EncoderSample& sample) {
   const double period = 1.0 / config_.encoder.rate_hz;
   const double dt = have_tick_ ? sample.t_s - last_tick_t_s_ : 0.0;
   phase_rad_ += step_rate_radps_ * (sample.t_s - last_tick_t_s_);  // the step generator ran at the held rate
-  const MotorReference ref = profile_.Reference(sample.t_s);
+  // The sample reports the angle at t - latency: compare it with the reference at that time (the latency is a
+  // datasheet number the controller knows), so the true angle, not the late reading, tracks the profile.
+  const MotorReference ref = profile_.Reference(sample.t_s - config_.encoder.latency_s);
   // Decode exactly as a reader of encoder.csv does, then unwrap next to the predicted angle.
   const double raw = decode_.EncoderAngle(sample.count);
   const double predicted = have_tick_ ? enc_theta_rad_ + enc_speed_radps_ * dt : ref.theta_rad;

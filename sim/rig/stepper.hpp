@@ -8,9 +8,9 @@
 // TRUE hinge state and answers the motor torque. Inside, per physics step:
 //   1. the encoder (EncoderStream) samples the true angle at its own rate, with latency, noise and quantisation;
 //   2. each encoder sample is one PID tick (controller rate = encoder rate): the PID compares the decoded,
-//      unwrapped encoder angle (never the true angle) with the profile and sets the step rate [rad/s];
-//   3. the step generator integrates the step rate; the driver energises the nearest microstep, whose magnetic
-//      equilibrium is off by the motor's fixed per-full-step error;
+//      unwrapped encoder angle (never the true angle) with the profile and sets the command theta_ref + u;
+//   3. the step generator ramps to that command over the tick (rate-limited); the driver energises the nearest
+//      microstep, whose magnetic equilibrium is off by the motor's fixed per-full-step error;
 //   4. torque = -T_po(w) (1 + r cos(4 N_r th_e)) sin(N_r (theta - th_e)) - T_detent sin(4 N_r theta) - B omega,
 //      N_r = rotor teeth, th_e = commanded equilibrium, T_po(w) = pull-out torque at the step rate.
 // A load above T_po drags theta more than half an electrical period (2 full steps) from th_e: the rotor slips to
@@ -56,7 +56,8 @@ struct StepperConfig {
   double phase_inductance_h = 2.8e-3;  ///< [H]; >= 0
   double supply_voltage_v = 24.0;      ///< driver supply [V]; > 0
   /// Injected missed steps (driver glitches), Poisson rate [1/s], >= 0; 0 = off. Each drops one full step of the
-  /// driver's counter against the direction of motion (RandomStream(run_seed, "stepper.missed_steps")).
+  /// driver's counter in the direction the step generator is stepping at that instant (none while it stands
+  /// still). Event times: RandomStream(run_seed, "stepper.missed_steps").
   double missed_step_rate_hz = 0.0;
 
   bool Validate(std::string* error) const;
@@ -72,7 +73,8 @@ struct StepperConfig {
 
 /// The closed loop on POSITION feedback from the encoder, run once per encoder sample (controller rate = encoder
 /// rate). Position form: the step generator is steered to the command
-///   theta_cmd = theta_ref + u,   u = kp e + ki int(e) dt + kd de/dt,   e = theta_ref - theta_encoder,
+///   theta_cmd = theta_ref + u,   u = kp e + ki int(e) dt + kd de/dt,   e = theta_ref(t - latency) - theta_encoder
+/// (a sample stamped t reports the angle at t - encoder.latency_s, a datasheet number the controller compensates),
 /// e passed through a +-deadband_counts dead zone for the P and I terms, de/dt = omega_ref - (low-passed encoder
 /// speed). The D term is what damps the rotor's torsional mode (~22 Hz: the stepper's 20 N m/rad against the
 /// VLP-16's inertia; open loop damping ratio ~0.003). Limits: the P + I part of u moves at most
@@ -81,11 +83,15 @@ struct StepperConfig {
 /// rate |d theta_cmd/dt| <= max_step_rate. Anti-windup: the integrator holds while a
 /// limit clips the output in the direction the error pushes, and |ki int(e)| <= integral_limit.
 struct PidConfig {
-  double kp = 1.0;          ///< [rad/rad]; >= 0
-  double ki_per_s = 20.0;   ///< [1/s]; >= 0. Slow pole (1 + kp) / ki = 0.1 s: removes lag and lost steps
+  /// Gains, tuned on a 1-DOF model of the rig (J = 1e-3 kg m^2, docs/motor_model.md): every loop delay turns P and
+  /// I into negative damping of the torsional mode (P: ~N_r T_hold kp delay; I: ~N_r T_hold ki / w^2), so both are
+  /// kept small next to D; measured stable for encoder latency <= 3 ms at 1 kHz (<= 1 ms at 500 Hz), 1 and 2 ms
+  /// physics steps.
+  double kp = 0.3;          ///< [rad/rad]; >= 0
+  double ki_per_s = 10.0;   ///< [1/s]; >= 0. Slow pole ki / (1 + kp) = 7.7 /s: removes lag and lost steps
   double kd_s = 5e-3;       ///< [s]; >= 0. N_r T_hold kd = 0.1 N m s/rad: damping ratio ~0.35 on 1e-3 kg m^2
   double speed_filter_hz = 50.0;      ///< first-order low-pass of the encoder's finite-difference speed [Hz]; > 0
-  double deadband_counts = 1.0;       ///< P/I dead zone [encoder counts]; >= 0 (no hunting across microsteps)
+  double deadband_counts = 1.0;       ///< P/I dead zone [encoder counts]; >= 0 (ignore what it cannot resolve)
   double integral_limit_rad = M_PI;   ///< bound of ki int(e) [rad]; >= 0 (recovers up to half a turn of slip)
   double max_correction_speed_radps = 2.0;  ///< [rad/s]; > 0. 2.6 + 2 stays below the pull-in speed 5.7 rad/s
   double max_step_rate_radps = 20.0;  ///< [rad/s]; (0, 200] (637 full steps/s; pull-out still = holding torque)
@@ -112,7 +118,7 @@ struct StepperDiagnostics {
   int64_t commanded_microsteps = 0;   ///< the driver's microstep counter (after injected missed steps)
   double commanded_theta_rad = 0.0;   ///< commanded_microsteps * microstep angle (ideal motor)
   double equilibrium_theta_rad = 0.0; ///< where the field holds the rotor: commanded + fixed step error
-  double step_rate_radps = 0.0;       ///< the PID's output (step generator rate)
+  double step_rate_radps = 0.0;       ///< the step generator's rate over the current tick [rad/s]
   double encoder_theta_rad = 0.0;     ///< latest decoded, unwrapped encoder angle (what the PID sees)
   double position_error_rad = 0.0;    ///< reference - encoder at the latest PID tick
   double pullout_torque_nm = 0.0;     ///< T_po at the step rate

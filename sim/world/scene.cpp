@@ -245,9 +245,14 @@ DynamicObject SceneParser::ParseDynamic(const YAML::Node& node, Scene* scene) {
   o.kind = y_.Get<std::string>(node, "kind", context);
   if (o.kind != "person" && o.kind != "car") y_.Fail(node["kind"], "kind must be person or car in " + context);
   const YAML::Node path = node["path"];
-  if (!path || !path.IsSequence()) y_.Fail(node, "'path' in " + context + " must be a list of [x, y]");
-  for (const YAML::Node& w : path) o.path_m.push_back(y_.VecNode(w, "path", 2, context).head<2>());
-  o.z_m = y_.GetOr<double>(node, "z", 0.0, context);
+  if (!path || !path.IsSequence()) y_.Fail(node, "'path' in " + context + " must be a list of [x, y] or [x, y, z]");
+  const double z_m = y_.GetOr<double>(node, "z", 0.0, context);  // ground height of 2-element waypoints
+  for (const YAML::Node& w : path) {
+    const bool with_z = w.IsSequence() && w.size() == 3;
+    Eigen::Vector3d p = y_.VecNode(w, "path", with_z ? 3 : 2, context);
+    if (!with_z) p.z() = z_m;
+    o.path_m.push_back(p);
+  }
   o.speed_mps = y_.Get<double>(node, "speed", context);
   o.start_offset_m = y_.GetOr<double>(node, "start_offset", 0.0, context);
   o.loop = y_.GetOr<bool>(node, "loop", true, context);

@@ -81,16 +81,16 @@ struct AnnotatedElement {
   Eigen::Isometry3d T_world_element() const;
 };
 
-/// A person or car that moves along a polyline at constant speed. Its body frame B: origin on the ground
-/// below its centre, x forward (along the path), z up. Pose at time t: see scene_dynamic.hpp.
+/// A person or car that moves along a polyline at constant horizontal speed. Its body frame B: origin on the
+/// ground below its centre, x forward (along the path), z up (kept upright on slopes). Pose: scene_dynamic.hpp.
 struct DynamicObject {
   std::string name;
   std::string kind;                      ///< "person" or "car"
   std::vector<Primitive> parts;          ///< in the body frame B (kind's default body unless the file gives one)
-  std::vector<Eigen::Vector2d> path_m;   ///< world xy waypoints (>= 2)
-  double z_m = 0.0;                      ///< height of the ground it moves on [world z]
-  double speed_mps = 1.0;                ///< along the path (> 0)
-  double start_offset_m = 0.0;           ///< arc length along the path at t = 0
+  /// World waypoints (>= 2): xy and the height of the ground the body stands on there (z, interpolated).
+  std::vector<Eigen::Vector3d> path_m;
+  double speed_mps = 1.0;                ///< along the path, horizontal (> 0)
+  double start_offset_m = 0.0;           ///< horizontal arc length along the path at t = 0
   bool loop = true;                      ///< true: the path closes (last -> first); false: back and forth
 };
 

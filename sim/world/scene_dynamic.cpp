@@ -9,11 +9,13 @@ namespace {
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// The path's corners in order, closed (first point repeated at the end) when the object loops.
-std::vector<Eigen::Vector2d> Corners(const DynamicObject& object) {
-  std::vector<Eigen::Vector2d> c = object.path_m;
+std::vector<Eigen::Vector3d> Corners(const DynamicObject& object) {
+  std::vector<Eigen::Vector3d> c = object.path_m;
   if (object.loop && !c.empty()) c.push_back(c.front());
   return c;
 }
+
+double HorizontalLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return (b - a).head<2>().norm(); }
 
 Primitive Part(PrimitiveType type, const std::string& name, const Eigen::Vector3d& center_m, int material_id) {
   Primitive p;
@@ -44,14 +46,14 @@ Primitive CylinderPart(const std::string& name, const Eigen::Vector3d& center_m,
 }  // namespace
 
 double PathLength(const DynamicObject& object) {
-  const std::vector<Eigen::Vector2d> c = Corners(object);
+  const std::vector<Eigen::Vector3d> c = Corners(object);
   double length = 0.0;
-  for (std::size_t i = 1; i < c.size(); ++i) length += (c[i] - c[i - 1]).norm();
+  for (std::size_t i = 1; i < c.size(); ++i) length += HorizontalLength(c[i - 1], c[i]);
   return length;
 }
 
 Eigen::Isometry3d DynamicObjectPose(const DynamicObject& object, Seconds t) {
-  const std::vector<Eigen::Vector2d> c = Corners(object);
+  const std::vector<Eigen::Vector3d> c = Corners(object);
   const double length = PathLength(object);
   ROTOLIDAR_CHECK(c.size() >= 2 && length > 0.0, "dynamic object '" << object.name << "' has no path");
   const double period = object.loop ? length : 2.0 * length;
@@ -63,18 +65,19 @@ Eigen::Isometry3d DynamicObjectPose(const DynamicObject& object, Seconds t) {
     backwards = true;
   }
   std::size_t i = 1;
-  double segment = (c[1] - c[0]).norm();
+  double segment = HorizontalLength(c[0], c[1]);
   while (i + 1 < c.size() && s > segment) {
     s -= segment;
     ++i;
-    segment = (c[i] - c[i - 1]).norm();
+    segment = HorizontalLength(c[i - 1], c[i]);
   }
-  const Eigen::Vector2d dir = segment > 0.0 ? Eigen::Vector2d((c[i] - c[i - 1]) / segment) : Eigen::Vector2d(1, 0);
-  const Eigen::Vector2d p = c[i - 1] + dir * std::min(s, segment);
-  const double heading = std::atan2(dir.y(), dir.x()) + (backwards ? 2.0 * kHalfPi : 0.0);
+  const double f = segment > 0.0 ? std::min(s / segment, 1.0) : 0.0;
+  const Eigen::Vector3d p = c[i - 1] + f * (c[i] - c[i - 1]);
+  const Eigen::Vector2d dir = (c[i] - c[i - 1]).head<2>();
+  const double heading = (segment > 0.0 ? std::atan2(dir.y(), dir.x()) : 0.0) + (backwards ? 2.0 * kHalfPi : 0.0);
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3d(p.x(), p.y(), object.z_m);
+  T.translation() = p;
   return T;
 }
 
@@ -114,18 +117,19 @@ bool ValidateDynamicObject(const DynamicObject& object, const Scene& scene, std:
   if (object.parts.empty()) return fail("has no parts");
   Scene parts_only;  // reuse the primitive checks (materials, sizes, meshes)
   parts_only.materials = scene.materials;
+  parts_only.textures = scene.textures;
   parts_only.meshes = scene.meshes;
   parts_only.primitives = object.parts;
   parts_only.bounds = Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
   std::string why;
   if (!parts_only.Validate(&why)) return fail(why);
   if (object.path_m.size() < 2) return fail("path needs >= 2 waypoints");
-  for (const Eigen::Vector2d& p : object.path_m) {
+  for (const Eigen::Vector3d& p : object.path_m) {
     if (!p.allFinite()) return fail("path has a non-finite waypoint");
   }
-  if (!(PathLength(object) > 1e-6)) return fail("path has zero length");
+  if (!(PathLength(object) > 1e-6)) return fail("path has zero horizontal length");
   if (!(object.speed_mps > 0.0 && std::isfinite(object.speed_mps))) return fail("speed must be > 0");
-  if (!std::isfinite(object.start_offset_m) || !std::isfinite(object.z_m)) return fail("non-finite offset or z");
+  if (!std::isfinite(object.start_offset_m)) return fail("non-finite start offset");
   return true;
 }
 

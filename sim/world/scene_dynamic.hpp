@@ -1,11 +1,11 @@
 #pragma once
 // Dynamic objects (people, cars) of a scene: where they are at time t, and their bodies.
 //
-// Motion model: an object moves along its polyline at constant speed; its arc length at time t is
-// s(t) = start_offset_m + speed_mps * t. A looped path wraps s modulo its closed length; an open path goes back
-// and forth (period 2L). Its body frame B sits at the path point, on the ground (z = z_m), with x along the
-// direction of travel and z up; the heading switches at the waypoints (no smoothing: the LiDAR and the camera
-// only need where the surfaces are). Everything is a pure function of t (no state), so any consumer
+// Motion model: an object moves along its polyline at constant horizontal speed; its horizontal arc length at
+// time t is s(t) = start_offset_m + speed_mps * t. A looped path wraps s modulo its closed length; an open path
+// goes back and forth (period 2L). Its body frame B sits at the path point (z interpolated between the
+// waypoints' ground heights), with x along the direction of travel and z up; the heading switches at the
+// waypoints (no smoothing: the LiDAR and the camera only need where the surfaces are). Everything is a pure function of t (no state), so any consumer
 // (EmbreeScene::SetTime, MujocoScene::SetTime) gets the same pose for the same t.
 #include <string>
 #include <vector>
@@ -17,7 +17,7 @@
 
 namespace rotolidar::sim {
 
-/// Length of the object's path [m]: the closed polygon when `loop`, else the open polyline.
+/// Horizontal length of the object's path [m]: the closed polygon when `loop`, else the open polyline.
 double PathLength(const DynamicObject& object);
 
 /// T_world_body at time t (any t, also negative). The object must have >= 2 distinct waypoints.

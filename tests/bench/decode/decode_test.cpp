@@ -1,4 +1,5 @@
-// `decode` on a synthetic pcap: CSV and PLY agree with the decoder, foreign/malformed input is counted.
+// `decode` on a synthetic pcap: CSV and PLY agree with the decoder, foreign/malformed input is counted, --return
+// and the range limits select rows.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -122,6 +123,72 @@ TEST(Decode, OneRevolutionAndErrors) {
   EXPECT_TRUE(ParseReturnFilter("last", &f));
   EXPECT_EQ(f, Vlp16ReturnFilter::kLast);
   EXPECT_FALSE(ParseReturnFilter("first", &f));
+}
+
+/// Reads the CSV rows: (range from the lidar origin ignoring the laser's vertical offset, return).
+std::vector<std::pair<double, int>> ReadRows(const std::string& csv_path) {
+  std::ifstream csv(csv_path);
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::pair<double, int>> rows;
+  while (std::getline(csv, line)) {
+    double x, y, z, intensity, azimuth, t;
+    int ring, ret;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%d,%lf,%d,%lf", &x, &y, &z, &intensity, &ring, &azimuth, &ret,
+                    &t) == 8) {
+      rows.emplace_back(std::hypot(x, y) / std::cos((2.0 * ring - 15.0) * M_PI / 180.0), ret);
+    }
+  }
+  return rows;
+}
+
+// Dual-return packets whose last return (even blocks) is at 5 m and strongest (odd blocks) at 2 m: --return and
+// the range limits select the rows.
+TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
+  Vlp16PacketEncoder encoder(Vlp16ReturnMode::kDual, 0.0);
+  const std::string pcap = Prefix("dual") + ".pcap";
+  PcapWriter writer;
+  ASSERT_TRUE(writer.Open(pcap).ok);
+  Vlp16FiringSequence s;
+  s.distance_2mm.fill(2500);   // last: 5 m
+  s.distance2_2mm.fill(1000);  // strongest: 2 m
+  s.reflectivity.fill(10);
+  s.reflectivity2.fill(80);
+  for (int k = 0; k < 12 * 20; ++k) {
+    s.t_s = k * kVlp16SequencePeriodS;
+    s.azimuth_centideg = static_cast<uint16_t>((k * 20) % 36000);
+    if (auto p = encoder.Add(s)) {
+      ASSERT_TRUE(writer.Write(*p).ok);
+    }
+  }
+  ASSERT_TRUE(writer.Close().ok);
+  const std::size_t per_return = 12 * 20 * 16;
+  struct Case {
+    Vlp16ReturnFilter filter;
+    double min_range_m;
+    std::size_t rows_2m, rows_5m;
+  };
+  for (const Case& c : {Case{Vlp16ReturnFilter::kAll, 0.4, per_return, per_return},
+                        Case{Vlp16ReturnFilter::kLast, 0.4, 0, per_return},
+                        Case{Vlp16ReturnFilter::kStrongest, 0.4, per_return, 0},
+                        Case{Vlp16ReturnFilter::kAll, 3.0, 0, per_return}}) {
+    DecodeOptions options;
+    options.input_path = pcap;
+    options.output_prefix = Prefix("dual_out");
+    options.return_filter = c.filter;
+    options.min_range_m = c.min_range_m;
+    DecodeSummary summary;
+    ASSERT_TRUE(RunDecode(options, &summary).ok);
+    std::size_t rows_2m = 0, rows_5m = 0;
+    for (const auto& [range_m, ret] : ReadRows(options.output_prefix + ".csv")) {
+      const bool near = std::abs(range_m - 2.0) < 0.02, far = std::abs(range_m - 5.0) < 0.02;  // + laser offset
+      ASSERT_TRUE(near || far) << range_m;
+      EXPECT_EQ(ret, near ? 0 : 1);  // 0 = strongest (odd blocks), 1 = last (even blocks)
+      ++(near ? rows_2m : rows_5m);
+    }
+    EXPECT_EQ(rows_2m, c.rows_2m) << "filter " << int(c.filter) << " min " << c.min_range_m;
+    EXPECT_EQ(rows_5m, c.rows_5m) << "filter " << int(c.filter) << " min " << c.min_range_m;
+  }
 }
 
 }  // namespace

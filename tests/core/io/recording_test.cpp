@@ -40,7 +40,9 @@ void WriteSmallRecording(const std::string& dir, const RigCalib& calib) {
     seq.azimuth_centideg = uint16_t((k * 20) % 36000);
     seq.distance_2mm.fill(uint16_t(1000 + k));
     seq.reflectivity.fill(uint8_t(k));
-    if (auto packet = encoder.Add(seq)) ASSERT_TRUE(writer.Write(*packet).ok);
+    if (auto packet = encoder.Add(seq)) {
+      ASSERT_TRUE(writer.Write(*packet).ok);
+    }
   }
   for (int i = 0; i < 5; ++i) {
     ASSERT_TRUE(writer.Write(ImuSample{0.005 * i, {0.1 * i, 0.2, 0.3}, {0.0, 0.0, 9.81 + i}}).ok);

@@ -1,4 +1,5 @@
-// UDP loopback: a tiny queue must count its drops; wrong-size datagrams are rejected.
+// UDP loopback: a tiny queue must count its drops; wrong-size datagrams are rejected; the sender routes data
+// and position packets to their ports and paces them.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -96,6 +97,66 @@ TEST(UdpLoopback, BadConfigAndAddress) {
   EXPECT_NE(s.message.find("not-an-ip"), std::string::npos);
   UdpPacketSender sender;
   EXPECT_FALSE(sender.Send(Numbered(0)).ok);
+}
+
+// The sensor sends data and position packets to two ports; the sender routes by LidarPacket::udp_port.
+TEST(UdpLoopback, SenderRoutesPositionPacketsToTheirPort) {
+  UdpSourceConfig config;
+  config.bind_address = "127.0.0.1";
+  config.port = 0;
+  UdpPacketSource data, position;
+  ASSERT_TRUE(data.Start(config).ok);
+  ASSERT_TRUE(position.Start(config).ok);
+  UdpSenderConfig sender_config;
+  sender_config.data_port = data.port();
+  sender_config.position_port = position.port();
+  UdpPacketSender sender;
+  ASSERT_TRUE(sender.Open(sender_config).ok);
+  std::vector<LidarPacket> packets;
+  for (int i = 0; i < 12; ++i) {
+    packets.push_back(i % 4 == 3 ? Numbered(i, kVlp16PositionPacketBytes) : Numbered(i));
+    if (i % 4 == 3) packets.back().udp_port = kVlp16PositionPort;
+  }
+  ASSERT_TRUE(sender.SendAll(packets, 0.0).ok);
+  EXPECT_EQ(sender.sent(), packets.size());
+  WaitForAccounted(data, 9);
+  WaitForAccounted(position, 3);
+  EXPECT_EQ(data.received(), 9u);
+  EXPECT_EQ(position.received(), 3u);
+  LidarPacket got;
+  for (const LidarPacket& sent : packets) {
+    UdpPacketSource& source = sent.udp_port == kVlp16PositionPort ? position : data;
+    ASSERT_TRUE(source.Pop(&got, 1.0));
+    EXPECT_EQ(got.payload, sent.payload);  // each port keeps its order
+  }
+}
+
+// Pacing arithmetic (no clock): packet due times after the first scale with 1 / rate.
+TEST(PacketPacer, DueTimesScaleWithRate) {
+  PacketPacer pacer(10.0);
+  EXPECT_EQ(pacer.DueAfterFirstS(7.0), 0.0);  // nothing started yet
+  EXPECT_EQ(pacer.WaitUntilDue(5.0), 0.0);    // the first packet leaves at once
+  EXPECT_DOUBLE_EQ(pacer.DueAfterFirstS(6.0), 0.1);
+  EXPECT_NEAR(pacer.DueAfterFirstS(5.001327), 0.0001327, 1e-15);  // 5.001327 - 5 is inexact in binary
+  EXPECT_EQ(pacer.DueAfterFirstS(4.0), 0.0);  // capture times going backwards: due at once
+  PacketPacer fast(0.0);
+  fast.WaitUntilDue(5.0);
+  EXPECT_EQ(fast.DueAfterFirstS(100.0), 0.0);
+}
+
+TEST(UdpSenderConfig, ValidateNamesTheField) {
+  std::string error;
+  EXPECT_TRUE(UdpSenderConfig{}.Validate(&error)) << error;
+  UdpSenderConfig c;
+  c.host = "localhost";  // names are not resolved: IPv4 literals only
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("host"), std::string::npos) << error;
+  c = UdpSenderConfig{};
+  c.position_port = 0;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("position_port"), std::string::npos) << error;
+  UdpPacketSender sender;
+  EXPECT_FALSE(sender.Open(c).ok);
 }
 
 }  // namespace

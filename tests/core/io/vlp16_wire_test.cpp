@@ -1,6 +1,8 @@
 // VLP-16 raw fields: serialize/parse round trip, malformed packets, position packets, the timestamp formula.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/io/vlp16.hpp"
 #include "core/util/rng.hpp"
 
@@ -103,6 +105,61 @@ TEST(Vlp16Wire, TimestampIsMicrosecondsPastTheHour) {
   EXPECT_EQ(Vlp16TimestampUs(3600.5, 0.0), 500000u);
   EXPECT_EQ(Vlp16TimestampUs(0.0, 0.25), 3599750000u);  // before the offset: wraps into the previous hour
   EXPECT_EQ(Vlp16TimestampUs(10.0, -7200.0 + 5.0), 5000000u);
+}
+
+// The worked example of the NMEA 0183 reference (RMC): 22:54:46 UTC on 19 Nov 1994, checksum 0x68.
+TEST(Vlp16Wire, GprmcParsesAReferenceSentence) {
+  double utc_s = 0.0;
+  const std::string ref = "$GPRMC,225446,A,4916.45,N,12311.12,W,000.5,054.7,191194,020.3,E*68";
+  const Status s = ParseGprmcUtc(ref + "\r\n", &utc_s);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_DOUBLE_EQ(utc_s, 785285686.0);  // Python: calendar.timegm((1994, 11, 19, 22, 54, 46))
+  std::string bad = ref;
+  bad[bad.size() - 1] = '9';
+  const Status e = ParseGprmcUtc(bad, &utc_s);
+  ASSERT_FALSE(e.ok);
+  EXPECT_NE(e.message.find("checksum"), std::string::npos) << e.message;
+  const Status d = ParseGprmcUtc("$GPRMC,225446,A,4916.45,N,12311.12,W,000.5,054.7,191394,020.3,E", &utc_s);
+  ASSERT_FALSE(d.ok);
+  EXPECT_NE(d.message.find("field 9"), std::string::npos) << d.message;
+}
+
+TEST(Vlp16Wire, GprmcFormatParseRoundTripAcrossDates) {
+  // A leap day, 1999/2000, both ends of the 2-digit year window (1980..2079); fractions of a second drop.
+  for (double utc_s : {1709211600.0 + 3599.75, 946684799.5, 315532800.0, 3471292799.0}) {
+    const std::string sentence = FormatGprmc(utc_s, true, -33.8568, 151.2153);
+    ASSERT_EQ(sentence.substr(0, 7), "$GPRMC,");
+    ASSERT_EQ(sentence.substr(sentence.size() - 2), "\r\n");
+    double back = -1.0;
+    const Status s = ParseGprmcUtc(sentence, &back);
+    ASSERT_TRUE(s.ok) << s.message << " in " << sentence;
+    EXPECT_DOUBLE_EQ(back, std::floor(utc_s)) << sentence;
+  }
+  EXPECT_NE(FormatGprmc(0.0, true, -33.8568, 151.2153).find(",3351.4080,S,15112.9180,E,"), std::string::npos);
+  EXPECT_NE(FormatGprmc(0.0, false, 0.0, 0.0).find(",V,"), std::string::npos);
+  EXPECT_EQ(UnixDaysFromCivil(2024, 2, 29), 19782);  // Python: date(2024,2,29) - date(1970,1,1)
+}
+
+// With PPS locked the sensor clock is UTC past the hour: the decoder recovers the hour from the RMC sentence, also
+// when the sentence (up to a second old) still names the previous hour.
+TEST(Vlp16Wire, DecoderFindsTheUtcHourFromPositionPackets) {
+  Vlp16Decoder decoder(LidarIntrinsics{}, Vlp16DecoderConfig{});
+  std::vector<LidarPoint> points;
+  EXPECT_FALSE(decoder.hour_start_unix_s().has_value());
+  const double hour = 1709211600.0;  // 2024-02-29 13:00:00 UTC
+  // Sensor at 13:00:00.300; the last sentence is for 12:59:59.
+  LidarPacket p = EncodeVlp16PositionPacket(0.3, 0.0, 2, FormatGprmc(hour - 1.0, true, 0.0, 0.0));
+  ASSERT_TRUE(decoder.Decode(p, &points).ok);
+  ASSERT_TRUE(decoder.hour_start_unix_s().has_value());
+  EXPECT_DOUBLE_EQ(*decoder.hour_start_unix_s(), hour);
+  EXPECT_TRUE(points.empty());
+  // Not locked: no claim about UTC (the previous locked value stays).
+  Vlp16Decoder unlocked(LidarIntrinsics{}, Vlp16DecoderConfig{});
+  p = EncodeVlp16PositionPacket(0.3, 0.0, 1, FormatGprmc(hour, true, 0.0, 0.0));
+  ASSERT_TRUE(unlocked.Decode(p, &points).ok);
+  EXPECT_FALSE(unlocked.hour_start_unix_s().has_value());
+  ASSERT_TRUE(unlocked.last_position().has_value());
+  EXPECT_EQ(unlocked.last_position()->pps_status, 1);
 }
 
 }  // namespace

@@ -5,7 +5,6 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <iostream>
 
 #include "core/registration/residuals.hpp"
 #include "core/registration/scan_to_map.hpp"
@@ -114,7 +113,8 @@ LocalMap MapOf(const Scene& scene, RandomStream& rng) {
   return map;
 }
 
-const Pose3 kTruth = MakePose(Eigen::Vector3d(0.4, -0.3, 1.2), Eigen::Quaterniond(ExpSO3(Eigen::Vector3d(0.02, -0.03, 0.6))));
+const Pose3 kTruth =
+    MakePose(Eigen::Vector3d(0.4, -0.3, 1.2), Eigen::Quaterniond(ExpSO3(Eigen::Vector3d(0.02, -0.03, 0.6))));
 
 TEST(ScanToMap, BoxRoomScanRegistersBackToTheTruth) {
   RandomStream rng(11, "test.registration.box_room");
@@ -125,24 +125,36 @@ TEST(ScanToMap, BoxRoomScanRegistersBackToTheTruth) {
   offset << 0.3, -0.25, 0.15, 0.03, -0.04, 0.09;  // 0.43 m and ~6 deg away from the truth
   const ScanToMapResult r = Register(scan, map, PoseBoxPlus(kTruth, offset), ScanToMapConfig());
   ASSERT_TRUE(r.converged) << r.message;
-  std::cerr << "DBG room eig " << r.degeneracy.eigenvalues.transpose() << "\nerr " << PoseBoxMinus(r.T_map_scan, kTruth).transpose() << " it " << r.iterations << " solver " << r.solver_iterations << " in " << r.planar_inliers << " " << r.edge_inliers << " rmse " << r.rmse_m << "\n";
-  // Measured: 1.3 mm / 0.011 deg with 1 cm noise on ~1100 scan points; the bounds leave ~4x margin.
+  // Measured: 0.5 mm / 0.014 deg with 1 cm noise on ~1700 scan points; the bounds leave > 3x margin.
   EXPECT_LT((r.T_map_scan.translation() - kTruth.translation()).norm(), 0.005);
   EXPECT_LT(RotationErrorRad(r.T_map_scan, kTruth), 0.05 * M_PI / 180.0);
   EXPECT_GT(r.planar_inliers, 900);
-  EXPECT_GT(r.edge_inliers, 250);
+  EXPECT_GT(r.edge_inliers, 450);  // measured 1117 planar, 595 edge matches
   EXPECT_LT(r.final_cost, r.initial_cost);
   EXPECT_NEAR(r.rmse_m, 0.012, 0.006);  // ~ the 1 cm point noise plus the map's own noise
   EXPECT_FALSE(r.degeneracy.degenerate);
+  EXPECT_FALSE(r.remapped);
   EXPECT_GT(r.degeneracy.eigenvalues(0), 4.0 * DegeneracyConfig().min_eigenvalue);
   EXPECT_LT((r.hessian - r.hessian.transpose()).norm(), 1e-9 * r.hessian.norm());
+}
+
+/// Mean motion along x of the scan's planar points between two poses of the scan: how far the scan slid along
+/// the corridor axis [m].
+double MeanSlideX(const FeatureSet& scan, const Pose3& A, const Pose3& B) {
+  double sum = 0.0;
+  for (const auto& q : scan.planar.points) {
+    const Eigen::Vector3d p(q.x, q.y, q.z);
+    sum += (A * p - B * p).x();
+  }
+  return sum / double(scan.planar.size());
 }
 
 TEST(ScanToMap, CorridorIsDegenerateAlongItsAxisAndRemappingHoldsTheGuess) {
   RandomStream rng(11, "test.registration.corridor");
   const Scene scene = Corridor();
   const LocalMap map = MapOf(scene, rng);
-  const Pose3 truth = MakePose(Eigen::Vector3d(2.0, 0.2, 1.0), Eigen::Quaterniond(ExpSO3(Eigen::Vector3d(0.01, 0.02, 0.1))));
+  const Pose3 truth =
+      MakePose(Eigen::Vector3d(2.0, 0.2, 1.0), Eigen::Quaterniond(ExpSO3(Eigen::Vector3d(0.01, 0.02, 0.1))));
   const FeatureSet scan = Sample(scene, 4.0, 5.0, 0.01, truth, rng);
   Vector6d offset;
   offset << 0.5, -0.15, 0.1, 0.02, -0.02, 0.05;
@@ -151,30 +163,31 @@ TEST(ScanToMap, CorridorIsDegenerateAlongItsAxisAndRemappingHoldsTheGuess) {
   ScanToMapConfig config;
   const ScanToMapResult remapped = Register(scan, map, guess, config);
   ASSERT_TRUE(remapped.converged) << remapped.message;
-  std::cerr << "DBG corridor eig " << remapped.degeneracy.eigenvalues.transpose() << "\nvec\n" << remapped.degeneracy.eigenvectors << "\nerr " << PoseBoxMinus(remapped.T_map_scan, truth).transpose() << " it " << remapped.iterations << "\n";
   ASSERT_TRUE(remapped.degeneracy.degenerate);
   ASSERT_EQ(remapped.degeneracy.degenerate_directions.size(), 1u);
-  // The one degenerate direction is translation along the corridor axis (x).
+  // The one degenerate direction is translation along the corridor axis (x). Measured: |v_x| = 0.99995,
+  // lambda = 0.013 (the map's normal-noise floor) against 0.45 for the next direction.
   EXPECT_GT(std::abs(remapped.degeneracy.degenerate_directions[0](0)), 0.999);
-  // Solution remapping: no motion along x at all; the observed directions still reach the truth.
-  const Vector6d moved = PoseBoxMinus(remapped.T_map_scan, guess);
-  EXPECT_LT(std::abs(moved(0)), 1e-6) << "DBGNOFAIL";
+  EXPECT_LT(remapped.degeneracy.eigenvalues(0), 0.2 * remapped.degeneracy.eigenvalues(1));
+  // Solution remapping: the scan does not slide along the axis (measured 0.04 mm, a second-order residue of the
+  // 3 deg rotation correction; 1 mm bound) ...
+  EXPECT_TRUE(remapped.remapped);
+  EXPECT_LT(std::abs(MeanSlideX(scan, remapped.T_map_scan, guess)), 1e-3);
+  // ... while every observed direction still reaches the truth (measured 0.9 mm and 0.02 deg).
   const Vector6d error = PoseBoxMinus(remapped.T_map_scan, truth);
-  EXPECT_NEAR(error(0), offset(0), 1e-6);  // the x offset stays, for the prior / IMU to fix
-  EXPECT_LT(error.segment<2>(1).norm(), 0.005);
-  EXPECT_LT(error.tail<3>().norm(), 0.1 * M_PI / 180.0);
+  EXPECT_LT(error.segment<2>(1).norm(), 0.003);
+  EXPECT_LT(error.tail<3>().norm(), 0.05 * M_PI / 180.0);
 
-  // The full solve: same geometry, an ill-conditioned Hessian (axis eigenvalue << the others), and its motion
-  // along x is whatever noise dictates rather than a measurement.
+  // The full solve: an ill-conditioned Hessian (same geometry), and it slides along the axis as the map's noise
+  // dictates (measured 58 mm, away from the truth here) although nothing there was measured.
   config.degeneracy.remap = false;
   const ScanToMapResult full = Register(scan, map, guess, config);
-  {
-    auto slide = [&](const Pose3& A, const Pose3& B) { double sx = 0; for (const auto& q : scan.planar.points) { const Eigen::Vector3d p(q.x, q.y, q.z); sx += (A * p - B * p).x(); } return sx / scan.planar.size(); };
-    std::cerr << "DBG slide remap-guess " << slide(remapped.T_map_scan, guess) << " full-guess " << slide(full.T_map_scan, guess) << " guess-truth " << slide(guess, truth) << " full err " << PoseBoxMinus(full.T_map_scan, truth).transpose() << " eig " << full.degeneracy.eigenvalues.transpose() << "\n";
-  }
+  EXPECT_FALSE(full.remapped);
   EXPECT_TRUE(full.degeneracy.degenerate);
-  EXPECT_LT(full.degeneracy.eigenvalues(0), 1e-3 * full.degeneracy.eigenvalues(1));
-  EXPECT_GT(std::abs(PoseBoxMinus(full.T_map_scan, guess)(0)), 1e-6);
+  EXPECT_LT(full.degeneracy.eigenvalues(0), 0.05 * full.degeneracy.eigenvalues(1));
+  const double full_slide = std::abs(MeanSlideX(scan, full.T_map_scan, guess));
+  EXPECT_GT(full_slide, 0.01);
+  EXPECT_GT(full_slide, 20.0 * std::abs(MeanSlideX(scan, remapped.T_map_scan, guess)));
 }
 
 TEST(ScanToMap, FailsCleanlyWithoutAMap) {
@@ -187,8 +200,10 @@ TEST(ScanToMap, FailsCleanlyWithoutAMap) {
 }
 
 TEST(ScanToMap, LineAndPlaneFitsAcceptOnlyTheirShape) {
-  const std::vector<Eigen::Vector3d> line = {{0, 0, 0}, {0.2, 0.001, 0}, {0.4, 0, 0.002}, {0.6, -0.001, 0}, {0.8, 0, 0}};
-  const std::vector<Eigen::Vector3d> plane = {{0, 0, 0}, {0.3, 0, 0.001}, {0, 0.3, 0}, {0.3, 0.3, -0.001}, {0.15, 0.1, 0}};
+  const std::vector<Eigen::Vector3d> line = {
+      {0, 0, 0}, {0.2, 0.001, 0}, {0.4, 0, 0.002}, {0.6, -0.001, 0}, {0.8, 0, 0}};
+  const std::vector<Eigen::Vector3d> plane = {
+      {0, 0, 0}, {0.3, 0, 0.001}, {0, 0.3, 0}, {0.3, 0.3, -0.001}, {0.15, 0.1, 0}};
   Eigen::Vector3d a, u, n;
   double d = 0.0;
   ASSERT_TRUE(FitLine(line, 3.0, &a, &u));
@@ -202,6 +217,8 @@ TEST(ScanToMap, LineAndPlaneFitsAcceptOnlyTheirShape) {
   EXPECT_FALSE(FitPlane(bent, 0.9, 0.2, &n, &d));
 }
 
+Pose3 AtX(double x_m) { return MakePose(Eigen::Vector3d(x_m, 0, 0), Eigen::Quaterniond::Identity()); }
+
 TEST(LocalMap, KeyframePolicyAndWindowBounds) {
   LocalMapConfig config;
   config.max_keyframes = 3;
@@ -212,14 +229,14 @@ TEST(LocalMap, KeyframePolicyAndWindowBounds) {
   Push(Eigen::Vector3d(1, 2, 3), &f.less_flat);
   Push(Eigen::Vector3d(0, 0, 1), &f.less_sharp);
   map.AddKeyframe(f, Pose3::Identity());
-  EXPECT_FALSE(map.NeedsKeyframe(MakePose(Eigen::Vector3d(0.5, 0, 0), Eigen::Quaterniond::Identity())));
-  EXPECT_TRUE(map.NeedsKeyframe(MakePose(Eigen::Vector3d(1.2, 0, 0), Eigen::Quaterniond::Identity())));
+  EXPECT_FALSE(map.NeedsKeyframe(AtX(0.5)));
+  EXPECT_TRUE(map.NeedsKeyframe(AtX(1.2)));
   EXPECT_TRUE(map.NeedsKeyframe(RotZ(0.25)));
-  for (int i = 1; i <= 4; ++i) map.AddKeyframe(f, MakePose(Eigen::Vector3d(0.8 * i, 0, 0), Eigen::Quaterniond::Identity()));
+  for (int i = 1; i <= 4; ++i) map.AddKeyframe(f, AtX(0.8 * i));
   // Count bound keeps x = 1.6, 2.4, 3.2; the distance bound (2.5 m from x = 3.2) keeps all three.
   ASSERT_EQ(map.num_keyframes(), 3u);
   EXPECT_NEAR(map.keyframe_poses().front().translation().x(), 1.6, 1e-12);
-  map.AddKeyframe(f, MakePose(Eigen::Vector3d(5.0, 0, 0), Eigen::Quaterniond::Identity()));
+  map.AddKeyframe(f, AtX(5.0));
   // Count keeps 2.4, 3.2, 5.0; x = 2.4 is 2.6 m from the newest: dropped by distance.
   ASSERT_EQ(map.num_keyframes(), 2u);
   EXPECT_NEAR(map.keyframe_poses().front().translation().x(), 3.2, 1e-12);

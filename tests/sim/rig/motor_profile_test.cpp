@@ -1,4 +1,5 @@
-// Command profiles (sim/rig/motor_profile) and the motor-drive YAML (sim/rig/motor_yaml.cpp).
+// Command profiles (sim/rig/motor_profile), the motor-drive configs and their YAML (sim/rig/motor_yaml.cpp).
+// The drive's closed-loop behaviour is tested in stepper_test.cpp.
 #include "sim/rig/motor_profile.hpp"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 #include <string>
 
 #include "core/io/yaml_util.hpp"
+#include "core/util/log.hpp"
 #include "sim/rig/stepper.hpp"
 
 namespace rotolidar::sim {
@@ -32,7 +34,9 @@ void ExpectConsistentDerivatives(const MotorProfile& p, double t_end) {
     const double lo = std::min(a.alpha_radps2, c.alpha_radps2), hi = std::max(a.alpha_radps2, c.alpha_radps2);
     EXPECT_GE(domega, lo - 1e-4) << "t " << t;
     EXPECT_LE(domega, hi + 1e-4) << "t " << t;
-    if (a.alpha_radps2 == c.alpha_radps2) EXPECT_NEAR(domega, b.alpha_radps2, 1e-4) << "t " << t;
+    if (a.alpha_radps2 == c.alpha_radps2) {
+      EXPECT_NEAR(domega, b.alpha_radps2, 1e-4) << "t " << t;
+    }
   }
 }
 
@@ -237,6 +241,57 @@ TEST(MotorDriveYaml, ErrorsNameFileLineAndField) {
   MotorDriveConfig expected;
   expected.profile.type = MotorProfileType::kConstant;
   EXPECT_TRUE(c == expected);
+}
+
+// Pull-out torque: holding torque at low speed (current-limited), then the phasor model's current
+// |(R + j N_r w L) i + k_t w| = V (checked by substituting back), falling to 0 where the back-EMF uses up the supply.
+TEST(StepperConfig, PullOutTorqueFallsWithSpeed) {
+  const StepperConfig s;
+  EXPECT_DOUBLE_EQ(s.PullOutTorqueNm(0.0), 0.40);
+  EXPECT_DOUBLE_EQ(s.PullOutTorqueNm(-2.6), 0.40);
+  double prev = 0.41;
+  bool uncapped = false;
+  for (double w = 1.0; w < 150.0; w += 1.0) {
+    const double t = s.PullOutTorqueNm(w);
+    EXPECT_LE(t, prev + 1e-12) << "w " << w;
+    prev = t;
+    if (t > 0 && t < 0.4) {
+      uncapped = true;
+      const double kt = 0.40 / 1.7, i = t / kt, x = 50 * w * 2.8e-3, emf = kt * w;
+      EXPECT_NEAR(std::hypot(1.5 * i + emf, x * i), 24.0, 1e-9) << "w " << w;
+    }
+  }
+  EXPECT_TRUE(uncapped);
+  EXPECT_EQ(s.PullOutTorqueNm(150.0), 0.0);
+  EXPECT_GT(s.PullOutTorqueNm(40.0), 0.39);  // the corner lies above 40 rad/s (380 rpm)
+}
+
+TEST(MotorDriveConfig, ValidateNamesTheField) {
+  struct Case {
+    const char* field;
+    void (*bad)(MotorDriveConfig*);
+  };
+  const Case cases[] = {
+      {"microsteps", [](MotorDriveConfig* c) { c->stepper.microsteps = 0; }},
+      {"full_steps_per_rev", [](MotorDriveConfig* c) { c->stepper.full_steps_per_rev = 202; }},
+      {"step_error_fraction", [](MotorDriveConfig* c) { c->stepper.step_error_fraction = 0.6; }},
+      {"detent_torque_nm", [](MotorDriveConfig* c) { c->stepper.detent_torque_nm = 0.5; }},
+      {"missed_step_rate_hz", [](MotorDriveConfig* c) { c->stepper.missed_step_rate_hz = -1; }},
+      {"kd_s", [](MotorDriveConfig* c) { c->pid.kd_s = -1e-3; }},
+      {"max_step_rate_radps", [](MotorDriveConfig* c) { c->profile.speed_radps = 30.0; }},
+      {"speed_filter_hz", [](MotorDriveConfig* c) { c->pid.speed_filter_hz = 600.0; }},
+      {"encoder: EncoderConfig: rate_hz", [](MotorDriveConfig* c) { c->encoder.rate_hz = 0.0; }},
+      {"profile: MotorProfileConfig: dwell_s", [](MotorDriveConfig* c) { c->profile.dwell_s = -2; }},
+  };
+  for (const Case& k : cases) {
+    MotorDriveConfig c;
+    std::string error;
+    ASSERT_TRUE(c.Validate(&error)) << error;
+    k.bad(&c);
+    EXPECT_FALSE(c.Validate(&error)) << k.field;
+    EXPECT_NE(error.find(k.field), std::string::npos) << error;
+    EXPECT_THROW(StepperDrive(c, 1), InternalError) << k.field;
+  }
 }
 
 }  // namespace

@@ -53,7 +53,7 @@ void ExpectYamlNear(const YAML::Node& a, const YAML::Node& b, const std::string&
 
 std::vector<RigModelConfig> AllVariants() {
   std::vector<RigModelConfig> configs;
-  for (CarrierType carrier : {CarrierType::kHandheld, CarrierType::kWheeled, CarrierType::kCar})
+  for (PlatformType carrier : {PlatformType::kHandheld, PlatformType::kWheeled, PlatformType::kCar})
     for (MotorAxis axis : {MotorAxis::kHorizontal, MotorAxis::kVertical, MotorAxis::kTilted}) {
       RigModelConfig c;
       c.carrier = carrier;
@@ -121,7 +121,7 @@ TEST(RigModel, LoadsForEveryCarrierAndAxisAndMatchesTheCalibGeometry) {
   const Pose3 T_world_base = MakePose({1.0, -2.0, 0.7}, Eigen::Quaterniond(0.9, 0.1, -0.2, 0.3));
   const double theta_rad = 0.83;
   for (const RigModelConfig& config : AllVariants()) {
-    const std::string name = std::string(CarrierTypeName(config.carrier)) + "/" + MotorAxisName(config.motor.axis);
+    const std::string name = std::string(PlatformTypeName(config.carrier)) + "/" + MotorAxisName(config.motor.axis);
     std::unique_ptr<RigModel> model;
     const Status status = RigModel::Create(config, &model);
     ASSERT_TRUE(status.ok) << name << ": " << status.message;
@@ -188,17 +188,16 @@ TEST(RigModel, MjcfErrorsNameTheFile) {
 }
 
 TEST(MujocoUtil, MujocoErrorsBecomeStatusNotExit) {
-  // A model whose mjData stack is far too small: mj_forward calls mju_error (the default handler would exit).
+  // An mjData whose stack is far too small: mj_forward calls mju_error (the default handler would exit).
   mjModel* m = nullptr;
-  const std::string xml =
-      "<mujoco><size nstack=\"50\"/><worldbody><body><freejoint/><geom size=\"0.1\"/></body>"
-      "<body pos=\"1 0 0\"><freejoint/><geom size=\"0.1\"/></body></worldbody></mujoco>";
+  const std::string xml = "<mujoco><worldbody><body><freejoint/><geom size=\"0.1\"/></body></worldbody></mujoco>";
   const Status loaded = LoadMjcfFromString(xml, "tiny_stack.xml", &m);
   ASSERT_TRUE(loaded.ok) << loaded.message;
+  m->nstack = 10;
   mjData* d = mj_makeData(m);
   const Status status = GuardMujoco("forward", [&] { mj_forward(m, d); });
   EXPECT_FALSE(status.ok);
-  EXPECT_NE(status.message.find("MuJoCo error"), std::string::npos) << status.message;
+  EXPECT_NE(status.message.find("forward: MuJoCo error"), std::string::npos) << status.message;
   mj_deleteData(d);
   mj_deleteModel(m);
   // A compile error comes back as a Status with MuJoCo's message.
@@ -222,7 +221,7 @@ TEST(RigModelYaml, ShippedFileHoldsTheDefaults) {
 
 TEST(RigModelYaml, EmitParseRoundTrip) {
   RigModelConfig c;
-  c.carrier = CarrierType::kWheeled;
+  c.carrier = PlatformType::kWheeled;
   c.platform = DefaultPlatform(c.carrier);
   c.platform.mass_kg = 21.5;
   c.motor.axis = MotorAxis::kTilted;
@@ -238,7 +237,7 @@ TEST(RigModelYaml, EmitParseRoundTrip) {
   YAML::Emitter again;
   EmitRigModelConfig(again, back);
   ExpectYamlNear(YAML::Load(out.c_str()), YAML::Load(again.c_str()), "rig", 1e-15);
-  EXPECT_EQ(back.carrier, CarrierType::kWheeled);
+  EXPECT_EQ(back.carrier, PlatformType::kWheeled);
   EXPECT_EQ(back.platform.mass_kg, 21.5);
 }
 
@@ -247,7 +246,7 @@ TEST(RigModelYaml, CarrierKeySelectsItsPlatform) {
   WriteFile(path, "carrier: car\n");
   RigModelConfig c;
   ASSERT_TRUE(LoadRigModelConfig(path, &c).ok);
-  EXPECT_EQ(c.platform.mass_kg, DefaultPlatform(CarrierType::kCar).mass_kg);
+  EXPECT_EQ(c.platform.mass_kg, DefaultPlatform(PlatformType::kCar).mass_kg);
 }
 
 TEST(RigModelYaml, ErrorsNameFileLineAndField) {

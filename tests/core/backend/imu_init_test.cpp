@@ -1,0 +1,232 @@
+// IMU initialisation: static start (roll/pitch, gyro bias, stillness test) and moving start (gyro bias, velocities,
+// gravity direction from LiDAR-only poses + preintegration), on synthetic data with seeded Kalibr noise.
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/backend/imu_init.hpp"
+#include "core/util/rng.hpp"
+
+namespace rotolidar {
+namespace {
+
+const Eigen::Vector3d kGravity(0.0, 0.0, -9.81);
+constexpr double kRateHz = 200.0;
+
+Eigen::Vector3d Noise(RandomStream& rng, double sigma) {
+  return {rng.Normal(0.0, sigma), rng.Normal(0.0, sigma), rng.Normal(0.0, sigma)};
+}
+
+Eigen::Matrix3d Rpy(double roll, double pitch, double yaw) {
+  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX())).toRotationMatrix();
+}
+
+/// Angle [rad] between the gravity directions that two orientations imply (yaw-free tilt error).
+double TiltError(const Eigen::Matrix3d& R_world_imu_a, const Eigen::Matrix3d& R_world_imu_b) {
+  const Eigen::Vector3d up_a = R_world_imu_a.transpose().col(2), up_b = R_world_imu_b.transpose().col(2);
+  return std::atan2(up_a.cross(up_b).norm(), up_a.dot(up_b));
+}
+
+/// Kalibr white noise per sample at kRateHz (ImuNoise defaults): density * sqrt(rate).
+void AddWhiteNoise(RandomStream& rng, ImuSample* s) {
+  const ImuNoise n;
+  s->gyro_radps += Noise(rng, n.gyro_noise_density * std::sqrt(kRateHz));
+  s->accel_mps2 += Noise(rng, n.accel_noise_density * std::sqrt(kRateHz));
+}
+
+/// A still IMU at orientation R with biases, optionally rocking about x at rock_radps amplitude (not still).
+std::vector<ImuSample> StillSamples(const Eigen::Matrix3d& R, const Eigen::Vector3d& bg, const Eigen::Vector3d& ba,
+                                    double duration_s, double rock_radps = 0.0) {
+  RandomStream rng(3, "imu_init_test.static");
+  std::vector<ImuSample> out;
+  for (int k = 0; k <= static_cast<int>(duration_s * kRateHz); ++k) {
+    ImuSample s;
+    s.t_s = k / kRateHz;
+    s.gyro_radps = bg + Eigen::Vector3d(rock_radps * std::sin(6.0 * s.t_s), 0.0, 0.0);
+    s.accel_mps2 = R.transpose() * (-kGravity) + ba;
+    AddWhiteNoise(rng, &s);
+    out.push_back(s);
+  }
+  return out;
+}
+
+TEST(ImuInit, StaticRecoversRollPitchAndGyroBias) {
+  const Eigen::Matrix3d R = Rpy(0.1, -0.2, 0.7);
+  const Eigen::Vector3d bg(0.01, -0.005, 0.02);
+  const ImuInitResult r = InitializeStatic(StillSamples(R, bg, Eigen::Vector3d::Zero(), 2.0), ImuInitConfig{});
+  ASSERT_TRUE(r.success) << r.reason;
+  const double tilt = TiltError(r.R_world_imu, R), bg_err = (r.bias_gyro_radps - bg).norm();
+  // Yaw is unobservable and set to 0: the recovered orientation is R up to a rotation about world z.
+  const Eigen::Vector3d ypr = r.R_world_imu.eulerAngles(2, 1, 0);
+  std::printf("[measured] static: tilt %.2e rad, bg %.2e rad/s, yaw %.2e, |g| residual %.2e\n", tilt, bg_err,
+              ypr(0), r.gravity_residual_mps2);
+  // 201 samples in the 1 s window. 1-sigma predictions: tilt 0.032 / (9.81 sqrt(201)) = 2.3e-4 rad, gyro bias
+  // 3.5e-3 / sqrt(201) = 2.4e-4 rad/s per axis. Measured tilt 8.5e-5 rad, |bg error| 3.5e-4 rad/s. Bounds ~4 sigma.
+  EXPECT_LT(tilt, 1e-3);
+  EXPECT_LT(bg_err, 1.7e-3);
+  EXPECT_LT(std::abs(ypr(0)), 1e-12);
+  EXPECT_EQ(r.velocities_world_mps.size(), 1u);
+  EXPECT_LT(r.gravity_residual_mps2, 0.02);
+  EXPECT_NEAR(r.t_s, 1.0, 1e-12);
+}
+
+TEST(ImuInit, StaticTiltErrorEqualsAccelBiasOverGravity) {
+  // The documented limitation: an accelerometer bias perpendicular to gravity reads as a tilt of |ba| / g.
+  const Eigen::Matrix3d R = Rpy(0.0, 0.0, 0.0);
+  const ImuInitResult r =
+      InitializeStatic(StillSamples(R, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1, 0.0, 0.0), 2.0), {});
+  ASSERT_TRUE(r.success) << r.reason;
+  // Expected 0.1 / 9.81 = 1.02e-2 rad, plus the noise (2.3e-4 rad, 1 sigma).
+  EXPECT_NEAR(TiltError(r.R_world_imu, R), 0.1 / 9.81, 1e-3);
+}
+
+TEST(ImuInit, StaticRejectsMotionAndShortData) {
+  const Eigen::Matrix3d R = Rpy(0.1, 0.1, 0.0);
+  const ImuInitResult rocking =
+      InitializeStatic(StillSamples(R, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 2.0, 0.2), {});
+  EXPECT_FALSE(rocking.success);
+  EXPECT_NE(rocking.reason.find("not still"), std::string::npos) << rocking.reason;
+  const ImuInitResult short_data =
+      InitializeStatic(StillSamples(R, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.5), {});
+  EXPECT_FALSE(short_data.success);
+  EXPECT_NE(short_data.reason.find("static_window_s"), std::string::npos) << short_data.reason;
+  EXPECT_FALSE(InitializeStatic({}, {}).success);
+}
+
+/// Motion for the moving start: R = Rz Ry Rx of smooth angles, p sinusoidal (|v| ~1 m/s, |a| ~1 m/s^2).
+struct Motion {
+  static Eigen::Vector3d Angles(double t) { return {0.2 * std::sin(1.1 * t), 0.15 * std::sin(0.8 * t + 0.3), 0.5 * t}; }
+  static Eigen::Vector3d AngleRates(double t) { return {0.22 * std::cos(1.1 * t), 0.12 * std::cos(0.8 * t + 0.3), 0.5}; }
+  static Eigen::Matrix3d R(double t) { const Eigen::Vector3d e = Angles(t); return Rpy(e.x(), e.y(), e.z()); }
+  static Eigen::Vector3d P(double t) { return {std::sin(1.2 * t) + 0.3 * t, 0.8 * (1.0 - std::cos(t)), 0.2 * std::sin(1.5 * t)}; }
+  static Eigen::Vector3d V(double t) { return {1.2 * std::cos(1.2 * t) + 0.3, 0.8 * std::sin(t), 0.3 * std::cos(1.5 * t)}; }
+  static Eigen::Vector3d A(double t) { return {-1.44 * std::sin(1.2 * t), 0.8 * std::cos(t), -0.45 * std::sin(1.5 * t)}; }
+  static ImuSample Sample(double t, const Eigen::Vector3d& bg) {
+    const Eigen::Vector3d e = Angles(t), d = AngleRates(t);
+    const Eigen::Matrix3d RxT = Rpy(e.x(), 0, 0).transpose(), RyT = Rpy(0, e.y(), 0).transpose();
+    ImuSample s;
+    s.t_s = t;
+    s.gyro_radps = RxT * RyT * Eigen::Vector3d(0, 0, d.z()) + RxT * Eigen::Vector3d(0, d.y(), 0) +
+                   Eigen::Vector3d(d.x(), 0, 0) + bg;
+    s.accel_mps2 = R(t).transpose() * (A(t) - kGravity);
+    return s;
+  }
+};
+
+struct MovingCase {
+  std::vector<Pose3> T_odom_imu;
+  std::vector<PreintegratedImu> imu_between;
+  Eigen::Matrix3d R_odom_world;
+};
+
+/// N poses at 10 Hz in a tilted odometry frame (LiDAR noise sigma_m / sigma_rad per axis), IMU at 200 Hz with the
+/// gyro bias (and Kalibr white noise when noisy), preintegrated at zero bias.
+MovingCase MakeMovingCase(int n, double sigma_m, double sigma_rad, bool noisy, const Eigen::Vector3d& bg) {
+  RandomStream lidar(9, "imu_init_test.lidar"), imu(9, "imu_init_test.imu");
+  MovingCase c;
+  c.R_odom_world = Rpy(0.25, -0.15, 1.0);  // odom = the first base frame: tilted, arbitrary heading
+  const Pose3 T_odom_world = MakePose(Eigen::Vector3d(0.5, -1.0, 0.2), Eigen::Quaterniond(c.R_odom_world));
+  for (int k = 0; k < n; ++k) {
+    const double t = 0.1 * k;
+    const Pose3 T_world_imu = MakePose(Motion::P(t) + Noise(lidar, sigma_m),
+                                       Eigen::Quaterniond(ExpSO3(Noise(lidar, sigma_rad)) * Motion::R(t)));
+    c.T_odom_imu.push_back(T_odom_world * T_world_imu);
+    if (k + 1 == n) break;
+    PreintegratedImu pre(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise{});
+    ImuSample prev = Motion::Sample(t, bg);
+    if (noisy) AddWhiteNoise(imu, &prev);
+    for (int j = 1; j <= 20; ++j) {
+      ImuSample next = Motion::Sample(t + j / kRateHz, bg);
+      if (noisy) AddWhiteNoise(imu, &next);
+      EXPECT_TRUE(pre.Integrate(prev, next).ok);
+      prev = next;
+    }
+    c.imu_between.push_back(pre);
+  }
+  return c;
+}
+
+struct MovingErrors {
+  double tilt_rad, vel_rms_mps, bg_err;
+};
+
+MovingErrors Evaluate(const MovingCase& c, const ImuInitResult& r, const Eigen::Vector3d& bg) {
+  MovingErrors e{};
+  // Gravity direction in odom: estimated vs true; velocities compared in odom (the world's yaw is arbitrary).
+  const Eigen::Vector3d g_true_odom = c.R_odom_world * kGravity;
+  e.tilt_rad = std::atan2(g_true_odom.cross(r.gravity_odom_mps2).norm(), g_true_odom.dot(r.gravity_odom_mps2));
+  double sum = 0.0;
+  for (size_t k = 0; k < r.velocities_world_mps.size(); ++k) {
+    const Eigen::Vector3d v_odom = r.R_world_odom.transpose() * r.velocities_world_mps[k];
+    sum += (v_odom - c.R_odom_world * Motion::V(0.1 * k)).squaredNorm();
+  }
+  e.vel_rms_mps = std::sqrt(sum / r.velocities_world_mps.size());
+  e.bg_err = (r.bias_gyro_radps - bg).norm();
+  return e;
+}
+
+TEST(ImuInit, MovingRecoversVelocityGravityAndGyroBias) {
+  const Eigen::Vector3d bg(0.01, -0.02, 0.015);
+  const MovingCase exact = MakeMovingCase(10, 0.0, 0.0, false, bg);
+  const ImuInitResult re = InitializeMoving(exact.T_odom_imu, exact.imu_between, ImuInitConfig{});
+  ASSERT_TRUE(re.success) << re.reason;
+  const MovingErrors ee = Evaluate(exact, re, bg);
+  const MovingCase noisy = MakeMovingCase(10, 0.01, 0.003, true, bg);
+  const ImuInitResult rn = InitializeMoving(noisy.T_odom_imu, noisy.imu_between, ImuInitConfig{});
+  ASSERT_TRUE(rn.success) << rn.reason;
+  const MovingErrors en = Evaluate(noisy, rn, bg);
+  std::printf("[measured] moving exact: tilt %.2e vel %.2e bg %.2e |g| res %.2e | noisy: tilt %.2e vel %.2e bg %.2e "
+              "|g| res %.2e\n", ee.tilt_rad, ee.vel_rms_mps, ee.bg_err, re.gravity_residual_mps2, en.tilt_rad,
+              en.vel_rms_mps, en.bg_err, rn.gravity_residual_mps2);
+  EXPECT_LT(ee.tilt_rad, 1e-4);
+  EXPECT_LT(ee.vel_rms_mps, 1e-3);
+  EXPECT_LT(ee.bg_err, 1e-4);
+  EXPECT_LT(en.tilt_rad, 0.03);
+  EXPECT_LT(en.vel_rms_mps, 0.1);
+  EXPECT_LT(en.bg_err, 0.01);
+  // The world states are consistent with the result's rotations.
+  ASSERT_EQ(rn.states.size(), 10u);
+  EXPECT_LT((rn.states[0].R_world_imu - rn.R_world_imu).norm(), 1e-12);
+  EXPECT_LT((rn.R_world_odom * rn.gravity_odom_mps2 - kGravity).norm(), 1e-9);
+}
+
+TEST(ImuInit, MovingRejectsBadInput) {
+  const MovingCase c = MakeMovingCase(4, 0.0, 0.0, false, Eigen::Vector3d::Zero());
+  const ImuInitResult few = InitializeMoving(c.T_odom_imu, c.imu_between, ImuInitConfig{});
+  EXPECT_FALSE(few.success);
+  EXPECT_NE(few.reason.find("moving_min_poses"), std::string::npos) << few.reason;
+  std::vector<PreintegratedImu> short_imu(c.imu_between.begin(), c.imu_between.end() - 1);
+  ImuInitConfig config;
+  config.moving_min_poses = 3;
+  const ImuInitResult mismatch = InitializeMoving(c.T_odom_imu, short_imu, config);
+  EXPECT_FALSE(mismatch.success);
+  EXPECT_NE(mismatch.reason.find("intervals"), std::string::npos) << mismatch.reason;
+  EXPECT_TRUE(InitializeMoving(c.T_odom_imu, c.imu_between, config).success);
+}
+
+TEST(ImuInitConfig, ValidateNamesTheField) {
+  std::string error;
+  EXPECT_TRUE(ImuInitConfig{}.Validate(&error)) << error;
+  ImuInitConfig c;
+  c.static_window_s = 0.0;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("imu_init.static_window_s"), std::string::npos) << error;
+  c = ImuInitConfig{};
+  c.moving_min_poses = 2;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("imu_init.moving_min_poses"), std::string::npos) << error;
+  c = ImuInitConfig{};
+  c.static_max_accel_std_mps2 = -1.0;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("static_max_accel_std_mps2"), std::string::npos) << error;
+  const ImuInitResult r = InitializeStatic(StillSamples(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(),
+                                                        Eigen::Vector3d::Zero(), 2.0), c);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.reason.find("static_max_accel_std_mps2"), std::string::npos) << r.reason;
+}
+
+}  // namespace
+}  // namespace rotolidar

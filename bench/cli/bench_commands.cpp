@@ -1,13 +1,44 @@
-// Placeholder: being written (M1 work in progress).
+// `rotolidar bench <name>`: speed benchmarks (ratios to real time) and the IMU Allan check.
+#include <cstring>
 #include <iostream>
 
 #include "bench/cli/commands.hpp"
+#include "bench/perf/lidar_perf.hpp"
+#include "bench/perf/rig_perf.hpp"
 
 namespace rotolidar::bench {
+namespace {
 
-int CmdBench(int, char**) {
-  std::cerr << "error: 'rotolidar bench' is not built yet\n";
-  return 1;
+struct Benchmark {
+  const char* name;
+  int (*run)(int, char**);
+  const char* summary;
+};
+
+const Benchmark kBenchmarks[] = {
+    {"rig", BenchRig, "rig physics + stepper/PID/encoder + IMU, no LiDAR (target >= 100x real time, 1 core)"},
+    {"allan", BenchAllan, "long static run: Allan deviation recovers the IMU's N and K within 10 %"},
+    {"lidar", BenchLidar, "VLP-16 ray casting + packet encoding (target >= 20x real time, 1 core)"},
+    {"decode", BenchDecode, "VLP-16 packet decoding (target >= 100x real time)"},
+};
+
+void Usage(std::ostream& os) {
+  os << "usage: rotolidar bench <name> [options]   (rotolidar bench <name> --help)\n\nbenchmarks:\n";
+  for (const Benchmark& b : kBenchmarks) os << "  " << b.name << std::string(8 - std::strlen(b.name), ' ') << b.summary << "\n";
+}
+
+}  // namespace
+
+int CmdBench(int argc, char** argv) {
+  if (argc < 1 || std::strcmp(argv[0], "--help") == 0 || std::strcmp(argv[0], "-h") == 0) {
+    Usage(argc < 1 ? std::cerr : std::cout);
+    return argc < 1 ? 2 : 0;
+  }
+  for (const Benchmark& b : kBenchmarks)
+    if (std::strcmp(argv[0], b.name) == 0) return b.run(argc - 1, argv + 1);
+  std::cerr << "error: unknown benchmark '" << argv[0] << "'\n";
+  Usage(std::cerr);
+  return 2;
 }
 
 }  // namespace rotolidar::bench

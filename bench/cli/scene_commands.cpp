@@ -17,10 +17,9 @@ int Fail(const Status& s) {
   return 1;
 }
 
-/// The folder sim::ResolveScenePath looks names up in ($ROTOLIDAR_SCENES, else the source tree's scenes/).
-std::string DefaultSceneDir() {
-  return std::filesystem::path(sim::ResolveScenePath("scene_name_probe")).parent_path().string();
-}
+/// The folder sim::ResolveScenePath looks names up in ($ROTOLIDAR_SCENES, else the source tree's scenes/): the
+/// empty name is never an existing file, so it resolves to "<dir>/.yaml".
+std::string DefaultSceneDir() { return std::filesystem::path(sim::ResolveScenePath("")).parent_path().string(); }
 
 int SceneList(int argc, char** argv) {
   OptionParser p("scene list", "List the scene files of a folder: triangles (static, dynamic), extent, dynamic "

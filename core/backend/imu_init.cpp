@@ -184,7 +184,8 @@ ImuInitResult InitializeMoving(const std::vector<Pose3>& T_odom_imu, const std::
     return Fail(r, "moving init: imu_between has " + std::to_string(imu_between.size()) + " intervals, expected " +
                        std::to_string(n - 1));
   for (int k = 0; k < n; ++k) {
-    if (!T_odom_imu[k].matrix().allFinite()) return Fail(r, "moving init: pose " + std::to_string(k) + " is not finite");
+    if (!T_odom_imu[k].matrix().allFinite())
+      return Fail(r, "moving init: pose " + std::to_string(k) + " is not finite");
     if (k + 1 < n && imu_between[k].num_steps() == 0)
       return Fail(r, "moving init: imu_between[" + std::to_string(k) + "] holds no IMU step");
   }

@@ -351,6 +351,10 @@ MarginalizationResult Marginalize(const std::vector<MarginalizationTerm>& terms,
     rank_d = static_cast<int>(qr_d.rank());
     rest.applyOnTheLeft(qr_d.householderQ().transpose());
   }
+  if (rows == rank_d) {
+    result.message = "Marginalize: the dropped blocks absorb every residual (the marginal carries no information)";
+    return result;
+  }
   const MatrixXd tail = rest.bottomRows(rows - rank_d);
   Eigen::ColPivHouseholderQR<MatrixXd> qr_k(tail.leftCols(nk));
   qr_k.setThreshold(rank_threshold);

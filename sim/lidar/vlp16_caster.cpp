@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <boost/random/normal_distribution.hpp>
+
 namespace rotolidar::sim {
 namespace {
 
@@ -19,6 +21,22 @@ bool Fail(std::string* error, const std::string& message) {
   return false;
 }
 
+/// RandomStream as a UniformRandomBitGenerator for Boost's normal distribution: the Marsaglia-Tsang ziggurat
+/// (header-only, a fixed algorithm, unlike std::normal_distribution), ~2x faster than RandomStream::Normal's
+/// polar method; the range noise draws 289,344 normals per simulated second.
+struct StreamBits {
+  using result_type = uint64_t;
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return ~result_type{0}; }
+  result_type operator()() { return stream->NextU64(); }
+  RandomStream* stream;
+};
+
+double StandardNormal(RandomStream* stream) {
+  StreamBits bits{stream};
+  return boost::random::normal_distribution<double>()(bits);
+}
+
 /// Room for `more` elements; grows at least 2x, so that callers appending packet by packet stay linear.
 template <typename T>
 void ReserveGeometric(std::vector<T>* v, std::size_t more) {
@@ -30,7 +48,7 @@ void ReserveGeometric(std::vector<T>* v, std::size_t more) {
 bool Vlp16CasterConfig::Validate(std::string* error) const {
   if (!std::isfinite(t0_s)) return Fail(error, "lidar.t0_s must be finite");
   if (!std::isfinite(azimuth0_deg)) return Fail(error, "lidar.azimuth0_deg must be finite");
-  if (!(rpm > 0.0 && rpm <= 1200.0)) return Fail(error, "lidar.rpm must be in (0, 1200]");
+  if (!(rpm >= 300.0 && rpm <= 1200.0)) return Fail(error, "lidar.rpm must be in [300, 1200] (the VLP-16's range)");
   if (!(rpm_jitter_frac >= 0.0 && rpm_jitter_frac < 0.5)) {
     return Fail(error, "lidar.rpm_jitter_frac must be in [0, 0.5)");
   }
@@ -261,8 +279,8 @@ void Vlp16Caster::CastBatch(std::size_t n_firings) {
 void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int laser_id, Vlp16FiringSequence* seq,
                           LidarTruthPoint* truth) {
   const bool dual = config_.return_mode == Vlp16ReturnMode::kDual;
-  double noise_m[2] = {config_.range_noise_sigma_m * range_rng_.Normal(), 0.0};  // drawn for every firing
-  if (dual) noise_m[1] = config_.range_noise_sigma_m * range_rng_.Normal();
+  double noise_m[2] = {config_.range_noise_sigma_m * StandardNormal(&range_rng_), 0.0};  // for every firing
+  if (dual) noise_m[1] = config_.range_noise_sigma_m * StandardNormal(&range_rng_);
   const std::size_t k_rays = pattern_.size();
   const std::size_t capacity = k_rays * static_cast<std::size_t>(config_.max_surfaces_per_ray);
   if (truth) {

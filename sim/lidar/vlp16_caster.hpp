@@ -46,7 +46,7 @@ namespace rotolidar::sim {
 struct Vlp16CasterConfig {
   double t0_s = 0.0;             ///< firing time of laser 0 of sequence 0 on the rig clock [s]
   double azimuth0_deg = 0.0;     ///< head azimuth at t0_s [deg], clockwise from lidar +x seen from above
-  double rpm = 600.0;            ///< nominal head spin (the VLP-16 allows 300..1200 in steps of 60)
+  double rpm = 600.0;            ///< nominal head spin, [300, 1200] (the sensor itself sets steps of 60)
   /// Relative spin-rate error (1-sigma), a first-order Gauss-Markov process with correlation time
   /// rpm_jitter_tau_s (real heads drift slowly, 9-11 Hz reported at a 10 Hz setting). 0 = exact rpm.
   double rpm_jitter_frac = 0.0;

@@ -143,6 +143,9 @@ class StepperDrive final : public RotorDrive {
   void DrainEncoderSamples(std::vector<EncoderSample>* out) override;
 
   const StepperDiagnostics& diagnostics() const { return diag_; }
+  /// The TRUE rotor angle [rad] at t from the encoder's short history (t within the last latency + 2 steps):
+  /// for tests that compare encoder samples with the truth they measured.
+  double EncoderTrueAngleRad(Seconds t) const { return encoder_.TrueAngleAt(t); }
   const MotorDriveConfig& config() const { return config_; }
   const MotorProfile& profile() const { return profile_; }
   /// The fixed step error [rad] of the equilibrium of microstep position `microstep` (an angle of

@@ -8,6 +8,43 @@
 
 namespace rotolidar::sim {
 
+namespace {
+
+/// The GL camera from the optical frame (z forward, y down: GL forward = z, up = -y) and the frustum at the
+/// near plane from the intrinsics (MuJoCo derives left/right from the aspect ratio: square pixels).
+void SetGlCamera(const Eigen::Isometry3d& T_world_cam, const CameraIntrinsics& k, const RenderSettings& settings,
+                 mjvScene* scn) {
+  const Eigen::Matrix3d R = T_world_cam.linear();
+  const double n = settings.near_m;
+  for (mjvGLCamera& c : scn->camera) {
+    for (int i = 0; i < 3; ++i) {
+      c.pos[i] = static_cast<float>(T_world_cam.translation()[i]);
+      c.forward[i] = static_cast<float>(R(i, 2));
+      c.up[i] = static_cast<float>(-R(i, 1));
+    }
+    c.frustum_near = static_cast<float>(n);
+    c.frustum_far = static_cast<float>(settings.far_m);
+    c.frustum_top = static_cast<float>(n * k.cy_px / k.fy_px);
+    c.frustum_bottom = static_cast<float>(-n * (k.height_px - k.cy_px) / k.fy_px);
+    c.frustum_center = static_cast<float>(n * (0.5 * k.width_px - k.cx_px) / k.fx_px);
+  }
+}
+
+/// OpenGL window depth d in [0, 1] (bottom-up rows) -> z along the optical axis [m] (top-down rows).
+void LinearDepth(const std::vector<float>& raw, const CameraIntrinsics& k, const RenderSettings& settings,
+                 std::vector<float>* depth_m) {
+  const double n = settings.near_m, f = settings.far_m;
+  depth_m->resize(raw.size());
+  for (int y = 0; y < k.height_px; ++y) {
+    for (int x = 0; x < k.width_px; ++x) {
+      const double d = raw[static_cast<std::size_t>((k.height_px - 1 - y) * k.width_px + x)];
+      (*depth_m)[static_cast<std::size_t>(y * k.width_px + x)] = static_cast<float>(n * f / (f - d * (f - n)));
+    }
+  }
+}
+
+}  // namespace
+
 struct OffscreenRenderer::Impl {
   OSMesaContext gl = nullptr;
   std::vector<unsigned char> gl_buffer;  ///< OSMesa's default framebuffer (MuJoCo draws offscreen)
@@ -102,21 +139,7 @@ Status OffscreenRenderer::Render(const mjModel* model, mjData* data, const Eigen
   scn.flags[mjRND_SHADOW] = settings.shadows;
   scn.flags[mjRND_SKYBOX] = settings.skybox;
   scn.flags[mjRND_REFLECTION] = 0;
-  // The GL camera: optical z forward, y down -> GL forward = z, up = -y; frustum at the near plane.
-  const Eigen::Matrix3d R = T_world_cam.linear();
-  const double n = settings.near_m;
-  for (mjvGLCamera& c : scn.camera) {
-    for (int i = 0; i < 3; ++i) {
-      c.pos[i] = static_cast<float>(T_world_cam.translation()[i]);
-      c.forward[i] = static_cast<float>(R(i, 2));
-      c.up[i] = static_cast<float>(-R(i, 1));
-    }
-    c.frustum_near = static_cast<float>(n);
-    c.frustum_far = static_cast<float>(settings.far_m);
-    c.frustum_top = static_cast<float>(n * k.cy_px / k.fy_px);
-    c.frustum_bottom = static_cast<float>(-n * (k.height_px - k.cy_px) / k.fy_px);
-    c.frustum_center = static_cast<float>(n * (0.5 * k.width_px - k.cx_px) / k.fx_px);
-  }
+  SetGlCamera(T_world_cam, k, settings, &scn);
   const mjrRect viewport{0, 0, k.width_px, k.height_px};
   mjr_setBuffer(mjFB_OFFSCREEN, &impl_->context);
   mjr_render(viewport, &scn, &impl_->context);
@@ -131,16 +154,7 @@ Status OffscreenRenderer::Render(const mjModel* model, mjData* data, const Eigen
   for (int y = 0; y < k.height_px; ++y) {  // OpenGL rows run bottom to top
     std::copy_n(&bottom_up[row * static_cast<std::size_t>(k.height_px - 1 - y)], row, &rgb->rgb[row * y]);
   }
-  if (depth_m) {
-    const double f = settings.far_m;
-    depth_m->resize(pixels);
-    for (int y = 0; y < k.height_px; ++y) {
-      for (int x = 0; x < k.width_px; ++x) {
-        const double d = depth_raw[static_cast<std::size_t>((k.height_px - 1 - y) * k.width_px + x)];
-        (*depth_m)[static_cast<std::size_t>(y * k.width_px + x)] = static_cast<float>(n * f / (f - d * (f - n)));
-      }
-    }
-  }
+  if (depth_m) LinearDepth(depth_raw, k, settings, depth_m);
   return Status::Ok();
 }
 

@@ -63,8 +63,9 @@ TEST(ImuInit, StaticRecoversRollPitchAndGyroBias) {
   const Eigen::Vector3d ypr = r.R_world_imu.eulerAngles(2, 1, 0);
   std::printf("[measured] static: tilt %.2e rad, bg %.2e rad/s, yaw %.2e, |g| residual %.2e\n", tilt, bg_err,
               ypr(0), r.gravity_residual_mps2);
-  // 201 samples in the 1 s window. 1-sigma predictions: tilt 0.032 / (9.81 sqrt(201)) = 2.3e-4 rad, gyro bias
-  // 3.5e-3 / sqrt(201) = 2.4e-4 rad/s per axis. Measured tilt 8.5e-5 rad, |bg error| 3.5e-4 rad/s. Bounds ~4 sigma.
+  // 201 samples in the 1 s window. 1-sigma predictions: tilt 0.032 / (9.81 sqrt(201)) = 2.3e-4 rad per axis, gyro
+  // bias 3.5e-3 / sqrt(201) = 2.4e-4 rad/s per axis. Measured tilt 3.2e-4 rad, |bg error| 2.8e-4 rad/s. Bounds are
+  // ~3-4 sigma of the 2-D / 3-D norms.
   EXPECT_LT(tilt, 1e-3);
   EXPECT_LT(bg_err, 1.7e-3);
   EXPECT_LT(std::abs(ypr(0)), 1e-12);
@@ -98,12 +99,25 @@ TEST(ImuInit, StaticRejectsMotionAndShortData) {
 
 /// Motion for the moving start: R = Rz Ry Rx of smooth angles, p sinusoidal (|v| ~1 m/s, |a| ~1 m/s^2).
 struct Motion {
-  static Eigen::Vector3d Angles(double t) { return {0.2 * std::sin(1.1 * t), 0.15 * std::sin(0.8 * t + 0.3), 0.5 * t}; }
-  static Eigen::Vector3d AngleRates(double t) { return {0.22 * std::cos(1.1 * t), 0.12 * std::cos(0.8 * t + 0.3), 0.5}; }
-  static Eigen::Matrix3d R(double t) { const Eigen::Vector3d e = Angles(t); return Rpy(e.x(), e.y(), e.z()); }
-  static Eigen::Vector3d P(double t) { return {std::sin(1.2 * t) + 0.3 * t, 0.8 * (1.0 - std::cos(t)), 0.2 * std::sin(1.5 * t)}; }
-  static Eigen::Vector3d V(double t) { return {1.2 * std::cos(1.2 * t) + 0.3, 0.8 * std::sin(t), 0.3 * std::cos(1.5 * t)}; }
-  static Eigen::Vector3d A(double t) { return {-1.44 * std::sin(1.2 * t), 0.8 * std::cos(t), -0.45 * std::sin(1.5 * t)}; }
+  static Eigen::Vector3d Angles(double t) {
+    return {0.2 * std::sin(1.1 * t), 0.15 * std::sin(0.8 * t + 0.3), 0.5 * t};
+  }
+  static Eigen::Vector3d AngleRates(double t) {
+    return {0.22 * std::cos(1.1 * t), 0.12 * std::cos(0.8 * t + 0.3), 0.5};
+  }
+  static Eigen::Matrix3d R(double t) {
+    const Eigen::Vector3d e = Angles(t);
+    return Rpy(e.x(), e.y(), e.z());
+  }
+  static Eigen::Vector3d P(double t) {
+    return {std::sin(1.2 * t) + 0.3 * t, 0.8 * (1.0 - std::cos(t)), 0.2 * std::sin(1.5 * t)};
+  }
+  static Eigen::Vector3d V(double t) {
+    return {1.2 * std::cos(1.2 * t) + 0.3, 0.8 * std::sin(t), 0.3 * std::cos(1.5 * t)};
+  }
+  static Eigen::Vector3d A(double t) {
+    return {-1.44 * std::sin(1.2 * t), 0.8 * std::cos(t), -0.45 * std::sin(1.5 * t)};
+  }
   static ImuSample Sample(double t, const Eigen::Vector3d& bg) {
     const Eigen::Vector3d e = Angles(t), d = AngleRates(t);
     const Eigen::Matrix3d RxT = Rpy(e.x(), 0, 0).transpose(), RyT = Rpy(0, e.y(), 0).transpose();
@@ -174,21 +188,29 @@ TEST(ImuInit, MovingRecoversVelocityGravityAndGyroBias) {
   const ImuInitResult re = InitializeMoving(exact.T_odom_imu, exact.imu_between, ImuInitConfig{});
   ASSERT_TRUE(re.success) << re.reason;
   const MovingErrors ee = Evaluate(exact, re, bg);
-  const MovingCase noisy = MakeMovingCase(10, 0.01, 0.003, true, bg);
+  const MovingCase noisy = MakeMovingCase(20, 0.01, 0.003, true, bg);
   const ImuInitResult rn = InitializeMoving(noisy.T_odom_imu, noisy.imu_between, ImuInitConfig{});
   ASSERT_TRUE(rn.success) << rn.reason;
   const MovingErrors en = Evaluate(noisy, rn, bg);
   std::printf("[measured] moving exact: tilt %.2e vel %.2e bg %.2e |g| res %.2e | noisy: tilt %.2e vel %.2e bg %.2e "
               "|g| res %.2e\n", ee.tilt_rad, ee.vel_rms_mps, ee.bg_err, re.gravity_residual_mps2, en.tilt_rad,
               en.vel_rms_mps, en.bg_err, rn.gravity_residual_mps2);
-  EXPECT_LT(ee.tilt_rad, 1e-4);
-  EXPECT_LT(ee.vel_rms_mps, 1e-3);
-  EXPECT_LT(ee.bg_err, 1e-4);
-  EXPECT_LT(en.tilt_rad, 0.03);
-  EXPECT_LT(en.vel_rms_mps, 0.1);
+  // Exact data (10 poses, 0.9 s): only the 200 Hz midpoint discretisation remains. Measured tilt 7.1e-7 rad,
+  // velocity RMS 3.3e-6 m/s, |bg error| 3.8e-7 rad/s, ||g| - 9.81| 2.9e-7. Bounds 10x.
+  EXPECT_LT(ee.tilt_rad, 1e-5);
+  EXPECT_LT(ee.vel_rms_mps, 3e-5);
+  EXPECT_LT(ee.bg_err, 4e-6);
+  // Noisy (20 poses over 1.9 s, LiDAR 1 cm / 3 mrad, Kalibr IMU noise). Gravity is the quadratic term of the
+  // positions: sigma_g = 2 * 0.01 m / sqrt(sum P2(t_k)^2) = 0.015 m/s^2 per axis -> tilt ~1.5 mrad per axis; the gyro
+  // bias is the slope of the rotation errors: 3 mrad / sqrt(sum (t_k - mean)^2) = 1.2e-3 rad/s per axis.
+  // Measured: tilt 2.1e-3 rad, velocity RMS 7.6e-2 m/s, |bg error| 4.8e-3 rad/s, ||g_lsq| - 9.81| 1.7e-2.
+  // (With 10 poses over 0.9 s the same noise gives tilt 8.6e-3 rad, velocity RMS 0.12 m/s: the init wants ~2 s.)
+  EXPECT_LT(en.tilt_rad, 6e-3);
+  EXPECT_LT(en.vel_rms_mps, 0.2);
   EXPECT_LT(en.bg_err, 0.01);
+  EXPECT_LT(rn.gravity_residual_mps2, 0.1);
   // The world states are consistent with the result's rotations.
-  ASSERT_EQ(rn.states.size(), 10u);
+  ASSERT_EQ(rn.states.size(), 20u);
   EXPECT_LT((rn.states[0].R_world_imu - rn.R_world_imu).norm(), 1e-12);
   EXPECT_LT((rn.R_world_odom * rn.gravity_odom_mps2 - kGravity).norm(), 1e-9);
 }

@@ -1,0 +1,43 @@
+#pragma once
+// Benchmarks of the rig twin without the LiDAR (`rotolidar bench rig`, `rotolidar bench allan`).
+//  - rig:   MuJoCo physics + stepper drive (PID, encoder) + IMU model for a simulated span, single-threaded;
+//           the ratio to real time is simulated seconds per second of process CPU time.
+//  - allan: a long static run (rig at rest, motor unpowered) through the same physics and IMU model; the Allan
+//           deviation of the record recovers the configured white-noise densities N and random walks K.
+#include <string>
+
+#include "bench/eval/allan.hpp"
+#include "core/util/log.hpp"
+#include "sim/sim_config.hpp"
+
+namespace rotolidar::bench {
+
+struct RigBenchResult {
+  double sim_s = 0.0;         ///< simulated time [s]
+  double cpu_s = 0.0;         ///< process CPU time spent [s] (one thread)
+  double wall_s = 0.0;        ///< wall time [s]
+  long physics_steps = 0;
+  long imu_samples = 0;
+  long encoder_samples = 0;
+  double RealTimeRatio() const { return cpu_s > 0 ? sim_s / cpu_s : 0.0; }
+};
+
+/// Runs `config` (its carrier, motor and IMU) for config.duration_s without the LiDAR.
+Status RunRigBench(const sim::SimConfig& config, RigBenchResult* result);
+
+struct AllanBenchResult {
+  RigBenchResult run;
+  AllanReport report;
+  ImuNoise configured;
+  /// |fitted / configured - 1| per quantity, worst over the three axes.
+  double gyro_n_error = 0.0, gyro_k_error = 0.0, accel_n_error = 0.0, accel_k_error = 0.0;
+};
+
+/// A static run of `hours` with `config`'s IMU (rig at rest at the origin, motor unpowered), physics at the IMU
+/// period. The first second (the hinge settling against the imbalance) is discarded.
+Status RunAllanBench(const sim::SimConfig& config, double hours, AllanBenchResult* result);
+
+int BenchRig(int argc, char** argv);
+int BenchAllan(int argc, char** argv);
+
+}  // namespace rotolidar::bench

@@ -30,7 +30,7 @@ struct SimConfig {
   uint64_t seed = 1;                 ///< run seed: every random stream derives from it plus its name
   double duration_s = 20.0;          ///< simulated time [s]
   std::string scene = "box_room";    ///< a name in scenes/ (scenes/<name>.yaml) or a path to a scene file
-  double truth_rate_hz = 200.0;      ///< rate of base/lidar/rotor truth samples [Hz]
+  double truth_rate_hz = 1000.0;     ///< rate of base/lidar/rotor truth samples [Hz] (the physics rate)
   Vlp16ReturnMode return_mode = Vlp16ReturnMode::kStrongest;
   RigModelConfig rig_model;          ///< the MuJoCo rig: platform, motor axis, masses, sites, physics step
   CarrierConfig carrier;             ///< how the base moves (a target the physics body tracks)

@@ -181,14 +181,8 @@ Primitive SceneParser::ParsePrimitive(const YAML::Node& node, Scene* scene) {
     if (scale && scale.IsSequence()) p.scale = y_.Vec(node, "scale", 3, context);
     if (scale && !scale.IsSequence()) p.scale = Eigen::Vector3d::Constant(y_.As<double>(scale, "scale", context));
   }
-  Scene one;  // validate this primitive alone so the error carries its line
-  one.materials = scene->materials;
-  one.textures = scene->textures;
-  one.meshes = scene->meshes;
-  one.primitives = {p};
-  one.bounds = Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
-  std::string error;
-  if (!one.Validate(&error)) y_.Fail(node, error);
+  std::string error;  // validate it here so the error carries its line
+  if (!ValidatePrimitive(p, *scene, &error)) y_.Fail(node, error);
   return p;
 }
 

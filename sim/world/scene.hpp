@@ -157,6 +157,10 @@ struct TriangleMesh {
   Eigen::AlignedBox3d Bounds() const;
 };
 
+/// Checks one primitive against the scene's materials and meshes (sizes, references, orientation); on failure
+/// false with the primitive named. Part of Scene::Validate.
+bool ValidatePrimitive(const Primitive& primitive, const Scene& scene, std::string* error);
+
 /// Loads a scene file. Never throws: YAML syntax errors, unknown keys, wrong types, unreadable mesh files and
 /// invalid values come back as a Status whose message reads "<path>:<line>: <what> (<key>)" (1-based line).
 Status LoadScene(const std::string& path, Scene* scene);

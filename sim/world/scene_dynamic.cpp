@@ -115,14 +115,10 @@ bool ValidateDynamicObject(const DynamicObject& object, const Scene& scene, std:
   };
   if (object.kind != "person" && object.kind != "car") return fail("kind must be person or car");
   if (object.parts.empty()) return fail("has no parts");
-  Scene parts_only;  // reuse the primitive checks (materials, sizes, meshes)
-  parts_only.materials = scene.materials;
-  parts_only.textures = scene.textures;
-  parts_only.meshes = scene.meshes;
-  parts_only.primitives = object.parts;
-  parts_only.bounds = Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
   std::string why;
-  if (!parts_only.Validate(&why)) return fail(why);
+  for (const Primitive& part : object.parts) {
+    if (!ValidatePrimitive(part, scene, &why)) return fail(why);
+  }
   if (object.path_m.size() < 2) return fail("path needs >= 2 waypoints");
   for (const Eigen::Vector3d& p : object.path_m) {
     if (!p.allFinite()) return fail("path has a non-finite waypoint");

@@ -20,8 +20,8 @@ bool ValidMaterialRef(int id, const std::vector<Material>& materials, bool optio
   return id >= 0 && id < static_cast<int>(materials.size());
 }
 
-bool ValidatePrimitive(const Primitive& p, const std::vector<Material>& materials, std::size_t num_meshes,
-                       std::string* error) {
+bool CheckPrimitive(const Primitive& p, const std::vector<Material>& materials, std::size_t num_meshes,
+                    std::string* error) {
   const std::string where = "primitive '" + p.name + "': ";
   if (!p.center_m.allFinite() || !p.rpy_rad.allFinite()) return Fail(error, where + "non-finite center/rpy");
   if (!ValidMaterialRef(p.material_id, materials, false) || !ValidMaterialRef(p.floor_material_id, materials, true) ||
@@ -157,6 +157,10 @@ Eigen::Matrix3d Primitive::Rotation() const {
       .toRotationMatrix();
 }
 
+bool ValidatePrimitive(const Primitive& primitive, const Scene& scene, std::string* error) {
+  return CheckPrimitive(primitive, scene.materials, scene.meshes.size(), error);
+}
+
 int Scene::FindMaterial(const std::string& material_name) const {
   for (size_t i = 0; i < materials.size(); ++i) {
     if (materials[i].name == material_name) return static_cast<int>(i);
@@ -189,7 +193,7 @@ bool Scene::Validate(std::string* error) const {
     if (m.triangles.empty()) return Fail(error, "mesh '" + m.file + "' has no triangles");
   }
   for (const Primitive& p : primitives) {
-    if (!ValidatePrimitive(p, materials, meshes.size(), error)) return false;
+    if (!CheckPrimitive(p, materials, meshes.size(), error)) return false;
   }
   if (bounds.isEmpty()) return Fail(error, "bounds: min must be < max");
   for (const AnnotatedElement& e : elements) {

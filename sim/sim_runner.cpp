@@ -28,14 +28,29 @@ struct SimWorld {
   std::unique_ptr<BaseMotion> carrier;
 };
 
+/// The carrier's waypoints default to the scene's own path for that carrier (scenes list handheld/wheeled/car).
+CarrierConfig CarrierWithSceneDefaults(const CarrierConfig& config, const Scene& scene) {
+  CarrierConfig c = config;
+  const auto fill = [&](const char* key, std::vector<Waypoint2d>* waypoints) {
+    const auto it = scene.default_paths.find(key);
+    if (waypoints->empty() && it != scene.default_paths.end()) *waypoints = it->second;
+  };
+  if (c.type == CarrierType::kHandheld) fill("handheld", &c.handheld.waypoints);
+  if (c.type == CarrierType::kWheeled) fill("wheeled", &c.wheeled.waypoints);
+  return c;
+}
+
 Status BuildWorld(const SimConfig& config, SimWorld* world) {
   const std::string path = ResolveScenePath(config.scene);
   if (Status s = LoadScene(path, &world->scene); !s) return s;
-  const TriangleMesh mesh = BuildMesh(world->scene);
-  world->triangles = mesh.triangles.size();
-  if (Status s = EmbreeScene::Create(mesh, &world->embree); !s) return s;
+  world->triangles = BuildMesh(world->scene).triangles.size();
+  if (Status s = EmbreeScene::Create(world->scene, &world->embree); !s) return s;
+  if (Status s = CheckCasterMaterials(config.lidar, world->embree->materials()); !s) return s;
   if (Status s = RigModel::Create(config.rig_model, &world->rig); !s) return s;
-  return MakeCarrierMotion(config.carrier, &world->carrier);
+  const CarrierConfig carrier = CarrierWithSceneDefaults(config.carrier, world->scene);
+  std::string why;
+  if (!carrier.Validate(&why)) return Status::Error(path + ": carrier: " + why);
+  return MakeCarrierMotion(carrier, &world->carrier);
 }
 
 Status WriteText(const std::string& path, const std::string& text) {

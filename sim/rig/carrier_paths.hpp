@@ -141,7 +141,8 @@ Pose3 KittiPoseToWorldBase(const KittiPathConfig& config, const Pose3& T_cam0sta
 ///         smoothing_s}
 ///   kitti: {poses_file, times_file, rate_hz, height_m, smoothing_s, start_x_m, start_y_m, start_yaw_rad}
 /// Relative file paths are resolved against the directory of `file`. Throws yaml::ParseError naming file:line
-/// for unknown keys, wrong types and an invalid active section; *config is untouched on error.
+/// for unknown keys, wrong types and an invalid active section (handheld/wheeled may leave waypoints empty: the
+/// scene's default path fills them); *config is untouched on error.
 void ParseCarrierConfig(const std::string& file, const YAML::Node& node, CarrierConfig* config);
 /// Emits `type` and the active type's section (every field), as one mapping.
 void EmitCarrierConfig(YAML::Emitter& out, const CarrierConfig& config);

@@ -242,7 +242,11 @@ void ParseCarrierConfig(const std::string& file, const YAML::Node& node, Carrier
   ParseSection(file, node, "kitti", &c.kitti);
   std::string why;
   const YAML::Node active = node[CarrierTypeName(c.type)];
-  if (!c.Validate(&why)) throw yaml::ParseError(yaml::Where(file, active ? active : node) + "carrier." + why);
+  // Handheld/wheeled without waypoints follow the scene's default path; the sim validates them after loading it.
+  const bool from_scene = (c.type == CarrierType::kHandheld && c.handheld.waypoints.empty()) ||
+                          (c.type == CarrierType::kWheeled && c.wheeled.waypoints.empty());
+  if (!from_scene && !c.Validate(&why))
+    throw yaml::ParseError(yaml::Where(file, active ? active : node) + "carrier." + why);
   *config = c;
 }
 

@@ -58,7 +58,11 @@ class LidarRoundTrip : public ::testing::Test {
     Vlp16Caster caster(*embree_, calib_.lidar, config_.lidar, 1);
     std::vector<Vlp16FiringSequence> seqs;
     caster.Fire(sequences, [&](Seconds t) { return T_world_lidar(t); }, &seqs, &truth_);
-    const std::string path = (std::filesystem::temp_directory_path() / "rotolidar_roundtrip.pcap").string();
+    // One file per test: ctest runs the tests of this suite in parallel processes.
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              (std::string("rotolidar_roundtrip_") +
+                               ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".pcap"))
+                                 .string();
     {
       PcapWriter writer;
       ASSERT_TRUE(writer.Open(path).ok);

@@ -23,7 +23,7 @@ namespace {
 struct SimWorld {
   Scene scene;
   std::unique_ptr<EmbreeScene> embree;
-  size_t triangles = 0;
+  size_t triangles = 0;  ///< static plus dynamic-object triangles
   std::unique_ptr<RigModel> rig;
   std::unique_ptr<BaseMotion> carrier;
 };
@@ -43,8 +43,8 @@ CarrierConfig CarrierWithSceneDefaults(const CarrierConfig& config, const Scene&
 Status BuildWorld(const SimConfig& config, SimWorld* world) {
   const std::string path = ResolveScenePath(config.scene);
   if (Status s = LoadScene(path, &world->scene); !s) return s;
-  world->triangles = BuildMesh(world->scene).triangles.size();
   if (Status s = EmbreeScene::Create(world->scene, &world->embree); !s) return s;
+  world->triangles = world->embree->num_triangles();
   if (Status s = CheckCasterMaterials(config.lidar, world->embree->materials()); !s) return s;
   if (Status s = RigModel::Create(config.rig_model, &world->rig); !s) return s;
   const CarrierConfig carrier = CarrierWithSceneDefaults(config.carrier, world->scene);

@@ -17,7 +17,7 @@ struct SimSummary {
   size_t lidar_rays = 0;
   size_t imu_samples = 0;
   size_t encoder_samples = 0;
-  size_t scene_triangles = 0;
+  size_t scene_triangles = 0;  ///< static plus dynamic-object triangles (EmbreeScene::num_triangles)
   std::string recording_dir;
 };
 

@@ -156,9 +156,7 @@ bool SimConfig::Validate(std::string* error) const {
   std::string why;
   if (!rig_model.Validate(&why)) return fail("rig_model: " + why);
   // Handheld/wheeled without waypoints take the scene's default path: validated once the scene is loaded.
-  const bool from_scene = (carrier.type == CarrierType::kHandheld && carrier.handheld.waypoints.empty()) ||
-                          (carrier.type == CarrierType::kWheeled && carrier.wheeled.waypoints.empty());
-  if (!from_scene && !carrier.Validate(&why)) return fail("carrier: " + why);
+  if (!UsesSceneDefaultPath(carrier) && !carrier.Validate(&why)) return fail("carrier: " + why);
   if (!motor.Validate(&why)) return fail("motor: " + why);
   if (!imu.Validate(&why)) return fail("imu: " + why);
   if (!lidar.Validate(&why)) return fail("lidar: " + why);

@@ -26,6 +26,7 @@ struct SimWorld {
   size_t triangles = 0;  ///< static plus dynamic-object triangles
   std::unique_ptr<RigModel> rig;
   std::unique_ptr<BaseMotion> carrier;
+  CarrierConfig carrier_config;  ///< the config's carrier with the scene's default path filled in
 };
 
 /// The carrier's waypoints default to the scene's own path for that carrier (scenes list handheld/wheeled/car).
@@ -37,6 +38,7 @@ CarrierConfig CarrierWithSceneDefaults(const CarrierConfig& config, const Scene&
   };
   if (c.type == CarrierType::kHandheld) fill("handheld", &c.handheld.waypoints);
   if (c.type == CarrierType::kWheeled) fill("wheeled", &c.wheeled.waypoints);
+  if (c.type == CarrierType::kCar && c.car.waypoints_file.empty()) fill("car", &c.car.waypoints);
   return c;
 }
 
@@ -47,10 +49,10 @@ Status BuildWorld(const SimConfig& config, SimWorld* world) {
   world->triangles = world->embree->num_triangles();
   if (Status s = CheckCasterMaterials(config.lidar, world->embree->materials()); !s) return s;
   if (Status s = RigModel::Create(config.rig_model, &world->rig); !s) return s;
-  const CarrierConfig carrier = CarrierWithSceneDefaults(config.carrier, world->scene);
+  world->carrier_config = CarrierWithSceneDefaults(config.carrier, world->scene);
   std::string why;
-  if (!carrier.Validate(&why)) return Status::Error(path + ": carrier: " + why);
-  return MakeCarrierMotion(carrier, &world->carrier);
+  if (!world->carrier_config.Validate(&why)) return Status::Error(path + ": carrier: " + why);
+  return MakeCarrierMotion(world->carrier_config, &world->carrier);
 }
 
 Status WriteText(const std::string& path, const std::string& text) {
@@ -59,10 +61,14 @@ Status WriteText(const std::string& path, const std::string& text) {
   return file ? Status::Ok() : Status::Error(path + ": write failed");
 }
 
-Status WriteResolvedConfig(const SimConfig& config, const RigModel& rig, const std::string& dir) {
+/// Writes the config as run: the carrier's path resolved from the scene where the config left it empty.
+Status WriteResolvedConfig(const SimConfig& config, const SimWorld& world, const std::string& dir) {
+  SimConfig resolved = config;
+  resolved.carrier = world.carrier_config;
+  const RigModel& rig = *world.rig;
   YAML::Emitter out;
   out.SetDoublePrecision(17);
-  EmitSimConfig(out, config);
+  EmitSimConfig(out, resolved);
   if (Status s = WriteText(dir + "/sim_config.yaml", std::string("# Resolved configuration of this simulation "
                                                                   "run (rotolidar sim).\n") + out.c_str() + "\n");
       !s)
@@ -231,7 +237,7 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
   if (Status s = writer.Open(recording_dir, calib); !s) return s;
   TruthWriter truth;
   if (Status s = truth.Open(recording_dir); !s) return s;
-  if (Status s = WriteResolvedConfig(config, *world.rig, recording_dir); !s) return s;
+  if (Status s = WriteResolvedConfig(config, world, recording_dir); !s) return s;
   if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress); !s) return s;
   if (Status s = writer.Close(); !s) return s;
   if (Status s = truth.Close(); !s) return s;

@@ -330,7 +330,12 @@ Status MakeCarrierMotion(const CarrierConfig& config, std::unique_ptr<BaseMotion
       return Status::Ok();
     case CarrierType::kCar: {
       std::vector<CarWaypoint> points;
-      if (Status s = LoadCarWaypointsCsv(config.car.waypoints_file, &points); !s) return s;
+      if (!config.car.waypoints_file.empty()) {
+        if (Status s = LoadCarWaypointsCsv(config.car.waypoints_file, &points); !s) return s;
+      } else {
+        for (size_t i = 0; i < config.car.waypoints.size(); ++i)
+          points.push_back({config.car.waypoints[i].x_m, config.car.waypoints[i].y_m, 0.0, int(i) + 1});
+      }
       return MakeCarPath(config.car, points, motion);
     }
     case CarrierType::kKitti: {

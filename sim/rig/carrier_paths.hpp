@@ -74,7 +74,10 @@ struct WheeledConfig {
 /// over a look-ahead/behind window, accelerated and braked within max_accel/max_decel, from rest to rest, then
 /// smoothed by the cubic-B-spline kernel (smoothing_s). Heading along the spline tangent, no roll/pitch.
 struct CarConfig {
-  std::string waypoints_file;            ///< CSV x_m,y_m[,speed_mps] (path_files.hpp)
+  std::string waypoints_file;            ///< CSV x_m,y_m[,speed_mps] (path_files.hpp); or:
+  /// inline waypoints (world frame, cruise speed; dwell ignored). Used when waypoints_file is empty; the sim
+  /// fills them from the scene's `car` default path when both are empty.
+  std::vector<Waypoint2d> waypoints;
   double height_m = 1.9;                 ///< roof-mount height of the base origin [m]
   double cruise_speed_mps = 8.0;         ///< speed where the file gives none [m/s]
   double max_lateral_accel_mps2 = 2.0;
@@ -113,6 +116,10 @@ struct CarrierConfig {
   /// Validates the active type's section (message prefixed with its name, e.g. "handheld.speed_mps ...").
   bool Validate(std::string* error) const;
 };
+
+/// True when the active carrier has no path of its own (handheld/wheeled/car without waypoints or file): the
+/// sim fills it from the scene's default path for that carrier, then validates.
+bool UsesSceneDefaultPath(const CarrierConfig& config);
 
 /// Builds the active carrier's motion, loading its files (car, kitti). Errors (invalid config, file problems
 /// with file:line, degenerate paths) come back as a Status; *motion is set only on success.

@@ -123,8 +123,9 @@ void ParseSection(const std::string& file, const YAML::Node& node, const std::st
     yaml::Get(file, n, "closed_loop", &c->closed_loop);
     yaml::Get(file, n, "laps", &c->laps);
   } else if constexpr (std::is_same_v<C, CarConfig>) {
-    keys.insert("waypoints_file");
+    keys.insert({"waypoints_file", "waypoints"});
     yaml::Get(file, n, "waypoints_file", &c->waypoints_file);
+    ParseWaypoints(file, n, name, &c->waypoints);
     c->waypoints_file = ResolvePath(file, c->waypoints_file);
   } else if constexpr (std::is_same_v<C, KittiPathConfig>) {
     keys.insert({"poses_file", "times_file"});
@@ -150,6 +151,7 @@ void EmitSection(YAML::Emitter& out, const std::string& name, const C& c) {
     out << YAML::Key << "closed_loop" << YAML::Value << c.closed_loop << YAML::Key << "laps" << YAML::Value << c.laps;
   } else if constexpr (std::is_same_v<C, CarConfig>) {
     out << YAML::Key << "waypoints_file" << YAML::Value << c.waypoints_file;
+    if (c.waypoints_file.empty()) EmitWaypoints(out, c.waypoints);
   } else if constexpr (std::is_same_v<C, KittiPathConfig>) {
     out << YAML::Key << "poses_file" << YAML::Value << c.poses_file << YAML::Key << "times_file" << YAML::Value
         << c.times_file;
@@ -192,7 +194,8 @@ bool WheeledConfig::Validate(std::string* error) const {
 }
 
 bool CarConfig::Validate(std::string* error) const {
-  if (waypoints_file.empty()) return Fail(error, "car.waypoints_file: required");
+  if (waypoints_file.empty() && waypoints.size() < 2)
+    return Fail(error, "car: waypoints_file or >= 2 waypoints required (or a scene with a car default path)");
   return InRange(error, "car.height_m", height_m, 0.0, 5.0) &&
          InRange(error, "car.cruise_speed_mps", cruise_speed_mps, 0.5, 70.0) &&
          InRange(error, "car.max_lateral_accel_mps2", max_lateral_accel_mps2, 0.1, 15.0) &&
@@ -208,6 +211,12 @@ bool KittiPathConfig::Validate(std::string* error) const {
          InRange(error, "kitti.start_x_m", start_x_m, -1e6, 1e6) &&
          InRange(error, "kitti.start_y_m", start_y_m, -1e6, 1e6) &&
          InRange(error, "kitti.start_yaw_rad", start_yaw_rad, -10, 10);
+}
+
+bool UsesSceneDefaultPath(const CarrierConfig& c) {
+  return (c.type == CarrierType::kHandheld && c.handheld.waypoints.empty()) ||
+         (c.type == CarrierType::kWheeled && c.wheeled.waypoints.empty()) ||
+         (c.type == CarrierType::kCar && c.car.waypoints.empty() && c.car.waypoints_file.empty());
 }
 
 bool CarrierConfig::Validate(std::string* error) const {
@@ -242,10 +251,8 @@ void ParseCarrierConfig(const std::string& file, const YAML::Node& node, Carrier
   ParseSection(file, node, "kitti", &c.kitti);
   std::string why;
   const YAML::Node active = node[CarrierTypeName(c.type)];
-  // Handheld/wheeled without waypoints follow the scene's default path; the sim validates them after loading it.
-  const bool from_scene = (c.type == CarrierType::kHandheld && c.handheld.waypoints.empty()) ||
-                          (c.type == CarrierType::kWheeled && c.wheeled.waypoints.empty());
-  if (!from_scene && !c.Validate(&why))
+  // Handheld/wheeled/car without waypoints follow the scene's default path; the sim validates them after loading it.
+  if (!UsesSceneDefaultPath(c) && !c.Validate(&why))
     throw yaml::ParseError(yaml::Where(file, active ? active : node) + "carrier." + why);
   *config = c;
 }

@@ -10,6 +10,7 @@
 #include "core/io/recording.hpp"
 #include "sim/rig/rig_physics.hpp"
 #include "sim/sim_runner.hpp"
+#include "sim/truth/truth.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -135,6 +136,31 @@ TEST(RigSensors, TheSimRunsWithEveryMotorAxis) {
     const Eigen::Vector3d want = MotorAxisRotation(config.rig_model.motor).col(2);
     EXPECT_LT((z - want).norm(), 1e-12) << MotorAxisName(axis);
   }
+}
+
+// A car carrier without a path of its own drives the scene's `car` default path (scenes/urban_loop.yaml), and
+// the resolved config written beside the run holds that path, so rerunning it reproduces the run.
+TEST(RigSensors, CarCarrierFollowsTheScenesDefaultPath) {
+  SimConfig config = DefaultSimConfig();
+  config.scene = "urban_loop";
+  config.duration_s = 4.0;
+  config.carrier.type = CarrierType::kCar;
+  ASSERT_TRUE(UsesSceneDefaultPath(config.carrier));
+  const std::string dir = (std::filesystem::temp_directory_path() / "rotolidar_car_default_test").string();
+  SimSummary summary;
+  ASSERT_TRUE(RunSimulation(config, dir, &summary).ok);
+  TruthLog truth;
+  ASSERT_TRUE(ReadTruth(dir, &truth).ok);
+  // The urban_loop car path starts at the origin heading +x; after 4 s from rest (1.5 m/s^2 at most) the car
+  // has moved forward, within 1.5 * 4^2 / 2 = 12 m, near the 1.9 m roof height.
+  const Eigen::Vector3d p = truth.base.back().T_ref_body.translation();
+  EXPECT_GT(p.x(), 0.5);
+  EXPECT_LT(p.head<2>().norm(), 12.0);
+  EXPECT_NEAR(p.z(), config.carrier.car.height_m, 0.05);
+  SimConfig resolved;
+  ASSERT_TRUE(LoadSimConfig(dir + "/sim_config.yaml", &resolved).ok);
+  EXPECT_GE(resolved.carrier.car.waypoints.size(), 10u);
+  EXPECT_FALSE(UsesSceneDefaultPath(resolved.carrier));
 }
 
 }  // namespace

@@ -1,1 +1,206 @@
-// Placeholder: being written.
+#include "bench/metrics/coverage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <tuple>
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include "sim/world/embree_scene.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+constexpr double kVisibilityToleranceM = 0.005;  // a ray "reaches" a sample when its first hit is this close
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr ToCloud(const std::vector<Eigen::Vector3f>& points) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->reserve(points.size());
+  for (const Eigen::Vector3f& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  return cloud;
+}
+
+// Grid points (cell centres of spacing s) of one triangle, in its own plane; the centroid when none fall inside.
+void SampleTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double s,
+                    std::vector<Eigen::Vector3d>* out) {
+  out->clear();
+  const Eigen::Vector3d ab = b - a, ac = c - a;
+  const Eigen::Vector3d u = ab.normalized();
+  const Eigen::Vector3d v = ab.cross(ac).cross(ab).normalized();  // in plane, towards c
+  const Eigen::Vector2d B(ab.norm(), 0.0), C(ac.dot(u), ac.dot(v));
+  const double x0 = std::min(0.0, C.x()), x1 = std::max(B.x(), C.x());
+  const double det = B.x() * C.y();  // 2D barycentric with A at the origin
+  for (double y = 0.5 * s; y < C.y(); y += s) {
+    for (double x = x0 + 0.5 * s; x < x1; x += s) {
+      const double l2 = (x * C.y() - y * C.x()) / det;  // weight of B
+      const double l3 = (B.x() * y) / det;              // weight of C
+      if (l2 < 0 || l3 < 0 || l2 + l3 > 1) continue;
+      out->push_back(a + x * u + y * v);
+    }
+  }
+  if (out->empty()) out->push_back((a + b + c) / 3.0);
+}
+
+}  // namespace
+
+const char* SurfaceClassName(SurfaceClass c) {
+  switch (c) {
+    case SurfaceClass::kWall: return "wall";
+    case SurfaceClass::kFloor: return "floor";
+    case SurfaceClass::kCeiling: return "ceiling";
+    case SurfaceClass::kOther: return "other";
+  }
+  return "other";
+}
+
+SurfaceClass ClassifyNormal(const Eigen::Vector3d& n) {
+  if (n.z() > 0.9) return SurfaceClass::kFloor;
+  if (n.z() < -0.9) return SurfaceClass::kCeiling;
+  if (std::abs(n.z()) < 0.3) return SurfaceClass::kWall;
+  return SurfaceClass::kOther;
+}
+
+std::vector<SurfaceSample> SampleSurfaces(const sim::TriangleMesh& mesh, double spacing_m,
+                                          const Eigen::AlignedBox3d& region) {
+  ROTOLIDAR_CHECK(spacing_m > 0, "sample spacing must be positive");
+  std::vector<SurfaceSample> samples;
+  std::vector<Eigen::Vector3d> points;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Eigen::Vector3i& tri = mesh.triangles[t];
+    const Eigen::Vector3d &a = mesh.vertices_m[tri[0]], &b = mesh.vertices_m[tri[1]], &c = mesh.vertices_m[tri[2]];
+    const Eigen::Vector3d cross = (b - a).cross(c - a);
+    const double area = 0.5 * cross.norm();
+    if (!(area > 1e-12)) continue;  // degenerate: no surface
+    SampleTriangle(a, b, c, spacing_m, &points);
+    const SurfaceClass cls = ClassifyNormal(cross.normalized());
+    const float weight = static_cast<float>(area / static_cast<double>(points.size()));
+    for (const Eigen::Vector3d& p : points) {
+      if (!region.isEmpty() && !region.contains(p)) continue;
+      SurfaceSample s;
+      s.p_world = p.cast<float>();
+      s.area_m2 = weight;
+      s.surface_class = cls;
+      s.triangle_id = static_cast<int>(t);
+      samples.push_back(s);
+    }
+  }
+  return samples;
+}
+
+void MarkCovered(const std::vector<Eigen::Vector3f>& map_world, double distance_m,
+                 std::vector<SurfaceSample>* samples) {
+  for (SurfaceSample& s : *samples) s.covered = false;
+  if (map_world.empty()) return;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(ToCloud(map_world));
+  std::vector<int> index(1);
+  std::vector<float> sq_dist(1);
+  const double d2 = distance_m * distance_m;
+  for (SurfaceSample& s : *samples) {
+    const pcl::PointXYZ q(s.p_world.x(), s.p_world.y(), s.p_world.z());
+    s.covered = tree.nearestKSearch(q, 1, index, sq_dist) == 1 && sq_dist[0] <= d2;
+  }
+}
+
+Status MarkVisible(const sim::TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& viewpoints_world,
+                   double min_range_m, double max_range_m, std::vector<SurfaceSample>* samples) {
+  std::unique_ptr<sim::EmbreeScene> embree;
+  if (Status st = sim::EmbreeScene::Create(mesh, &embree); !st) return Status::Error("visibility: " + st.message);
+  for (SurfaceSample& s : *samples) {
+    s.visible = false;
+    const Eigen::Vector3d p = s.p_world.cast<double>();
+    for (const Eigen::Vector3d& o : viewpoints_world) {
+      const double range = (p - o).norm();
+      if (range < min_range_m || range > max_range_m) continue;
+      const sim::RayHit hit = embree->Intersect(o, p - o, range + kVisibilityToleranceM);
+      if (!hit.hit || hit.distance_m >= range - kVisibilityToleranceM) {
+        s.visible = true;
+        break;
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+CoverageResult SummarizeCoverage(const std::vector<SurfaceSample>& samples, bool has_visibility) {
+  CoverageResult r;
+  r.has_visibility = has_visibility;
+  for (const SurfaceSample& s : samples) {
+    for (ClassCoverage* c : {&r.per_class[static_cast<int>(s.surface_class)], &r.total}) {
+      c->area_m2 += s.area_m2;
+      if (s.covered) c->covered_area_m2 += s.area_m2;
+      if (s.visible) c->visible_area_m2 += s.area_m2;
+      if (s.visible && s.covered) c->covered_visible_area_m2 += s.area_m2;
+    }
+  }
+  for (ClassCoverage* c : {&r.per_class[0], &r.per_class[1], &r.per_class[2], &r.per_class[3], &r.total}) {
+    c->coverage = c->area_m2 > 0 ? c->covered_area_m2 / c->area_m2 : 0.0;
+    c->completeness = c->visible_area_m2 > 0 ? c->covered_visible_area_m2 / c->visible_area_m2 : 0.0;
+  }
+  return r;
+}
+
+double Quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double pos = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const size_t i = static_cast<size_t>(std::floor(pos));
+  if (i + 1 >= values.size()) return values.back();
+  return values[i] + (pos - static_cast<double>(i)) * (values[i + 1] - values[i]);
+}
+
+DensityResult ComputeDensity(const std::vector<SurfaceSample>& samples,
+                             const std::vector<Eigen::Vector3f>& map_world, double distance_m, double cell_m) {
+  using Key = std::tuple<long, long, long>;
+  struct Cell {
+    double area_m2 = 0.0;
+    size_t points = 0;
+  };
+  std::vector<Eigen::Vector3f> visible;
+  std::vector<Key> keys;
+  std::map<Key, Cell> cells;
+  for (const SurfaceSample& s : samples) {
+    if (!s.visible) continue;
+    const Key k{std::lround(std::floor(s.p_world.x() / cell_m)), std::lround(std::floor(s.p_world.y() / cell_m)),
+                std::lround(std::floor(s.p_world.z() / cell_m))};
+    visible.push_back(s.p_world);
+    keys.push_back(k);
+    cells[k].area_m2 += s.area_m2;
+  }
+  DensityResult r;
+  if (visible.empty()) return r;
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(ToCloud(visible));
+  std::vector<int> index(1);
+  std::vector<float> sq_dist(1);
+  for (const Eigen::Vector3f& p : map_world) {
+    if (tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, sq_dist) == 1 &&
+        sq_dist[0] <= distance_m * distance_m)
+      ++cells[keys[static_cast<size_t>(index[0])]].points;
+  }
+  std::vector<double> density;
+  for (const auto& [key, cell] : cells) {
+    if (cell.area_m2 < 0.25 * cell_m * cell_m) continue;
+    ++r.cells;
+    if (cell.points == 0) continue;
+    density.push_back(static_cast<double>(cell.points) / cell.area_m2);
+  }
+  r.occupied_cells = density.size();
+  r.occupied_fraction = r.cells > 0 ? static_cast<double>(r.occupied_cells) / static_cast<double>(r.cells) : 0.0;
+  if (density.empty()) return r;
+  double sum = 0.0, sum2 = 0.0;
+  for (double d : density) sum += d, sum2 += d * d;
+  const double n = static_cast<double>(density.size());
+  r.mean_per_m2 = sum / n;
+  r.cv = r.mean_per_m2 > 0 ? std::sqrt(std::max(0.0, sum2 / n - r.mean_per_m2 * r.mean_per_m2)) / r.mean_per_m2 : 0.0;
+  r.median_per_m2 = Quantile(density, 0.5);
+  r.p05_per_m2 = Quantile(density, 0.05);
+  r.p95_per_m2 = Quantile(density, 0.95);
+  return r;
+}
+
+}  // namespace rotolidar::bench

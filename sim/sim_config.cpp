@@ -93,7 +93,7 @@ void ParseTop(const std::string& path, const YAML::Node& root, SimConfig* c) {
   using yaml::Get;
   yaml::CheckKeys(path, root,
                   {"seed", "duration_s", "scene", "truth_rate_hz", "return_mode", "rig_model", "carrier", "motor",
-                   "imu", "lidar", "clocks"},
+                   "imu", "lidar", "clocks", "camera"},
                   "sim");
   Get(path, root, "seed", &c->seed);
   Get(path, root, "duration_s", &c->duration_s);
@@ -140,6 +140,7 @@ RigCalib SimConfig::TrueCalib() const {
   c.encoder = motor.encoder.ToCalib();
   c.motor_speed_radps = motor.profile.speed_radps;
   c.lidar_clock_offset_s = clocks.lidar_offset_s;
+  c.camera = camera.Intrinsics();
   return c;
 }
 
@@ -161,6 +162,7 @@ bool SimConfig::Validate(std::string* error) const {
   if (!imu.Validate(&why)) return fail("imu: " + why);
   if (!lidar.Validate(&why)) return fail("lidar: " + why);
   if (!clocks.Validate(&why)) return fail(why);
+  if (!camera.Validate(&why)) return fail(why);
   if (lidar.return_mode != return_mode) return fail("lidar.return_mode must equal return_mode");
   // The physics loop samples the IMU at step boundaries: its period must be a whole number of steps.
   const double steps_per_imu = 1.0 / (imu.noise.rate_hz * rig_model.physics.timestep_s);
@@ -181,15 +183,25 @@ std::string ResolveScenePath(const std::string& scene) {
 }
 
 Status LoadSimConfig(const std::string& path, SimConfig* config) {
+  try {
+    return ParseSimConfig(path, yaml::LoadFile(path), config);
+  } catch (const yaml::ParseError& e) {
+    return Status::Error(e.what());
+  }
+}
+
+Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig* config) {
   SimConfig c = *config;
   try {
-    const YAML::Node root = yaml::LoadFile(path);
+    if (!root.IsMap() && !root.IsNull())
+      throw yaml::ParseError(yaml::Where(path, root) + "sim config: expected a mapping");
     ParseTop(path, root, &c);
     if (const YAML::Node n = root["rig_model"]) ParseRigModelSection(path, n, &c.rig_model);
     if (const YAML::Node n = root["carrier"]) ParseCarrierConfig(path, n, &c.carrier);
     if (const YAML::Node n = root["motor"]) ParseMotorDriveConfig(path, n, &c.motor);
     if (const YAML::Node n = root["imu"]) ParseImuConfig(path, n, &c.imu);
     if (const YAML::Node n = root["lidar"]) ParseLidar(path, n, &c.lidar);
+    if (const YAML::Node n = root["camera"]) ParseCameraConfig(path, n, &c.camera);
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   }
@@ -219,6 +231,8 @@ void EmitSimConfig(YAML::Emitter& out, const SimConfig& c) {
   out << YAML::Key << "clocks" << YAML::Value << YAML::BeginMap << YAML::Key << "lidar_offset_s" << YAML::Value
       << c.clocks.lidar_offset_s << YAML::Key << "encoder_offset_s" << YAML::Value << c.clocks.encoder_offset_s
       << YAML::EndMap;
+  out << YAML::Key << "camera" << YAML::Value;
+  EmitCameraConfig(out, c.camera);
   out << YAML::EndMap;
 }
 

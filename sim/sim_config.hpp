@@ -7,6 +7,7 @@
 
 #include "core/io/vlp16.hpp"
 #include "core/types/calib.hpp"
+#include "sim/camera/camera_model.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/rig/rig_model.hpp"
@@ -15,6 +16,7 @@
 
 namespace YAML {
 class Emitter;
+class Node;
 }
 
 namespace rotolidar::sim {
@@ -39,10 +41,12 @@ struct SimConfig {
   Vlp16CasterConfig lidar;
   LidarIntrinsics lidar_intrinsics;  ///< the VLP-16's laser table (manual's values by default)
   ClockConfig clocks;
+  CameraConfig camera;               ///< the RGB camera (sim/camera/camera_model.hpp); on by default at 30 Hz
 
   bool Validate(std::string* error) const;
   /// The rig's TRUE calibration, as written to calib.yaml: geometry from rig_model, IMU noise, encoder
-  /// resolution and zero, the nominal motor speed (the uniform-rotation fallback) and the LiDAR clock offset.
+  /// resolution and zero, the nominal motor speed (the uniform-rotation fallback), the LiDAR clock offset and
+  /// the camera's lens and rate (T_base_cam is the rig model's `cam` site).
   RigCalib TrueCalib() const;
 };
 
@@ -60,6 +64,9 @@ std::string ResolveScenePath(const std::string& scene);
 /// Reads a YAML file whose keys override DefaultSimConfig() (only the keys given change). `rig_model` may be a
 /// mapping of overrides or a path to a rig parameter file (relative paths resolve against the config's folder).
 Status LoadSimConfig(const std::string& path, SimConfig* config);
+/// LoadSimConfig on an already-parsed mapping (e.g. a section of a study file): `path` names it in messages
+/// (file:line from the node's marks) and resolves relative paths. *config is untouched on error.
+Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig* config);
 /// Writes every field: the resolved config of a run.
 void EmitSimConfig(YAML::Emitter& out, const SimConfig& config);
 

@@ -1,6 +1,7 @@
 #include "sim/sim_runner.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -8,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/io/recording.hpp"
+#include "sim/camera/camera_stream.hpp"
 #include "sim/lidar/position_source.hpp"
 #include "sim/rig/rig_physics.hpp"
 #include "sim/rig/rig_trace.hpp"
@@ -169,6 +171,17 @@ class TruthStream {
   long next_ = 0;
 };
 
+/// The camera stream when the config enables it (else *out stays null); its extrinsic is the rig's cam site.
+Status MakeCameraStream(const SimConfig& config, SimWorld& world, const RigCalib& calib,
+                        std::unique_ptr<CameraStream>* out) {
+  if (!config.camera.enabled) return Status::Ok();
+  std::unique_ptr<CameraSimulator> camera;
+  if (Status s = CameraSimulator::Create(config.camera, config.seed, world.scene, world.embree.get(), &camera); !s)
+    return s;
+  *out = std::make_unique<CameraStream>(std::move(camera), calib.T_base_cam);
+  return Status::Ok();
+}
+
 /// The physics loop: steps the rig at its timestep; samples the IMU every whole number of steps; streams the
 /// encoder samples the drive produced; feeds the trace that the LiDAR and truth streams read behind it.
 Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& calib, RecordingWriter* writer,
@@ -182,6 +195,8 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
   trace.Append({0.0, state.T_world_base(), state.rotor_angle_rad()});
   LidarStream lidar(config, world, calib);
   TruthStream truth(config, calib, truth_writer);
+  std::unique_ptr<CameraStream> camera;
+  if (Status s = MakeCameraStream(config, world, calib, &camera); !s) return s;
   const long steps_per_imu = std::lround(1.0 / (config.imu.noise.rate_hz * state.timestep_s()));
   const long n_steps = long(std::ceil(config.duration_s / state.timestep_s() - 1e-9)) + 1;
   std::vector<EncoderSample> encoder_samples;
@@ -210,12 +225,16 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
     }
     if (Status s = truth.WriteCovered(trace); !s) return s;
     if (Status s = lidar.FireCovered(trace, writer, summary); !s) return s;
-    trace.DropBefore(std::min(lidar.NextFiringTime(), truth.NextTime()));
+    if (Status s = camera ? camera->RenderCovered(trace, config.duration_s, writer, truth_writer) : Status::Ok(); !s)
+      return s;
+    trace.DropBefore(std::min({lidar.NextFiringTime(), truth.NextTime(),
+                               camera ? camera->NextNeededTime() : lidar.NextFiringTime()}));
     if (progress && state.time_s() >= next_progress_s) {
       progress(std::min(1.0, state.time_s() / config.duration_s));
       next_progress_s += 1.0;
     }
   }
+  summary->camera_frames = camera ? static_cast<size_t>(camera->frames()) : 0;
   return Status::Ok();
 }
 

@@ -1,6 +1,6 @@
 #pragma once
 // Runs one simulation and writes a recording folder (docs/recording_format.md): the same files a real rig's
-// logger writes (calib.yaml, lidar.pcap, imu.csv, encoder.csv), plus truth/ on its own channel.
+// logger writes (calib.yaml, lidar.pcap, imu.csv, encoder.csv, camera.csv + camera/), plus truth/ on its own channel.
 #include <functional>
 #include <string>
 
@@ -17,6 +17,7 @@ struct SimSummary {
   size_t lidar_rays = 0;
   size_t imu_samples = 0;
   size_t encoder_samples = 0;
+  size_t camera_frames = 0;    ///< images written to camera/ (0 when the camera is off)
   size_t scene_triangles = 0;  ///< static plus dynamic-object triangles (EmbreeScene::num_triangles)
   std::string recording_dir;
 };

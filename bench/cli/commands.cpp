@@ -8,6 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bench/cli/options.hpp"
+#include "bench/report/run_report.hpp"
 #include "bench/run/demo.hpp"
 #include "bench/run/progress.hpp"
 #include "bench/run/truth_eval.hpp"
@@ -73,7 +74,7 @@ void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
 int CmdDemo(int argc, char** argv) {
   DemoOptions options;
   OptionParser p("demo", "Simulate the rotary rig in the default scene, run the SLAM core, report the error vs truth.");
-  p.Add("out", options.out_dir, "-", "output folder (recording/, slam/, metrics.json)");
+  p.Add("out", options.out_dir, "-", "output folder (recording/, slam/, metrics.json, report.html)");
   AddSimOptions(&p, options.sim);
   p.Add("slam-config", "", "-", "estimator config YAML (keys of slam_config.yaml)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
@@ -91,7 +92,11 @@ int CmdDemo(int argc, char** argv) {
               r.slam.scans.size(), r.slam.median_scan_ms, rt, r.slam.map_points);
   std::printf("  ATE   : RMSE %.4f m (mean %.4f, max %.4f) over %zu poses, SE(3) Umeyama alignment\n",
               r.ape.stats.rmse, r.ape.stats.mean, r.ape.stats.max, r.ape.num_associated);
-  std::printf("  output: %s\n", std::filesystem::absolute(options.out_dir).c_str());
+  if (r.evaluation.has_map_metrics)
+    std::printf("  map   : map-to-truth median %.4f m, coverage %.1f %%, element size RMSE %.3f m\n",
+                r.evaluation.map.map_to_truth.median_m, 100 * r.evaluation.map.coverage.total.coverage,
+                r.evaluation.map.element_summary.rmse_m);
+  std::printf("  output: %s (report.html)\n", std::filesystem::absolute(options.out_dir).c_str());
   return 0;
 }
 
@@ -114,11 +119,15 @@ int CmdSim(int argc, char** argv) {
 }
 
 int CmdSlam(int argc, char** argv) {
+  for (int i = 0; i < argc; ++i)  // a KITTI sequence instead of a recording: its own options (kitti_commands.cpp)
+    if (std::string(argv[i]) == "--kitti" || std::string(argv[i]).rfind("--kitti=", 0) == 0)
+      return CmdSlamKitti(argc, argv);
   OptionParser p("slam", "Run the SLAM core on a recording folder; writes trajectory (TUM, KITTI), map (PLY, PCD), "
-                         "per-scan timings and the resolved config.");
+                         "per-scan timings, the resolved config, metrics.json and report.html.");
   p.AddPositional("RECORDING", "recording folder (docs/recording_format.md)");
   p.Add("out", "runs/slam", "-", "output folder");
   p.Add("config", "", "-", "estimator config YAML (keys of slam_config.yaml)");
+  p.Add("kitti", "", "-", "a KITTI sequence folder instead of RECORDING (`slam --kitti DIR --help`)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EstimatorConfig config;
   if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);
@@ -127,11 +136,11 @@ int CmdSlam(int argc, char** argv) {
     return Fail(s);
   std::printf("%zu scans, median %.1f ms per scan, %.1fx real time; outputs in %s\n", r.scans.size(),
               r.median_scan_ms, r.wall_time_s > 0 ? r.data_duration_s / r.wall_time_s : 0.0, p.Get("out").c_str());
-  if (std::filesystem::exists(p.Get("RECORDING") + "/truth/base.tum")) {
-    EvalResult ape;
-    if (Status s = EvaluateAgainstTruth(p.Get("RECORDING"), r.trajectory, &ape); !s) return Fail(s);
-    std::printf("ATE vs truth (SE(3)): RMSE %.4f m over %zu poses\n", ape.stats.rmse, ape.num_associated);
-  }
+  RunEvaluation ev;  // truth and map metrics when the recording has them (bench may read truth/)
+  if (Status s = WriteSlamRunReport(p.Get("RECORDING"), p.Get("out"), r, &ev); !s) return Fail(s);
+  if (ev.has_truth)
+    std::printf("ATE vs truth (SE(3)): RMSE %.4f m over %zu poses\n", ev.ape.stats.rmse, ev.ape.num_associated);
+  std::printf("report: %s/report.html\n", p.Get("out").c_str());
   return 0;
 }
 

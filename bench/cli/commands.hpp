@@ -11,5 +11,9 @@ int CmdDecode(int argc, char** argv);
 int CmdBench(int argc, char** argv);
 int CmdReplay(int argc, char** argv);
 int CmdScene(int argc, char** argv);
+int CmdExport(int argc, char** argv);     ///< bench/cli/kitti_commands.cpp
+int CmdSlamKitti(int argc, char** argv);  ///< `slam --kitti DIR` (CmdSlam dispatches to it)
+int CmdMapEval(int argc, char** argv);
+int CmdStudy(int argc, char** argv);
 
 }  // namespace rotolidar::bench

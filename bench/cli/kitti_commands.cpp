@@ -1,1 +1,119 @@
-// Placeholder: being written.
+// `rotolidar slam --kitti DIR` and `rotolidar export RECORDING --kitti OUT` (docs/kitti.md).
+#include <cstdio>
+#include <iostream>
+
+#include "bench/cli/commands.hpp"
+#include "bench/cli/options.hpp"
+#include "bench/run/kitti_export.hpp"
+#include "bench/run/kitti_run.hpp"
+#include "bench/run/progress.hpp"
+#include "core/io/config_yaml.hpp"
+#include "core/io/yaml_util.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+int Fail(const Status& s) {
+  std::cerr << "error: " << s.message << "\n";
+  return 1;
+}
+
+Status LoadEstimatorConfig(const std::string& path, EstimatorConfig* config) {
+  if (path.empty()) return Status::Ok();
+  try {
+    return ParseEstimatorConfig(path, yaml::LoadFile(path), config);
+  } catch (const yaml::ParseError& e) {
+    return Status::Error(e.what());
+  }
+}
+
+Status GetCount(const OptionParser& p, const std::string& name, int* value) {
+  long v = 0;
+  if (Status s = p.GetInt(name, &v); !s) return s;
+  if (v < 0) return Status::Error("--" + name + " must be >= 0 (got " + std::to_string(v) + ")");
+  *value = int(v);
+  return Status::Ok();
+}
+
+void PrintStats(const char* name, const EvalResult& e, const char* unit) {
+  if (!e.status) {
+    std::printf("  %-28s n/a (%s)\n", name, e.status.message.c_str());
+    return;
+  }
+  std::printf("  %-28s rmse %.4f  mean %.4f  median %.4f  max %.4f %s (%zu)\n", name, e.stats.rmse, e.stats.mean,
+              e.stats.median, e.stats.max, unit, e.stats.count);
+}
+
+}  // namespace
+
+int CmdSlamKitti(int argc, char** argv) {
+  KittiRunOptions o;
+  OptionParser p("slam --kitti", "Run the SLAM core LiDAR-only on a KITTI odometry sequence (base = velodyne); "
+                                 "trajectory in KITTI's cam0 convention, map, per-frame table, metrics vs the "
+                                 "ground truth when a poses file is found (docs/kitti.md).");
+  p.Add("kitti", "", "-", "sequence folder holding velodyne/%06d.bin (and calib.txt, times.txt)");
+  p.Add("out", o.out_dir, "-", "output folder");
+  p.Add("frames", "0", "-", "at most this many frames (0 = all)");
+  p.Add("start", "0", "-", "first frame id");
+  p.Add("calib", "", "-", "calib.txt (default DIR/calib.txt)");
+  p.Add("times", "", "-", "times.txt (default DIR/times.txt; none: nominal 10 Hz)");
+  p.Add("poses", "", "-", "ground-truth poses (default DIR/poses.txt or DIR/../../poses/<DIR name>.txt)");
+  p.Add("config", "", "-", "estimator config YAML (keys of slam_config.yaml) over the KITTI defaults");
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
+  o.paths = {p.Get("kitti"), p.Get("calib"), p.Get("times"), p.Get("poses")};
+  o.out_dir = p.Get("out");
+  if (Status s = GetCount(p, "frames", &o.max_frames); !s) return Fail(s);
+  if (Status s = GetCount(p, "start", &o.start_frame); !s) return Fail(s);
+  if (Status s = LoadEstimatorConfig(p.Get("config"), &o.estimator); !s) return Fail(s);
+  KittiRunResult r;
+  if (Status s = RunKitti(o, &r, MakeProgressPrinter("slam")); !s) return Fail(s);
+  std::printf("%zu frames (%d..%d), median %.1f ms per frame, map %zu points; outputs in %s\n", r.frame_ids.size(),
+              r.frame_ids.front(), r.frame_ids.back(), r.median_scan_ms, r.map_points, o.out_dir.c_str());
+  if (r.frames_other_line_count > 0 || r.elevation_inversions > 0)
+    std::printf("warning: %zu frames without %d scan lines, %zu elevation inversions (rings may be off)\n",
+                r.frames_other_line_count, o.scan.expected_lines, r.elevation_inversions);
+  if (r.nominal_times) std::printf("note: no times file: nominal 10 Hz frame times\n");
+  if (r.has_ground_truth) {
+    std::printf("vs ground truth (cam0 convention, rebased to frame %d):\n", r.frame_ids.front());
+    PrintStats("APE translation (no align)", r.ape, "m");
+    PrintStats("APE translation (SE(3))", r.ape_se3, "m");
+    PrintStats("RPE translation (1 frame)", r.rpe_translation, "m");
+    PrintStats("RPE rotation (1 frame)", r.rpe_rotation, "deg");
+  }
+  return 0;
+}
+
+int CmdExport(int argc, char** argv) {
+  KittiExportOptions o;
+  OptionParser p("export", "Write a recording as a KITTI odometry sequence: one velodyne bin per VLP-16 revolution "
+                           "(deskewed into the base frame at the revolution start), times.txt, calib.txt and, "
+                           "with truth, poses (docs/kitti.md).");
+  p.AddPositional("RECORDING", "recording folder (docs/recording_format.md)");
+  p.Add("kitti", "", "-", "output dataset root: sequences/<seq>/..., poses/<seq>.txt (required)");
+  p.Add("sequence", o.sequence, "-", "sequence name");
+  p.Add("return", "strongest", "-", "dual-return recordings: strongest|last");
+  p.Add("deskew", "auto", "-", "auto (truth if truth/ exists) | truth | estimator");
+  p.Add("config", "", "-", "estimator config YAML (estimator deskew only)");
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
+  if (p.Get("kitti").empty()) {
+    std::cerr << "error: export: --kitti OUT is required (see --help)\n";
+    return 2;
+  }
+  o.recording_dir = p.Get("RECORDING");
+  o.out_dir = p.Get("kitti");
+  o.sequence = p.Get("sequence");
+  if (p.Get("return") == "strongest") o.return_filter = Vlp16ReturnFilter::kStrongest;
+  else if (p.Get("return") == "last") o.return_filter = Vlp16ReturnFilter::kLast;
+  else return Fail(Status::Error("--return: strongest or last (got '" + p.Get("return") + "')"));
+  if (!ParseKittiDeskewSource(p.Get("deskew"), &o.deskew))
+    return Fail(Status::Error("--deskew: auto, truth or estimator (got '" + p.Get("deskew") + "')"));
+  if (Status s = LoadEstimatorConfig(p.Get("config"), &o.estimator); !s) return Fail(s);
+  KittiExportResult r;
+  if (Status s = ExportKitti(o, &r, MakeProgressPrinter("export")); !s) return Fail(s);
+  std::printf("wrote %s: %zu frames, %zu points (%zu skipped), deskewed with %s%s\n", r.sequence_dir.c_str(),
+              r.frames, r.points, r.points_skipped, r.deskewed_with_truth ? "the truth" : "the estimator",
+              r.wrote_poses ? ", poses from the truth" : ", no poses (no truth)");
+  return 0;
+}
+
+}  // namespace rotolidar::bench

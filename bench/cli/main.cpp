@@ -23,6 +23,9 @@ const Command kCommands[] = {
     {"bench", rotolidar::bench::CmdBench, "speed benchmarks (ratios to real time) and the IMU Allan check"},
     {"replay", rotolidar::bench::CmdReplay, "send a recording's VLP-16 packets over UDP at N x real time"},
     {"scene", rotolidar::bench::CmdScene, "inspect scenes: list, show (top and perspective pictures)"},
+    {"export", rotolidar::bench::CmdExport, "write a recording as a KITTI odometry sequence (bins, times, calib, poses)"},
+    {"mapeval", rotolidar::bench::CmdMapEval, "map metrics vs the scene: coverage, density, distance, elements"},
+    {"study", rotolidar::bench::CmdStudy, "trade studies: sweep sim parameters, run each point, table + plots"},
 };
 
 void PrintUsage(std::ostream& os) {

@@ -5,26 +5,63 @@
 #include <sstream>
 
 #include <Eigen/Dense>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
 
 #include "bench/metrics/coverage.hpp"
 
 namespace rotolidar::bench {
 namespace {
 
-using Points = std::vector<Eigen::Vector3d>;  // element frame E
+// Map points in the element frame E with their surface normals (unit; zero where too few neighbours).
+struct Points {
+  std::vector<Eigen::Vector3d> p;
+  std::vector<Eigen::Vector3d> n;
+};
 
-// Coordinate `axis` of the points inside the box [lo, hi] (element frame).
-std::vector<double> Coordinates(const Points& points, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int axis) {
+// PCA normals: the smallest-eigenvalue axis of the neighbours within radius_m (at least 5 of them).
+void EstimateNormals(double radius_m, Points* pts) {
+  pts->n.assign(pts->p.size(), Eigen::Vector3d::Zero());
+  if (pts->p.empty()) return;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (const Eigen::Vector3d& q : pts->p) cloud->push_back(pcl::PointXYZ(q.x(), q.y(), q.z()));
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  std::vector<int> idx;
+  std::vector<float> sq;
+  for (size_t i = 0; i < pts->p.size(); ++i) {
+    if (tree.radiusSearch(cloud->points[i], radius_m, idx, sq) < 5) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int k : idx) mean += pts->p[static_cast<size_t>(k)];
+    mean /= static_cast<double>(idx.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (int k : idx) {
+      const Eigen::Vector3d d = pts->p[static_cast<size_t>(k)] - mean;
+      cov += d * d.transpose();
+    }
+    pts->n[i] = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  }
+}
+
+// Coordinate `axis` of the points inside the box [lo, hi] (element frame) whose normal lies within the
+// configured angle of that axis (a plane perpendicular to it).
+std::vector<double> Coordinates(const Points& pts, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int axis,
+                                double min_cos) {
   std::vector<double> out;
-  for (const Eigen::Vector3d& p : points)
-    if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) out.push_back(p[axis]);
+  for (size_t i = 0; i < pts.p.size(); ++i) {
+    const Eigen::Vector3d& p = pts.p[i];
+    if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all() && std::abs(pts.n[i][axis]) >= min_cos)
+      out.push_back(p[axis]);
+  }
   return out;
 }
 
-// Least-squares circle (Kasa) through xy, trimmed: points farther than 3 robust sigmas (min 1 cm) from the
-// circle are dropped and the fit repeated. False with fewer than min_points inliers.
+// Circle through xy: an algebraic (Kasa) start, then Gauss-Newton on the geometric distances (the Kasa fit
+// alone shrinks the radius on a partial, noisy arc); trimmed: points farther than 3 robust sigmas (min 1 cm)
+// are dropped and the fit repeated. False with fewer than min_points inliers.
 bool FitCircle(std::vector<Eigen::Vector2d> xy, int min_points, double* radius) {
-  for (int iteration = 0; iteration < 4; ++iteration) {
+  for (int round = 0; round < 4; ++round) {
     if (static_cast<int>(xy.size()) < min_points) return false;
     Eigen::MatrixXd A(xy.size(), 3);
     Eigen::VectorXd b(xy.size());
@@ -32,11 +69,22 @@ bool FitCircle(std::vector<Eigen::Vector2d> xy, int min_points, double* radius) 
       A.row(i) << 2 * xy[i].x(), 2 * xy[i].y(), 1.0;
       b(i) = xy[i].squaredNorm();
     }
-    const Eigen::Vector3d s = A.colPivHouseholderQr().solve(b);
-    const Eigen::Vector2d c = s.head<2>();
-    *radius = std::sqrt(std::max(0.0, s(2) + c.squaredNorm()));
+    const Eigen::Vector3d k = A.colPivHouseholderQr().solve(b);
+    Eigen::Vector3d x(k(0), k(1), std::sqrt(std::max(0.0, k(2) + k.head<2>().squaredNorm())));  // cx, cy, r
+    for (int it = 0; it < 10; ++it) {
+      Eigen::MatrixXd J(xy.size(), 3);
+      Eigen::VectorXd res(xy.size());
+      for (size_t i = 0; i < xy.size(); ++i) {
+        const Eigen::Vector2d d = xy[i] - x.head<2>();
+        const double dn = std::max(d.norm(), 1e-9);
+        res(i) = dn - x(2);
+        J.row(i) << -d.x() / dn, -d.y() / dn, -1.0;
+      }
+      x -= J.colPivHouseholderQr().solve(res);
+    }
+    *radius = x(2);
     std::vector<double> abs_res;
-    for (const Eigen::Vector2d& p : xy) abs_res.push_back(std::abs((p - c).norm() - *radius));
+    for (const Eigen::Vector2d& p : xy) abs_res.push_back(std::abs((p - x.head<2>()).norm() - x(2)));
     const double limit = std::max(0.01, 3.0 * 1.4826 * Quantile(abs_res, 0.5));
     std::vector<Eigen::Vector2d> kept;
     for (size_t i = 0; i < xy.size(); ++i)
@@ -59,16 +107,23 @@ void SetHeight(double value, ElementMeasurement* m) {
   m->height_error_m = value - m->true_height_m;
 }
 
+// The plane perpendicular to `axis` from the points in the box [lo, hi] with a normal along `axis`, searched
+// over [lo[axis], hi[axis]].
+bool Plane(const Points& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int axis, const ElementFitConfig& c,
+           double* offset) {
+  return PlaneOffsetByMode(Coordinates(p, lo, hi, axis, c.normal_min_cos), lo[axis], hi[axis], c, offset);
+}
+
 // Door or window: jambs (planes y = +-w/2) and sill/floor + lintel (planes z = -+h/2) inside the wall thickness.
 void MeasureOpening(const Points& p, double depth_m, const ElementFitConfig& c, ElementMeasurement* m) {
   const double w2 = 0.5 * m->true_width_m, h2 = 0.5 * m->true_height_m, s = c.search_margin_m;
   const double bx = std::max(0.5 * depth_m - c.face_margin_m, 0.01);  // reveal band |x| <= bx
   const double bz = c.band_fraction * h2, by = c.band_fraction * w2;
   double left = 0, right = 0, bottom = 0, top = 0;
-  const bool l = PlaneOffsetByMode(Coordinates(p, {-bx, -w2 - s, -bz}, {bx, 0, bz}, 1), -w2 - s, 0, c, &left);
-  const bool r = PlaneOffsetByMode(Coordinates(p, {-bx, 0, -bz}, {bx, w2 + s, bz}, 1), 0, w2 + s, c, &right);
-  const bool b = PlaneOffsetByMode(Coordinates(p, {-bx, -by, -h2 - s}, {bx, by, 0}, 2), -h2 - s, 0, c, &bottom);
-  const bool t = PlaneOffsetByMode(Coordinates(p, {-bx, -by, 0}, {bx, by, h2 + s}, 2), 0, h2 + s, c, &top);
+  const bool l = Plane(p, {-bx, -w2 - s, -bz}, {bx, 0, bz}, 1, c, &left);
+  const bool r = Plane(p, {-bx, 0, -bz}, {bx, w2 + s, bz}, 1, c, &right);
+  const bool b = Plane(p, {-bx, -by, -h2 - s}, {bx, by, 0}, 2, c, &bottom);
+  const bool t = Plane(p, {-bx, -by, 0}, {bx, by, h2 + s}, 2, c, &top);
   if (l && r) SetWidth(right - left, m);
   if (b && t) SetHeight(top - bottom, m);
   std::ostringstream why;
@@ -86,30 +141,29 @@ void MeasureColumn(const Points& p, bool round, double depth_m, const ElementFit
   std::ostringstream why;
   if (round) {
     std::vector<Eigen::Vector2d> xy;
-    for (const Eigen::Vector3d& q : p)
-      if (std::abs(q.z()) <= bz && std::abs(q.x()) <= d2 + s && std::abs(q.y()) <= w2 + s) xy.emplace_back(q.x(), q.y());
+    for (size_t i = 0; i < p.p.size(); ++i)
+      if (std::abs(p.p[i].z()) <= bz && std::abs(p.n[i].z()) <= std::sqrt(1.0 - c.normal_min_cos * c.normal_min_cos)) xy.push_back(p.p[i].head<2>());
     double radius = 0;
     if (FitCircle(xy, c.min_points, &radius)) SetWidth(2 * radius, m);
     else why << "too few points on the column; ";
   } else {
     const double bx = c.band_fraction * d2;
     double left = 0, right = 0;
-    const bool l = PlaneOffsetByMode(Coordinates(p, {-bx, -w2 - s, -bz}, {bx, 0, bz}, 1), -w2 - s, 0, c, &left);
-    const bool r = PlaneOffsetByMode(Coordinates(p, {-bx, 0, -bz}, {bx, w2 + s, bz}, 1), 0, w2 + s, c, &right);
+    const bool l = Plane(p, {-bx, -w2 - s, -bz}, {bx, 0, bz}, 1, c, &left);
+    const bool r = Plane(p, {-bx, 0, -bz}, {bx, w2 + s, bz}, 1, c, &right);
     if (l && r) SetWidth(right - left, m);
     else why << "no column faces; ";
   }
   // Floor and ceiling in a ring around the column (outside it by 5 cm, within the search margin).
-  std::vector<double> floor_z, ceiling_z;
-  for (const Eigen::Vector3d& q : p) {
-    const double ring = std::max(std::abs(q.x()) - d2, std::abs(q.y()) - w2);
-    if (ring < 0.05 || ring > s) continue;
-    if (std::abs(q.z() + h2) <= s) floor_z.push_back(q.z());
-    if (std::abs(q.z() - h2) <= s) ceiling_z.push_back(q.z());
+  Points ring;
+  for (size_t i = 0; i < p.p.size(); ++i) {
+    const double out = std::max(std::abs(p.p[i].x()) - d2, std::abs(p.p[i].y()) - w2);
+    if (out >= 0.05 && out <= s) ring.p.push_back(p.p[i]), ring.n.push_back(p.n[i]);
   }
+  const Eigen::Vector3d far(d2 + s, w2 + s, 0);
   double bottom = 0, top = 0;
-  const bool b = PlaneOffsetByMode(floor_z, -h2 - s, -h2 + s, c, &bottom);
-  const bool t = PlaneOffsetByMode(ceiling_z, h2 - s, h2 + s, c, &top);
+  const bool b = Plane(ring, -far - Eigen::Vector3d(0, 0, h2 + s), far - Eigen::Vector3d(0, 0, h2 - s), 2, c, &bottom);
+  const bool t = Plane(ring, -far + Eigen::Vector3d(0, 0, h2 - s), far + Eigen::Vector3d(0, 0, h2 + s), 2, c, &top);
   if (b && t) SetHeight(top - bottom, m);
   if (!b) why << "no floor; ";
   if (!t) why << "no ceiling; ";
@@ -127,6 +181,9 @@ bool ElementFitConfig::Validate(std::string* error) const {
   if (!(bin_m > 0)) return fail("bin_m must be > 0");
   if (!(refine_halfwidth_m >= bin_m)) return fail("refine_halfwidth_m must be >= bin_m");
   if (min_points < 3) return fail("min_points must be >= 3");
+  if (!(normal_radius_m > 0)) return fail("normal_radius_m must be > 0");
+  if (!(normal_min_cos >= 0 && normal_min_cos <= 1)) return fail("normal_min_cos must be in [0, 1]");
+  if (!(prominence >= 0)) return fail("prominence must be >= 0");
   return true;
 }
 
@@ -151,7 +208,10 @@ bool PlaneOffsetByMode(const std::vector<double>& values, double lo, double hi, 
   std::vector<double> near;
   for (double v : values)
     if (std::abs(v - mode) <= config.refine_halfwidth_m) near.push_back(v);
-  if (static_cast<int>(near.size()) < config.min_points) return false;
+  // Prominence: the peak must stand out of the clutter level (the median bin count) over its window.
+  const double clutter = Quantile(count, 0.5) * (2.0 * config.refine_halfwidth_m / config.bin_m);
+  const double needed = std::max(static_cast<double>(config.min_points), config.prominence * clutter);
+  if (static_cast<double>(near.size()) < needed) return false;
   *offset = Quantile(near, 0.5);
   return true;
 }
@@ -172,9 +232,10 @@ ElementMeasurement MeasureElement(const sim::Scene& scene, const sim::AnnotatedE
   Points p_element;
   for (const Eigen::Vector3f& p : map_world) {
     const Eigen::Vector3d q = T_element_world * p.cast<double>();
-    if ((q.cwiseAbs().array() <= half.array()).all()) p_element.push_back(q);
+    if ((q.cwiseAbs().array() <= half.array()).all()) p_element.p.push_back(q);
   }
-  m.crop_points = p_element.size();
+  m.crop_points = p_element.p.size();
+  EstimateNormals(config.normal_radius_m, &p_element);
   if (column) {
     bool round = false;
     for (const sim::Primitive& prim : scene.primitives)

@@ -28,6 +28,12 @@ struct ElementFitConfig {
   double bin_m = 0.01;              ///< histogram bin for plane modes
   double refine_halfwidth_m = 0.03;  ///< points within this of a mode give the plane by their median
   int min_points = 15;              ///< per plane (or per circle) to report a measurement
+  double normal_radius_m = 0.06;    ///< PCA normals from the neighbours within this radius (>= 5 of them)
+  /// A plane perpendicular to axis a uses only points with |n . a| >= this (round columns: |n_z| <= sin);
+  /// keeps wall-face points that noise pushed into a reveal out of the jamb/sill/lintel planes.
+  double normal_min_cos = 0.7;
+  /// The peak must hold at least this many times the clutter level (median bin count) over its window.
+  double prominence = 3.0;
 
   bool Validate(std::string* error) const;
 };
@@ -60,7 +66,8 @@ ElementSummary SummarizeElements(const std::vector<ElementMeasurement>& elements
 
 /// Robust position of a plane from coordinates along its normal: the mode of a histogram (bin_m, 3-bin
 /// smoothing) over [lo, hi], refined as the median of the values within refine_halfwidth_m of the mode.
-/// False when fewer than min_points values fall within the refinement window. Exposed for tests.
+/// False when fewer than max(min_points, prominence x the clutter level) values fall within the refinement
+/// window (the clutter level: the median bin count times the window's bins). Exposed for tests.
 bool PlaneOffsetByMode(const std::vector<double>& values, double lo, double hi, const ElementFitConfig& config,
                        double* offset);
 

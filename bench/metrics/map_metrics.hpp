@@ -7,6 +7,7 @@
 // frame at the first scan); LoadMapInSceneFrame moves it into the scene frame with the truth trajectory.
 // Determinism: no randomness; surface samples sit on a fixed grid per triangle, so equal inputs give equal
 // outputs. Thread safety: the functions share no state.
+#include <iosfwd>
 #include <string>
 #include <vector>
 

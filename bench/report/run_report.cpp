@@ -1,1 +1,155 @@
-// Placeholder: being written.
+#include "bench/report/run_report.hpp"
+
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/report/html_report.hpp"
+#include "bench/report/run_report_sections.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+using Rows = std::vector<std::pair<std::string, std::string>>;
+
+double RealtimeFactor(const SlamRunResult& s) { return s.wall_time_s > 0 ? s.data_duration_s / s.wall_time_s : 0.0; }
+
+void AddSlamRows(const SlamRunResult& s, Rows* rows) {
+  size_t attempted = 0, converged = 0, imu = 0;
+  for (const ScanReport& r : s.scans) {
+    attempted += r.registration.attempted;
+    converged += r.registration.converged;
+    imu += r.imu_initialized;
+  }
+  rows->push_back({"scans", std::to_string(s.scans.size())});
+  rows->push_back({"data duration", Fmt("%.2f s", s.data_duration_s)});
+  rows->push_back({"SLAM wall time", Fmt("%.2f s", s.wall_time_s)});
+  rows->push_back({"real-time factor (data / wall)", Fmt("%.2f x", RealtimeFactor(s))});
+  rows->push_back({"median time per scan", Fmt("%.1f ms", s.median_scan_ms)});
+  rows->push_back({"registrations converged", std::to_string(converged) + " of " + std::to_string(attempted)});
+  rows->push_back({"scans with the IMU window", std::to_string(imu)});
+  rows->push_back({"map points", std::to_string(s.map_points)});
+  if (s.bad_packets > 0) rows->push_back({"malformed packets", std::to_string(s.bad_packets)});
+}
+
+void AddTruthRows(const RunEvaluation& ev, Rows* rows) {
+  const ErrorStatistics& a = ev.ape.stats;
+  rows->push_back({"ATE RMSE (SE(3) aligned)", Fmt("%.4f m", a.rmse)});
+  rows->push_back({"ATE mean / median / max",
+                   Fmt("%.4f", a.mean) + " / " + Fmt("%.4f", a.median) + " / " + Fmt("%.4f m", a.max)});
+  rows->push_back({"poses compared", std::to_string(ev.ape.num_associated)});
+  if (ev.rpe.status.ok && ev.rpe.stats.count > 0)
+    rows->push_back({"RPE RMSE / max over " + ev.rpe_delta,
+                     Fmt("%.4f", ev.rpe.stats.rmse) + " / " + Fmt("%.4f m", ev.rpe.stats.max)});
+  if (!ev.has_map_metrics) return;
+  const MapMetrics& m = ev.map;
+  rows->push_back({"map-to-truth median / RMSE / p95", Fmt("%.4f", m.map_to_truth.median_m) + " / " +
+                                                           Fmt("%.4f", m.map_to_truth.rmse_m) + " / " +
+                                                           Fmt("%.4f m", m.map_to_truth.p95_m)});
+  rows->push_back({"surface coverage", Fmt("%.1f %%", 100 * m.coverage.total.coverage)});
+  if (m.coverage.has_visibility)
+    rows->push_back({"completeness (visible surfaces)", Fmt("%.1f %%", 100 * m.coverage.total.completeness)});
+  if (m.element_summary.elements > 0)
+    rows->push_back({"element size RMSE", Fmt("%.3f m", m.element_summary.rmse_m) + " (" +
+                                              std::to_string(m.element_summary.widths_measured +
+                                                             m.element_summary.heights_measured) +
+                                              " dimensions)"});
+}
+
+void AddConfigSection(const RunReportInput& in, HtmlReport* html) {
+  if (in.config_files.empty()) return;
+  html->BeginSection("config", "Resolved configuration");
+  for (const auto& [title, path] : in.config_files) {
+    std::ifstream file(path);
+    if (!file) {
+      html->Note(title + ": " + path + " could not be read");
+      continue;
+    }
+    std::stringstream text;
+    text << file.rdbuf();
+    html->Preformatted(title + " (" + path + ")", text.str());
+  }
+}
+
+}  // namespace
+
+std::string RenderRunReport(const RunReportInput& in) {
+  ROTOLIDAR_CHECK(in.slam != nullptr && in.evaluation != nullptr, "RenderRunReport: slam and evaluation must be set");
+  const RunEvaluation& ev = *in.evaluation;
+  HtmlReport html(in.title);
+  html.BeginSection("headline", "Headline");
+  Rows rows = in.run_info;
+  AddSlamRows(*in.slam, &rows);
+  if (ev.has_truth) AddTruthRows(ev, &rows);
+  html.KeyValueTable(rows);
+  if (!ev.has_truth)
+    html.Note("Left out: APE, RPE, map accuracy, coverage and element sections (" + ev.truth_note + ").");
+  else if (!ev.has_map_metrics)
+    html.Note("Left out: map accuracy, coverage and element sections (" + ev.map_note + ").");
+  report::AddTrajectorySection(in, &html);
+  report::AddApeSection(in, &html);
+  report::AddRpeSection(in, &html);
+  report::AddTimingSection(in, &html);
+  report::AddMapSection(in, &html);
+  report::AddCoverageSection(in, &html);
+  report::AddElementsSection(in, &html);
+  AddConfigSection(in, &html);
+  return html.Render();
+}
+
+Status WriteRunReport(const std::string& path, const RunReportInput& input) {
+  std::ofstream file(path, std::ios::binary);
+  file << RenderRunReport(input);
+  return file ? Status::Ok() : Status::Error(path + ": cannot write the report");
+}
+
+void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann::json* out) {
+  nlohmann::json& j = *out;
+  j["slam"] = {{"scans", s.scans.size()},          {"median_scan_ms", s.median_scan_ms},
+               {"wall_time_s", s.wall_time_s},     {"data_duration_s", s.data_duration_s},
+               {"realtime_factor", RealtimeFactor(s)}, {"map_points", s.map_points},
+               {"bad_packets", s.bad_packets}};
+  for (const report::StageTiming& t : report::ComputeStageTimings(s.scans))
+    j["slam"]["stage_mean_ms"][t.stage] = t.mean_ms;
+  if (!ev.has_truth) return;
+  const ErrorStatistics& a = ev.ape.stats;
+  j["ape_translation_m"] = {{"alignment", "se3"}, {"poses", ev.ape.num_associated}, {"rmse", a.rmse},
+                            {"mean", a.mean},     {"median", a.median},              {"std", a.std},
+                            {"min", a.min},       {"max", a.max}};
+  if (ev.rpe.status.ok && ev.rpe.stats.count > 0) {
+    const ErrorStatistics& r = ev.rpe.stats;
+    j["rpe_translation_m"] = {{"delta", ev.rpe_delta}, {"all_pairs", true}, {"pairs", r.count}, {"rmse", r.rmse},
+                              {"mean", r.mean},        {"median", r.median}, {"std", r.std},    {"max", r.max}};
+  }
+  if (ev.has_map_metrics) {
+    nlohmann::json map;
+    ToJson(ev.map, &map);
+    map["scene"] = ev.scene_name;
+    map["alignment"] = "se3 (the APE's)";
+    j["map"] = map;
+  }
+}
+
+Status WriteSlamRunReport(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,
+                          RunEvaluation* evaluation) {
+  RunEvaluation local;
+  RunEvaluation* ev = evaluation ? evaluation : &local;
+  if (Status s = EvaluateRun(recording_dir, slam_dir, slam, "", RunEvaluationOptions{}, ev); !s) return s;
+  nlohmann::json j;
+  j["recording"] = recording_dir;
+  AddRunMetricsJson(slam, *ev, &j);
+  std::ofstream file(slam_dir + "/metrics.json");
+  file << j.dump(2) << "\n";
+  if (!file) return Status::Error(slam_dir + "/metrics.json: write failed");
+  RunReportInput in;
+  in.title = "rotolidar slam: " + recording_dir;
+  in.run_info = {{"recording", recording_dir}, {"outputs", slam_dir}};
+  in.slam = &slam;
+  in.evaluation = ev;
+  in.config_files = {{"estimator (slam_config.yaml)", slam_dir + "/slam_config.yaml"},
+                     {"rig calibration (calib.yaml)", recording_dir + "/calib.yaml"}};
+  return WriteRunReport(slam_dir + "/report.html", in);
+}
+
+}  // namespace rotolidar::bench

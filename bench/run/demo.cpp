@@ -1,25 +1,57 @@
 #include "bench/run/demo.hpp"
 
+#include <cstdio>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
+#include "bench/report/html_report.hpp"
+#include "bench/report/run_report.hpp"
 #include "bench/run/progress.hpp"
-#include "bench/run/truth_eval.hpp"
 
 namespace rotolidar::bench {
+namespace {
+
+Status WriteDemoReport(const DemoOptions& options, DemoResult* r) {
+  RunReportInput in;
+  char title[160];
+  std::snprintf(title, sizeof(title), "rotolidar demo: %s, %.0f s simulated (seed %llu)", options.sim.scene.c_str(),
+                r->sim.sim_duration_s, static_cast<unsigned long long>(options.sim.seed));
+  in.title = title;
+  in.run_info = {{"scene", options.sim.scene},
+                 {"seed", std::to_string(options.sim.seed)},
+                 {"output folder", options.out_dir},
+                 {"simulated LiDAR packets / returns",
+                  std::to_string(r->sim.lidar_packets) + " / " + std::to_string(r->sim.lidar_returns)},
+                 {"sim wall time", Fmt("%.1f s", r->sim.wall_time_s)}};
+  in.slam = &r->slam;
+  in.evaluation = &r->evaluation;
+  in.config_files = {{"sim (recording/sim_config.yaml)", options.out_dir + "/recording/sim_config.yaml"},
+                     {"estimator (slam/slam_config.yaml)", options.out_dir + "/slam/slam_config.yaml"},
+                     {"rig calibration (recording/calib.yaml)", options.out_dir + "/recording/calib.yaml"}};
+  r->report_path = options.out_dir + "/report.html";
+  return WriteRunReport(r->report_path, in);
+}
+
+}  // namespace
 
 Status RunDemo(const DemoOptions& options, DemoResult* result) {
   const std::string recording = options.out_dir + "/recording";
+  const std::string slam_dir = options.out_dir + "/slam";
   LOG_INFO("simulating " << options.sim.duration_s << " s of the rig in scene '" << options.sim.scene << "' -> "
                          << recording);
   if (Status s = sim::RunSimulation(options.sim, recording, &result->sim, MakeProgressPrinter("sim")); !s) return s;
   LOG_INFO("running the SLAM core on the recording");
-  if (Status s = RunSlam(recording, options.slam, options.out_dir + "/slam", &result->slam, MakeProgressPrinter("slam"));
+  if (Status s = RunSlam(recording, options.slam, slam_dir, &result->slam, MakeProgressPrinter("slam")); !s) return s;
+  LOG_INFO("evaluating against truth (trajectory, map metrics)");
+  if (Status s = EvaluateRun(recording, slam_dir, result->slam, options.sim.scene, options.evaluation,
+                             &result->evaluation);
       !s)
     return s;
-  if (Status s = EvaluateAgainstTruth(recording, result->slam.trajectory, &result->ape); !s) return s;
-  return WriteDemoMetrics(options.out_dir + "/metrics.json", options, *result);
+  if (!result->evaluation.has_truth) return Status::Error(recording + ": " + result->evaluation.truth_note);
+  result->ape = result->evaluation.ape;
+  if (Status s = WriteDemoMetrics(options.out_dir + "/metrics.json", options, *result); !s) return s;
+  return options.report ? WriteDemoReport(options, result) : Status::Ok();
 }
 
 Status WriteDemoMetrics(const std::string& path, const DemoOptions& options, const DemoResult& r) {
@@ -29,13 +61,7 @@ Status WriteDemoMetrics(const std::string& path, const DemoOptions& options, con
   j["sim"] = {{"duration_s", r.sim.sim_duration_s}, {"wall_time_s", r.sim.wall_time_s},
               {"lidar_packets", r.sim.lidar_packets}, {"lidar_returns", r.sim.lidar_returns},
               {"scene_triangles", r.sim.scene_triangles}};
-  j["slam"] = {{"scans", r.slam.scans.size()}, {"median_scan_ms", r.slam.median_scan_ms},
-               {"wall_time_s", r.slam.wall_time_s}, {"data_duration_s", r.slam.data_duration_s},
-               {"realtime_factor", r.slam.wall_time_s > 0 ? r.slam.data_duration_s / r.slam.wall_time_s : 0.0},
-               {"map_points", r.slam.map_points}};
-  const ErrorStatistics& s = r.ape.stats;
-  j["ape_translation_m"] = {{"alignment", "se3"}, {"poses", r.ape.num_associated}, {"rmse", s.rmse},
-                            {"mean", s.mean}, {"median", s.median}, {"std", s.std}, {"min", s.min}, {"max", s.max}};
+  AddRunMetricsJson(r.slam, r.evaluation, &j);
   std::ofstream file(path);
   file << j.dump(2) << "\n";
   return file ? Status::Ok() : Status::Error(path + ": write failed");

@@ -1,1 +1,264 @@
-// Placeholder: being written.
+// A recording as a KITTI odometry sequence: revolutions -> deskewed bins in the base frame at the frame time.
+#include "bench/run/kitti_export.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+
+#include "core/io/recording.hpp"
+#include "core/io/scan_splitter.hpp"
+#include "core/pipeline/estimator.hpp"
+#include "sim/truth/truth.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+namespace fs = std::filesystem;
+using ProgressFn = std::function<void(double)>;
+
+/// T_ref_body at t, linear in position and slerp in rotation between the bracketing poses; false outside the span.
+bool InterpolatePose(const Trajectory& traj, Seconds t, Pose3* T) {
+  if (traj.empty() || t < traj.front().t_s || t > traj.back().t_s) return false;
+  const auto it = std::upper_bound(traj.begin(), traj.end(), t,
+                                   [](Seconds a, const StampedPose& p) { return a < p.t_s; });
+  if (it == traj.end()) {
+    *T = traj.back().T_ref_body;
+    return true;
+  }
+  const StampedPose& a = *(it - 1);
+  const double dt = it->t_s - a.t_s;
+  *T = Interpolate(a.T_ref_body, it->T_ref_body, dt > 0.0 ? (t - a.t_s) / dt : 0.0);
+  return true;
+}
+
+/// Return mode of the first parsable data packet (kStrongest when there is none).
+Vlp16ReturnMode RecordingReturnMode(const Recording& rec) {
+  for (const LidarPacket& p : rec.lidar_packets) {
+    Vlp16RawPacket raw;
+    if (p.payload.size() == 1206 && ParseVlp16DataPacket(p.payload.data(), p.payload.size(), &raw))
+      return Vlp16ReturnMode(raw.return_mode);
+  }
+  return Vlp16ReturnMode::kStrongest;
+}
+
+/// Keeps every point of a single-return recording; of a dual-return one, the chosen echo.
+bool KeepReturn(Vlp16ReturnMode mode, Vlp16ReturnFilter filter, uint8_t return_type) {
+  if (mode != Vlp16ReturnMode::kDual) return true;
+  return return_type == (filter == Vlp16ReturnFilter::kLast ? 1 : 0);
+}
+
+/// Writes bins as frames arrive (ids 0, 1, ...) and collects their times.
+class BinSink {
+ public:
+  BinSink(const KittiDatasetLayout& layout, KittiExportResult* result) : layout_(layout), result_(result) {}
+  Status Add(Seconds t_s, const std::vector<KittiPoint>& points) {
+    if (Status s = WriteKittiBin(layout_.BinPath(int(result_->frames)), points); !s) return s;
+    result_->times.push_back(t_s);
+    result_->points += points.size();
+    ++result_->frames;
+    return Status::Ok();
+  }
+
+ private:
+  KittiDatasetLayout layout_;
+  KittiExportResult* result_;
+};
+
+/// Every point at its firing time through the true T_world_lidar, into the true base frame at the scan start.
+std::vector<KittiPoint> DeskewWithTruth(const LidarScan& scan, const Trajectory& base, const Trajectory& lidar,
+                                        size_t* skipped) {
+  std::vector<KittiPoint> out;
+  Pose3 T_world_base0;
+  if (!InterpolatePose(base, scan.t_start_s, &T_world_base0)) {
+    *skipped += scan.points.size();
+    return out;
+  }
+  const Pose3 T_base0_world = T_world_base0.inverse();
+  out.reserve(scan.points.size());
+  for (const LidarPoint& p : scan.points) {
+    Pose3 T_world_lidar;
+    if (!InterpolatePose(lidar, p.t_s, &T_world_lidar)) {
+      ++*skipped;
+      continue;
+    }
+    const Eigen::Vector3d q = T_base0_world * (T_world_lidar * Eigen::Vector3d(p.x_m, p.y_m, p.z_m));
+    out.push_back({float(q.x()), float(q.y()), float(q.z()), p.intensity / 255.f});
+  }
+  return out;
+}
+
+Status ExportWithTruth(const Recording& rec, const sim::TruthLog& truth, const KittiExportOptions& o,
+                       BinSink* sink, KittiExportResult* r, const ProgressFn& progress) {
+  Vlp16DecoderConfig dc;
+  dc.min_range_m = rec.calib.lidar.min_range_m;
+  dc.max_range_m = rec.calib.lidar.max_range_m;
+  dc.lidar_clock_offset_s = rec.calib.lidar_clock_offset_s;
+  Vlp16Decoder decoder(rec.calib.lidar, dc);
+  RevolutionSplitter splitter(0.0);
+  const Vlp16ReturnMode mode = RecordingReturnMode(rec);
+  std::vector<LidarPoint> points;
+  std::vector<LidarScan> done;
+  size_t revolutions = 0;
+  const size_t n = rec.lidar_packets.size();
+  for (size_t i = 0; i < n; ++i) {
+    points.clear();
+    if (!decoder.Decode(rec.lidar_packets[i], &points)) {
+      ++r->bad_packets;
+      continue;
+    }
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&](const LidarPoint& p) { return !KeepReturn(mode, o.return_filter, p.return_type); }),
+                 points.end());
+    done.clear();
+    splitter.Add(points, &done);
+    for (const LidarScan& scan : done) {
+      if (revolutions++ == 0) continue;  // the stream starts mid-revolution
+      if (Status s = sink->Add(scan.t_start_s, DeskewWithTruth(scan, truth.base, truth.lidar, &r->points_skipped));
+          !s)
+        return s;
+    }
+    if (progress && i % 2000 == 0) progress(double(i) / double(n));
+  }
+  return Status::Ok();  // the revolution in progress at the end is partial: not written
+}
+
+/// The estimator's own rotary transform and deskew (keep_deskewed), revolution by revolution.
+Status ExportWithEstimator(const Recording& rec, const KittiExportOptions& o, BinSink* sink, KittiExportResult* r,
+                           const ProgressFn& progress) {
+  EstimatorConfig config = o.estimator;
+  config.keep_deskewed = true;
+  Estimator estimator(rec.calib, config);
+  const Vlp16ReturnMode mode = RecordingReturnMode(rec);
+  // The newest report waits for the next one: report 0 (the partial first revolution) and the last (the flushed
+  // partial one) are never written.
+  std::optional<ScanReport> held;
+  size_t held_index = 0, next_index = 0;
+  auto write_held = [&]() -> Status {
+    std::vector<KittiPoint> bin;
+    for (size_t k = 0; k < held->deskewed_base.size(); ++k) {
+      const Eigen::Vector3f& q = held->deskewed_base[k];
+      const LidarPoint& src = held->deskew_source[k];
+      if (!KeepReturn(mode, o.return_filter, src.return_type)) continue;
+      if (!q.allFinite()) {
+        ++r->points_skipped;
+        continue;
+      }
+      bin.push_back({q.x(), q.y(), q.z(), src.intensity / 255.f});
+    }
+    return sink->Add(held->t_start_s, bin);
+  };
+  auto take = [&](std::vector<ScanReport> reports) -> Status {
+    for (ScanReport& report : reports) {
+      if (held && held_index > 0)
+        if (Status s = write_held(); !s) return s;
+      held = std::move(report);
+      held_index = next_index++;
+    }
+    return Status::Ok();
+  };
+  size_t i_imu = 0, i_enc = 0;
+  const size_t n = rec.lidar_packets.size();
+  for (size_t i = 0; i < n; ++i) {
+    const LidarPacket& packet = rec.lidar_packets[i];
+    while (i_enc < rec.encoder.size() && rec.encoder[i_enc].t_s <= packet.t_capture_s)
+      estimator.Feed(rec.encoder[i_enc++]);
+    while (i_imu < rec.imu.size() && rec.imu[i_imu].t_s <= packet.t_capture_s) estimator.Feed(rec.imu[i_imu++]);
+    if (!estimator.Feed(packet)) ++r->bad_packets;
+    if (Status s = take(estimator.Process()); !s) return s;
+    if (progress && i % 2000 == 0) progress(double(i) / double(n));
+  }
+  while (i_enc < rec.encoder.size()) estimator.Feed(rec.encoder[i_enc++]);
+  while (i_imu < rec.imu.size()) estimator.Feed(rec.imu[i_imu++]);
+  return take(estimator.Finish());
+}
+
+KittiCalib RigAsKittiCalib(const RigCalib& calib) {
+  KittiCalib k;
+  Matrix34d P = Matrix34d::Zero();
+  P(0, 0) = calib.camera.fx_px;
+  P(1, 1) = calib.camera.fy_px;
+  P(0, 2) = calib.camera.cx_px;
+  P(1, 2) = calib.camera.cy_px;
+  P(2, 2) = 1.0;
+  k.P = {P, P, P, P};  // one camera: no stereo baseline
+  k.T_cam0_velo = calib.T_base_cam.inverse();  // velodyne = base
+  return k;
+}
+
+Status WritePosesFromTruth(const Trajectory& base, const KittiDatasetLayout& layout, KittiExportResult* r) {
+  Pose3 T_world_base0;
+  if (r->times.empty() || !InterpolatePose(base, r->times.front(), &T_world_base0))
+    return Status::Error(layout.PosesPath() + ": the truth does not cover the first frame");
+  for (Seconds t : r->times) {
+    Pose3 T_world_base;
+    if (!InterpolatePose(base, t, &T_world_base))
+      return Status::Error(layout.PosesPath() + ": the truth does not cover t = " + std::to_string(t) + " s");
+    r->poses.push_back(VeloToCam0Pose(r->calib.T_cam0_velo, T_world_base0.inverse() * T_world_base));
+  }
+  r->wrote_poses = true;
+  return WriteKittiPoses(layout.PosesPath(), r->poses);
+}
+
+}  // namespace
+
+bool ParseKittiDeskewSource(const std::string& name, KittiDeskewSource* out) {
+  if (name == "auto") *out = KittiDeskewSource::kAuto;
+  else if (name == "truth") *out = KittiDeskewSource::kTruth;
+  else if (name == "estimator") *out = KittiDeskewSource::kEstimator;
+  else return false;
+  return true;
+}
+
+bool KittiExportOptions::Validate(std::string* error) const {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (recording_dir.empty()) return fail("export: no recording folder");
+  if (out_dir.empty()) return fail("export: no output folder (--kitti)");
+  if (sequence.empty() || sequence.find('/') != std::string::npos)
+    return fail("export: sequence must be a folder name (got '" + sequence + "')");
+  if (return_filter == Vlp16ReturnFilter::kAll) return fail("export: return_filter must be strongest or last");
+  std::string why;
+  if (!estimator.Validate(&why)) return fail("slam config: " + why);
+  return true;
+}
+
+Status ExportKitti(const KittiExportOptions& options, KittiExportResult* result, const ProgressFn& progress) {
+  std::string why;
+  if (!options.Validate(&why)) return Status::Error(why);
+  Recording rec;
+  if (Status s = LoadRecording(options.recording_dir, &rec); !s) return s;
+  const std::string truth_dir = options.recording_dir + "/truth";
+  const bool has_truth = fs::exists(truth_dir + "/base.tum") && fs::exists(truth_dir + "/lidar.tum");
+  if (options.deskew == KittiDeskewSource::kTruth && !has_truth)
+    return Status::Error(truth_dir + ": no base.tum / lidar.tum: truth deskew needs a simulated recording");
+  sim::TruthLog truth;
+  if (has_truth) {
+    if (Status s = sim::ReadTum(truth_dir + "/base.tum", &truth.base); !s) return s;
+    if (Status s = sim::ReadTum(truth_dir + "/lidar.tum", &truth.lidar); !s) return s;
+  }
+  KittiDatasetLayout layout;
+  layout.root = options.out_dir;
+  layout.name = options.sequence;
+  if (Status s = CreateKittiDatasetFolders(layout); !s) return s;
+
+  KittiExportResult r;
+  r.sequence_dir = layout.SequenceDir();
+  r.calib = RigAsKittiCalib(rec.calib);
+  r.deskewed_with_truth = has_truth && options.deskew != KittiDeskewSource::kEstimator;
+  BinSink sink(layout, &r);
+  Status s = r.deskewed_with_truth ? ExportWithTruth(rec, truth, options, &sink, &r, progress)
+                                   : ExportWithEstimator(rec, options, &sink, &r, progress);
+  if (!s) return s;
+  if (r.frames == 0) return Status::Error(options.recording_dir + ": no complete LiDAR revolution to export");
+  if (Status w = WriteKittiTimeList(layout.TimesPath(), r.times); !w) return w;
+  if (Status w = WriteKittiCalib(layout.CalibPath(), r.calib); !w) return w;
+  if (has_truth)
+    if (Status w = WritePosesFromTruth(truth.base, layout, &r); !w) return w;
+  *result = std::move(r);
+  return Status::Ok();
+}
+
+}  // namespace rotolidar::bench

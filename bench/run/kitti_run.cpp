@@ -1,1 +1,217 @@
-// Placeholder: being written.
+#include "bench/run/kitti_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "core/io/config_yaml.hpp"
+#include "core/io/csv.hpp"
+#include "core/io/point_cloud_io.hpp"
+#include "core/io/trajectory_io.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+/// Indices into sequence.frame_ids of the frames to use.
+std::vector<size_t> SelectFrames(const KittiSequence& seq, const KittiRunOptions& o) {
+  std::vector<size_t> picked;
+  for (size_t i = 0; i < seq.frame_ids.size(); ++i) {
+    if (seq.frame_ids[i] < o.start_frame) continue;
+    if (o.max_frames > 0 && picked.size() >= size_t(o.max_frames)) break;
+    picked.push_back(i);
+  }
+  return picked;
+}
+
+/// Feeds the picked frames to a fresh estimator; fills the per-frame parts of *r and the dense map [velo(first)].
+Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
+                 KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
+                 const std::function<void(double)>& progress) {
+  Estimator estimator(RigCalib(), o.estimator);  // base = velodyne: no rotor, no IMU, identity extrinsics
+  double estimator_s = 0.0;
+  size_t next_report = picked.size() / 10;
+  for (size_t n = 0; n < picked.size(); ++n) {
+    const size_t i = picked[n];
+    const int id = seq.frame_ids[i];
+    const Seconds t_s = seq.times[size_t(id)];
+    std::vector<KittiPoint> bin;
+    if (Status s = ReadKittiBin(seq.bin_paths[i], &bin); !s) return s;
+    std::vector<ScanPoint> points;
+    KittiScanStats stats;
+    if (Status s = KittiScanPoints(bin, t_s, o.scan, &points, &stats); !s)
+      return Status::Error(seq.bin_paths[i] + ": " + s.message);
+    r->scan_lines.push_back(stats.num_lines);
+    r->frames_other_line_count += stats.num_lines != size_t(o.scan.expected_lines) ? 1 : 0;
+    r->elevation_inversions += stats.elevation_inversions;
+    const auto t0 = std::chrono::steady_clock::now();
+    r->scans.push_back(estimator.ProcessDeskewedScan(t_s, std::move(points)));
+    estimator_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r->frame_ids.push_back(id);
+    if (progress && n >= next_report) {
+      progress(double(n) / double(picked.size()));
+      next_report += std::max<size_t>(1, picked.size() / 10);
+    }
+  }
+  r->wall_time_s = estimator_s;
+  r->trajectory_velo = estimator.trajectory();
+  if (r->trajectory_velo.size() != r->scans.size())
+    return Status::Error("estimator returned " + std::to_string(r->trajectory_velo.size()) + " poses for " +
+                         std::to_string(r->scans.size()) + " frames");
+  *map = estimator.map().Points();
+  r->map_points = map->size();
+  std::vector<double> ms;
+  for (const ScanReport& s : r->scans) ms.push_back(s.timings.total_ms);
+  r->median_scan_ms = Median(ms);
+  return Status::Ok();
+}
+
+/// APE (none, SE(3)) and consecutive-frame RPE (translation, angle) of trajectory_cam0 against the ground truth.
+void Evaluate(const KittiSequence& seq, KittiRunResult* r) {
+  const Pose3 T_first_inv = seq.poses[size_t(r->frame_ids.front())].inverse();
+  for (size_t n = 0; n < r->frame_ids.size(); ++n)
+    r->ground_truth_cam0.push_back({r->trajectory_cam0[n].t_s, T_first_inv * seq.poses[size_t(r->frame_ids[n])]});
+  r->has_ground_truth = true;
+  EvalOptions o;
+  o.align = Alignment::kNone;
+  r->ape = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);
+  o.align = Alignment::kSe3;
+  r->ape_se3 = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);
+  o.align = Alignment::kNone;
+  o.metric = EvalMetric::kRpe;
+  o.delta = 1.0;
+  r->rpe_translation = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);
+  o.pose_relation = PoseRelation::kRotationAngleDeg;
+  r->rpe_rotation = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);
+}
+
+Status WriteScanTable(const std::string& path, const KittiRunResult& r) {
+  CsvWriter csv;
+  if (Status s = csv.Open(path, {"t_s", "frame", "num_points", "num_registered", "scan_lines", "edge", "planar",
+                                 "converged", "iterations", "edge_inliers", "planar_inliers", "rmse_m",
+                                 "degenerate", "total_ms"});
+      !s)
+    return s;
+  for (size_t n = 0; n < r.scans.size(); ++n) {
+    const ScanReport& s = r.scans[n];
+    csv.Row({s.t_start_s, double(r.frame_ids[n]), double(s.num_points), double(s.num_registered),
+             double(r.scan_lines[n]), double(s.features.edge), double(s.features.planar),
+             double(s.registration.converged), double(s.registration.iterations),
+             double(s.registration.edge_inliers), double(s.registration.planar_inliers), s.registration.rmse_m,
+             double(s.degeneracy.degenerate), s.timings.total_ms});
+  }
+  return csv.Close();
+}
+
+nlohmann::json StatsJson(const EvalResult& e, const char* alignment) {
+  if (!e.status) return {{"error", e.status.message}};
+  const ErrorStatistics& s = e.stats;
+  return {{"alignment", alignment}, {"count", s.count}, {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
+          {"std", s.std}, {"min", s.min}, {"max", s.max}};
+}
+
+Status WriteMetrics(const std::string& path, const KittiSequence& seq, const KittiRunOptions& o,
+                    const KittiRunResult& r) {
+  nlohmann::json j;
+  j["sequence"] = o.paths.dir;
+  j["calib"] = seq.calib_path;
+  j["times"] = seq.nominal_times ? "nominal 10 Hz" : seq.times_path;
+  j["frames"] = r.frame_ids.size();
+  j["first_frame"] = r.frame_ids.front();
+  j["scan_lines"] = {{"frames_other_count", r.frames_other_line_count},
+                     {"elevation_inversions", r.elevation_inversions}};
+  j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
+  if (r.has_ground_truth) {
+    j["ground_truth"] = seq.poses_path;
+    j["ape_translation_m"] = StatsJson(r.ape, "none");
+    j["ape_translation_m_se3"] = StatsJson(r.ape_se3, "se3");
+    j["rpe_translation_m"] = StatsJson(r.rpe_translation, "none");
+    j["rpe_rotation_deg"] = StatsJson(r.rpe_rotation, "none");
+    j["rpe_delta"] = "1 frame";
+  }
+  std::ofstream file(path);
+  file << j.dump(2) << "\n";
+  return file ? Status::Ok() : Status::Error(path + ": write failed");
+}
+
+Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const std::vector<Eigen::Vector3d>& map,
+                    const KittiRunResult& r) {
+  const std::string& d = o.out_dir;
+  std::vector<Pose3> cam0;
+  std::vector<Seconds> times;
+  for (const StampedPose& p : r.trajectory_cam0) {
+    cam0.push_back(p.T_ref_body);
+    times.push_back(p.t_s);
+  }
+  if (Status s = WriteKittiPoses(d + "/trajectory.kitti", cam0); !s) return s;
+  if (Status s = WriteTrajectory(d + "/trajectory.tum", TrajectoryFormat::kTum, r.trajectory_cam0); !s) return s;
+  if (Status s = WriteTrajectory(d + "/trajectory_velo.tum", TrajectoryFormat::kTum, r.trajectory_velo); !s) return s;
+  if (Status s = WriteKittiTimeList(d + "/times.txt", times); !s) return s;
+  if (Status s = SavePointCloud(d + "/map.ply", map); !s) return s;
+  if (Status s = WriteScanTable(d + "/scans.csv", r); !s) return s;
+  YAML::Emitter out;
+  EmitEstimatorConfig(out, o.estimator);
+  std::ofstream file(d + "/slam_config.yaml");
+  file << "# Resolved estimator configuration of this run (rotolidar slam --kitti).\n" << out.c_str() << "\n";
+  if (!file) return Status::Error(d + "/slam_config.yaml: write failed");
+  return WriteMetrics(d + "/metrics.json", seq, o, r);
+}
+
+}  // namespace
+
+EstimatorConfig KittiEstimatorConfig() {
+  EstimatorConfig c;
+  c.preprocess.min_range_m = 2.0;
+  c.preprocess.max_range_m = 80.0;
+  return c;
+}
+
+bool KittiRunOptions::Validate(std::string* error) const {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (paths.dir.empty()) return fail("kitti: no sequence folder");
+  if (start_frame < 0) return fail("kitti: start_frame must be >= 0 (got " + std::to_string(start_frame) + ")");
+  if (max_frames < 0) return fail("kitti: max_frames must be >= 0 (got " + std::to_string(max_frames) + ")");
+  if (out_dir.empty()) return fail("kitti: no output folder");
+  std::string why;
+  if (!estimator.Validate(&why)) return fail("slam config: " + why);
+  if (!scan.Validate(&why)) return fail(why);
+  return true;
+}
+
+Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
+                const std::function<void(double)>& progress) {
+  std::string why;
+  if (!options.Validate(&why)) return Status::Error(why);
+  KittiSequence seq;
+  if (Status s = OpenKittiSequence(options.paths, &seq); !s) return s;
+  const std::vector<size_t> picked = SelectFrames(seq, options);
+  if (picked.empty())
+    return Status::Error(options.paths.dir + ": no frame with id >= " + std::to_string(options.start_frame));
+  std::error_code ec;
+  std::filesystem::create_directories(options.out_dir, ec);
+  if (ec) return Status::Error(options.out_dir + ": cannot create folder: " + ec.message());
+
+  KittiRunResult r;
+  r.nominal_times = seq.nominal_times;
+  std::vector<Eigen::Vector3d> map;
+  if (Status s = RunFrames(seq, picked, options, &r, &map, progress); !s) return s;
+  for (const StampedPose& p : r.trajectory_velo)
+    r.trajectory_cam0.push_back({p.t_s, VeloToCam0Pose(seq.calib.T_cam0_velo, p.T_ref_body)});
+  if (!seq.poses.empty()) Evaluate(seq, &r);
+  *result = std::move(r);
+  return WriteOutputs(seq, options, map, *result);
+}
+
+}  // namespace rotolidar::bench

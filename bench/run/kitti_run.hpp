@@ -1,2 +1,68 @@
 #pragma once
-// Placeholder: being written.
+// `rotolidar slam --kitti DIR`: runs the core LiDAR-only on a KITTI odometry sequence (docs/kitti.md).
+//
+// KITTI's bins are motion-compensated clouds in the Velodyne frame of their frame, so base = velodyne: each bin
+// becomes ScanPoints (KittiScanPoints: rings from the scan-line order) fed to Estimator::ProcessDeskewedScan at the
+// frame's time (no IMU, no rotary transform, no deskew). The estimator's world is the Velodyne frame of the first
+// frame used. Outputs in out_dir:
+//   trajectory.kitti    KITTI convention: T_cam0(first)_cam0(k) = Tr * T_velo(first)_velo(k) * Tr^-1, one line per
+//                       frame used (the first line is the identity)
+//   trajectory.tum      the same poses with the frame times (TUM)
+//   trajectory_velo.tum T_velo(first)_velo(k), the estimator's own output
+//   times.txt           frame times [s], one per line
+//   map.ply             the dense map, Velodyne frame of the first frame [m]
+//   scans.csv           per frame: time, id, points, scan lines, registration outcome, timings
+//   slam_config.yaml    the resolved estimator config
+//   metrics.json        run summary; with ground truth: APE and RPE against it (rebased to the first frame used)
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bench/run/eval_run.hpp"
+#include "core/io/kitti.hpp"
+#include "core/pipeline/estimator.hpp"
+
+namespace rotolidar::bench {
+
+/// The estimator defaults with KITTI's HDL-64E car data in mind: the range gate drops the car itself (< 2 m)
+/// and keeps what a 64-beam sensor sees well (< 80 m). Everything else is EstimatorConfig's default.
+EstimatorConfig KittiEstimatorConfig();
+
+struct KittiRunOptions {
+  KittiSequencePaths paths;          ///< the sequence folder and optional calib / times / poses files
+  std::string out_dir = "runs/kitti";
+  int start_frame = 0;               ///< first frame id used (bins with smaller ids are skipped)
+  int max_frames = 0;                ///< at most this many frames from start_frame; 0 = all
+  EstimatorConfig estimator = KittiEstimatorConfig();
+  KittiScanConfig scan;
+  bool Validate(std::string* error) const;  ///< false naming the field (start_frame, max_frames, sub-configs)
+};
+
+struct KittiRunResult {
+  std::vector<int> frame_ids;        ///< frames used, in order
+  Trajectory trajectory_velo;        ///< T_velo(first)_velo(k) at the frame times
+  Trajectory trajectory_cam0;        ///< KITTI convention (see above), same times
+  std::vector<ScanReport> scans;     ///< one per frame used
+  std::vector<size_t> scan_lines;    ///< scan lines (rings) found per frame
+  size_t frames_other_line_count = 0;  ///< frames whose line count != KittiScanConfig::expected_lines
+  size_t elevation_inversions = 0;     ///< summed over frames (0: every line split follows the beam order)
+  size_t map_points = 0;
+  double wall_time_s = 0.0;          ///< estimator time only (excludes reading bins) [s]
+  double median_scan_ms = 0.0;
+  bool nominal_times = false;        ///< the sequence had no times file
+  bool has_ground_truth = false;
+  Trajectory ground_truth_cam0;      ///< GT rebased to the first frame used, frame times (when present)
+  /// With ground truth (cam0 convention, no association: pose i = frame i):
+  EvalResult ape;                    ///< translation [m], no alignment (both start at the identity)
+  EvalResult ape_se3;                ///< translation [m], SE(3) Umeyama (status not ok when degenerate)
+  EvalResult rpe_translation;        ///< consecutive frames, translation [m]
+  EvalResult rpe_rotation;           ///< consecutive frames, angle [deg]
+};
+
+/// Opens the sequence, runs the estimator over the chosen frames, evaluates against the poses file when there is
+/// one, and writes the outputs. Fails (naming the file) on unreadable input, no frame in range, or unwritable
+/// output. `progress(fraction)` is called about every 10 % of the frames.
+Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
+                const std::function<void(double)>& progress = nullptr);
+
+}  // namespace rotolidar::bench

@@ -42,13 +42,32 @@ void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
 Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& scans) {
   CsvWriter csv;
   if (Status s = csv.Open(path, {"t_start_s", "t_end_s", "num_points", "num_registered", "num_rotor_fallback",
-                                 "converged", "iterations", "num_inliers", "rmse_m", "process_time_ms"});
+                                 "num_edge", "num_planar", "num_less_sharp", "num_less_flat", "imu_initialized",
+                                 "imu_deskew", "reg_attempted", "converged", "remapped", "iterations",
+                                 "edge_inliers", "planar_inliers", "final_cost", "rmse_m", "degenerate",
+                                 "num_degenerate", "lambda0", "lambda1", "lambda2", "lambda3", "lambda4", "lambda5",
+                                 "degen_tx", "degen_ty", "degen_tz", "degen_rx", "degen_ry", "degen_rz",
+                                 "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
+                                 "total_ms"});
       !s)
     return s;
-  for (const ScanReport& r : scans)
-    csv.Row({r.t_start_s, r.t_end_s, double(r.num_points), double(r.num_registered), double(r.num_rotor_fallback),
-             double(r.registration.converged), double(r.registration.iterations),
-             double(r.registration.num_inliers), r.registration.rmse_m, r.process_time_ms});
+  for (const ScanReport& r : scans) {
+    const RegistrationSummary& g = r.registration;
+    const DegeneracyRecord& d = r.degeneracy;
+    const ScanTimings& t = r.timings;
+    std::vector<double> row = {r.t_start_s, r.t_end_s, double(r.num_points), double(r.num_registered),
+                               double(r.num_rotor_fallback), double(r.features.edge), double(r.features.planar),
+                               double(r.features.less_sharp), double(r.features.less_flat),
+                               double(r.imu_initialized), double(r.imu_deskew), double(g.attempted),
+                               double(g.converged), double(g.remapped), double(g.iterations),
+                               double(g.edge_inliers), double(g.planar_inliers), g.final_cost, g.rmse_m,
+                               double(d.degenerate), double(d.num_degenerate)};
+    for (int i = 0; i < 6; ++i) row.push_back(d.eigenvalues[i]);
+    for (int i = 0; i < 6; ++i) row.push_back(d.axis_weight[i]);
+    for (double ms : {t.deskew_ms, t.preprocess_ms, t.features_ms, t.register_ms, t.fuse_ms, t.map_ms, t.total_ms})
+      row.push_back(ms);
+    csv.Row(row);
+  }
   return csv.Close();
 }
 
@@ -97,7 +116,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   result->bad_packets = estimator.bad_packets();
   if (!result->scans.empty()) result->data_duration_s = result->scans.back().t_end_s - result->scans.front().t_start_s;
   std::vector<double> times;
-  for (const auto& r : result->scans) times.push_back(r.process_time_ms);
+  for (const auto& r : result->scans) times.push_back(r.timings.total_ms);
   result->median_scan_ms = Median(times);
   if (result->trajectory.empty()) return Status::Error(recording_dir + ": no complete LiDAR revolution in the data");
   return WriteOutputs(out_dir, config, estimator, *result);

@@ -2,7 +2,7 @@
 // Runs the core estimator over a recording folder and writes its outputs:
 //   trajectory.tum, trajectory.kitti (+ trajectory_times.txt)   T_world_base at each scan start
 //   map.ply, map.pcd                                            the dense map [world, m]
-//   scans.csv                                                   per-scan timings and registration outcome
+//   scans.csv          per scan: stage timings [ms], feature counts, registration, degeneracy (eigenvalues, axes)
 //   slam_config.yaml                                            the resolved estimator config
 #include <functional>
 #include <string>

@@ -1,2 +1,68 @@
 #pragma once
-// Placeholder: being written.
+// Motion compensation ("deskew") of one scan: every point, measured in the base frame at its own firing time t,
+// is moved into the base frame at the scan's start time t0 (seed Sec. 3.2):
+//   p_base(t0) = T_base(t0)_base(t) * p_base(t)
+// The rotor's rotation is NOT part of this: LidarToBase (core/pipeline/rotary.hpp) already placed each point in
+// the base frame at its own time with the encoder angle. What remains is the carrier's motion, given as a
+// MotionTable: T_base(t0)_base(t) sampled at increasing times and interpolated in between.
+//
+// Tables come from
+//   - ImuMotionTable: IMU readings integrated from t0 with the state's velocity, gravity and biases (rotation
+//     AND translation; the sliding window's estimates once the IMU is initialised), or with the accelerometer
+//     ignored (gyro rotation + constant velocity: before the IMU is initialised);
+//   - ConstantTwistTable: a constant twist (no IMU: the last two poses' relative motion).
+// Pure functions on their arguments; thread-safe. Units SI, times on the rig clock.
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/types/geometry.hpp"
+#include "core/types/messages.hpp"
+#include "core/util/log.hpp"
+
+namespace rotolidar {
+
+/// T_base(t0)_base(t) at increasing times t_s[0] = t0 < t_s[1] < ...; sizes equal, at least one entry.
+struct MotionTable {
+  std::vector<Seconds> t_s;
+  std::vector<Pose3> T_start_t;
+
+  /// Pose at t: translation linear and rotation geodesic between the bracketing entries. Outside
+  /// [t_s.front(), t_s.back()] the nearest end entry is returned and *outside (if given) is set true.
+  Pose3 At(Seconds t, bool* outside = nullptr) const;
+};
+
+/// The state the IMU integration starts from, all in the imu frame at t0.
+struct ImuMotionModel {
+  Eigen::Vector3d v_imu_mps = Eigen::Vector3d::Zero();         ///< velocity of the imu origin at t0 [m/s]
+  Eigen::Vector3d gravity_imu_mps2 = Eigen::Vector3d::Zero();  ///< gravity vector at t0 [m/s^2] (-g "down")
+  Eigen::Vector3d bias_gyro_radps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bias_accel_mps2 = Eigen::Vector3d::Zero();
+  /// false: the accelerometer is ignored and v_imu_mps is held constant in the t0 frame (gyro rotation +
+  /// constant velocity), for use before gravity and the velocity are known.
+  bool use_accel = true;
+};
+
+/// Integrates `imu` (time-ordered, imu frame, raw readings) over [t0_s, t1_s] with the midpoint scheme of
+/// core/imu/preintegration.hpp (each interval between samples uses the mean of its two readings, clipped to
+/// [t0, t1]) and returns the base-frame table T_base(t0)_base(t) = T_base_imu T_imu(t0)_imu(t) T_base_imu^-1 at
+/// t0, every sample time inside (t0, t1) and t1. Error (out untouched) when t1 < t0 or the samples do not
+/// bracket [t0, t1] (first sample after t0 or last before t1).
+Status ImuMotionTable(const std::vector<ImuSample>& imu, Seconds t0_s, Seconds t1_s, const ImuMotionModel& model,
+                      const Pose3& T_base_imu, MotionTable* out);
+
+/// Constant twist over [t0_s, t1_s]: T_base(t0)_base(t) = exp(s log(T_start_end)), s = (t - t0) / (t1 - t0),
+/// sampled at `steps` + 1 evenly spaced times (steps >= 1; t1 > t0). Rotation and translation interpolate
+/// separately (the SE(3) exp is not needed at scan-scale motions).
+MotionTable ConstantTwistTable(const Pose3& T_start_end, Seconds t0_s, Seconds t1_s, int steps = 10);
+
+/// The identity over [t0_s, t1_s] (no motion known).
+MotionTable IdentityTable(Seconds t0_s, Seconds t1_s);
+
+/// Deskews points: (*p_start)[i] = table.At(t_s[i]) * p_base[i] (sizes must match: ROTOLIDAR_CHECK).
+/// Returns how many points lay outside the table's span (they used its nearest end). Non-finite inputs give
+/// non-finite outputs.
+size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
+                    const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start);
+
+}  // namespace rotolidar

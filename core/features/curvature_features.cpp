@@ -30,6 +30,8 @@ struct Ring {
   std::vector<uint8_t> step_ok;  ///< step_ok[j]: positions j and j+1 are neighbours
   std::vector<float> c;          ///< Eq. 3 per position, NaN without a window
   std::vector<int> sector;       ///< sector per position
+  std::vector<std::vector<int>> by_sector;  ///< positions of each sector, in firing order
+  std::vector<uint8_t> sharp;    ///< c above the edge threshold at the point's range (EdgeThresholdAt)
   std::vector<uint8_t> picked;   ///< LOAM's "neighbour picked": not selectable any more
 };
 
@@ -38,10 +40,12 @@ struct Context {
   const FeatureConfig& config;
   std::vector<Ring> rings;
   std::vector<FeatureLabel> labels;  ///< per input point
+  double tan_max_incidence = 0.0;    ///< tan(config.beam_parallel_max_incidence_deg)
 };
 
 struct SectorOutput {
-  pcl::PointCloud<pcl::PointXYZI> edge, planar, less_sharp, less_flat;
+  pcl::PointCloud<pcl::PointXYZI> edge, planar, less_sharp;
+  std::vector<int> less_flat;  ///< input indices: the map-side planar set before its voxel filter
 };
 
 /// Runs fn(0..n-1) on up to `threads` threads. Each call must write only its own outputs; the first exception
@@ -114,7 +118,7 @@ void MarkOccluded(const Context& ctx, const Ring& ring, std::vector<uint8_t>* oc
 /// LOAM's beam-parallel rule, noise-robust: the incidence from the range slope over N steps, on both sides.
 bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
   const int n_side = ctx.config.neighbours;
-  const double tan_max = std::tan(ctx.config.beam_parallel_max_incidence_deg * kDegToRad);
+  const double tan_max = ctx.tan_max_incidence;
   const ScanPoint& p = ctx.points[ring.index[i]];
   for (const int q : {i - n_side, i + n_side}) {
     const ScanPoint& o = ctx.points[ring.index[q]];
@@ -125,24 +129,35 @@ bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
   return true;
 }
 
+/// The edge threshold at range r [m]: the fixed Eq. 3 threshold or the noise gate, whichever is higher.
+double EdgeThresholdAt(const FeatureConfig& cfg, float range_m) {
+  const double n = cfg.neighbours;
+  const double sigma_c = cfg.range_sigma_m * std::sqrt(4.0 * n * n + 2.0 * n) / (2.0 * n * range_m);
+  return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
+}
+
 // Stage 1, one ring: firing order, steps, curvature, sectors and the rejection labels.
 void AnalyseRing(Context* ctx, Ring* ring) {
   const std::vector<ScanPoint>& pts = ctx->points;
   const FeatureConfig& cfg = ctx->config;
-  std::sort(ring->index.begin(), ring->index.end(), [&](int a, int b) {
-    return pts[a].t_s < pts[b].t_s || (pts[a].t_s == pts[b].t_s && a < b);
-  });
+  const auto earlier = [&](int a, int b) { return pts[a].t_s < pts[b].t_s || (pts[a].t_s == pts[b].t_s && a < b); };
+  if (!std::is_sorted(ring->index.begin(), ring->index.end(), earlier))  // decoded scans come in firing order
+    std::sort(ring->index.begin(), ring->index.end(), earlier);
   const int n = static_cast<int>(ring->index.size());
   ring->step_ok = StepsOk(pts, ring->index, cfg.max_neighbour_step_deg);
   ring->c = CurvatureOf(pts, ring->index, ring->step_ok, cfg.neighbours);
   ring->picked.assign(n, 0);
   ring->sector.resize(n);
+  ring->sharp.resize(n);
+  ring->by_sector.assign(cfg.sectors, {});
   const double sector_deg = 360.0 / cfg.sectors;
   std::vector<uint8_t> occluded(n, 0);
   if (cfg.reject_occluded) MarkOccluded(*ctx, *ring, &occluded);
   for (int i = 0; i < n; ++i) {
     const int s = static_cast<int>(std::floor(pts[ring->index[i]].azimuth_deg / sector_deg));
     ring->sector[i] = std::clamp(s, 0, cfg.sectors - 1);
+    ring->by_sector[ring->sector[i]].push_back(i);
+    ring->sharp[i] = ring->c[i] > EdgeThresholdAt(cfg, pts[ring->index[i]].range_m);  // false for NaN
     FeatureLabel& label = ctx->labels[ring->index[i]];
     if (std::isnan(ring->c[i])) label = FeatureLabel::kNoWindow;
     else if (occluded[i]) label = FeatureLabel::kOccluded;
@@ -164,13 +179,6 @@ void Suppress(const Context& ctx, int sector, int p, Ring* ring) {
   }
 }
 
-/// The edge threshold at range r [m]: the fixed Eq. 3 threshold or the noise gate, whichever is higher.
-double EdgeThresholdAt(const FeatureConfig& cfg, float range_m) {
-  const double n = cfg.neighbours;
-  const double sigma_c = cfg.range_sigma_m * std::sqrt(4.0 * n * n + 2.0 * n) / (2.0 * n * range_m);
-  return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
-}
-
 pcl::PointXYZI ToPcl(const ScanPoint& p, float c) {
   pcl::PointXYZI out;
   out.x = p.p_base.x(), out.y = p.p_base.y(), out.z = p.p_base.z();
@@ -179,25 +187,28 @@ pcl::PointXYZI ToPcl(const ScanPoint& p, float c) {
 }
 
 // Stage 2, one (ring, sector) cell: LOAM's selection, sharpest first, then flattest, then the less-flat set.
+// The sharp candidates are sorted by c descending (ties: firing order); the flat ones are popped from a heap in
+// the reverse order (c ascending, ties: later firing first), so only the few points picked are ever ordered.
 void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
   const FeatureConfig& cfg = ctx->config;
-  std::vector<int> cand;  // selectable positions of this cell
-  for (int i = 0; i < static_cast<int>(ring->index.size()); ++i)
-    if (ring->sector[i] == sector && ctx->labels[ring->index[i]] == FeatureLabel::kUnused) cand.push_back(i);
-  std::sort(cand.begin(), cand.end(), [&](int a, int b) {
-    return ring->c[a] > ring->c[b] || (ring->c[a] == ring->c[b] && a < b);
-  });
+  const std::vector<float>& c = ring->c;
+  std::vector<int> sharp_cand, flat_cand;  // selectable positions of this cell
+  for (const int i : ring->by_sector[sector]) {
+    if (ctx->labels[ring->index[i]] != FeatureLabel::kUnused) continue;
+    if (c[i] > cfg.edge_threshold) sharp_cand.push_back(i);
+    if (c[i] < cfg.planar_threshold) flat_cand.push_back(i);
+  }
+  std::sort(sharp_cand.begin(), sharp_cand.end(), [&](int a, int b) { return c[a] > c[b] || (c[a] == c[b] && a < b); });
   int n_edge = 0, n_sharp = 0, n_planar = 0;
   auto take = [&](int p, FeatureLabel label, pcl::PointCloud<pcl::PointXYZI>* cloud) {
     ctx->labels[ring->index[p]] = label;
-    cloud->push_back(ToPcl(ctx->points[ring->index[p]], ring->c[p]));
+    cloud->push_back(ToPcl(ctx->points[ring->index[p]], c[p]));
     ring->picked[p] = 1;
     Suppress(*ctx, sector, p, ring);
   };
-  auto sharp = [&](int p) { return ring->c[p] > EdgeThresholdAt(cfg, ctx->points[ring->index[p]].range_m); };
-  for (const int p : cand) {  // c falls along cand, the gate's threshold does not: test each
-    if (n_sharp >= cfg.less_sharp_per_sector || !(ring->c[p] > cfg.edge_threshold)) break;
-    if (ring->picked[p] || !sharp(p)) continue;
+  for (const int p : sharp_cand) {  // c falls along the list, the gate's threshold does not: test each
+    if (n_sharp >= cfg.less_sharp_per_sector) break;
+    if (ring->picked[p] || !ring->sharp[p]) continue;
     const bool edge = n_edge < cfg.edges_per_sector;
     take(p, edge ? FeatureLabel::kEdge : FeatureLabel::kLessSharp, &out->less_sharp);
     if (edge) {
@@ -206,27 +217,35 @@ void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
     }
     ++n_sharp;
   }
-  for (auto it = cand.rbegin(); it != cand.rend(); ++it) {
-    if (n_planar >= cfg.planars_per_sector || !(ring->c[*it] < cfg.planar_threshold)) break;
-    if (ring->picked[*it]) continue;
-    take(*it, FeatureLabel::kPlanar, &out->planar);
+  const auto after = [&](int a, int b) { return c[a] > c[b] || (c[a] == c[b] && a < b); };  // heap top: flattest
+  std::make_heap(flat_cand.begin(), flat_cand.end(), after);
+  for (auto end = flat_cand.end(); end != flat_cand.begin() && n_planar < cfg.planars_per_sector; --end) {
+    std::pop_heap(flat_cand.begin(), end, after);
+    const int p = *(end - 1);
+    if (ring->picked[p]) continue;
+    take(p, FeatureLabel::kPlanar, &out->planar);
     ++n_planar;
   }
-  std::sort(cand.begin(), cand.end());  // firing order for the less-flat set
-  for (const int p : cand) {
+  for (const int p : ring->by_sector[sector]) {  // firing order; kUnused / kPlanar = selectable at the start
     FeatureLabel& label = ctx->labels[ring->index[p]];
-    if ((label != FeatureLabel::kUnused && label != FeatureLabel::kPlanar) || sharp(p)) continue;
+    if ((label != FeatureLabel::kUnused && label != FeatureLabel::kPlanar) || ring->sharp[p]) continue;
     if (label == FeatureLabel::kUnused) label = FeatureLabel::kLessFlat;
-    out->less_flat.push_back(ToPcl(ctx->points[ring->index[p]], ring->c[p]));
+    out->less_flat.push_back(ring->index[p]);
   }
 }
 
-pcl::PointCloud<pcl::PointXYZI> Downsample(const pcl::PointCloud<pcl::PointXYZI>& cloud, double voxel_m) {
-  if (voxel_m <= 0.0) return cloud;
-  std::vector<Eigen::Vector3f> positions(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) positions[i] = cloud[i].getVector3fMap();
+/// The less-flat cloud: one point per voxel_m voxel (VoxelRepresentatives, in list order), all when voxel_m is 0.
+pcl::PointCloud<pcl::PointXYZI> LessFlatCloud(const Context& ctx, const std::vector<int>& list,
+                                              const std::vector<float>& curvature, double voxel_m) {
   pcl::PointCloud<pcl::PointXYZI> out;
-  for (const std::size_t i : VoxelRepresentatives(positions, voxel_m)) out.push_back(cloud[i]);
+  if (voxel_m <= 0.0) {
+    for (const int i : list) out.push_back(ToPcl(ctx.points[i], curvature[i]));
+    return out;
+  }
+  std::vector<Eigen::Vector3f> positions(list.size());
+  for (std::size_t k = 0; k < list.size(); ++k) positions[k] = ctx.points[list[k]].p_base;
+  for (const std::size_t k : VoxelRepresentatives(positions, voxel_m))
+    out.push_back(ToPcl(ctx.points[list[k]], curvature[list[k]]));
   return out;
 }
 
@@ -292,7 +311,8 @@ FeatureResult ExtractFeatures(const std::vector<ScanPoint>& points, Seconds t_sc
                               const FeatureConfig& config) {
   std::string why;
   ROTOLIDAR_CHECK(config.Validate(&why), why);
-  Context ctx{points, config, {}, std::vector<FeatureLabel>(points.size(), FeatureLabel::kInvalid)};
+  Context ctx{points, config, {}, std::vector<FeatureLabel>(points.size(), FeatureLabel::kInvalid),
+              std::tan(config.beam_parallel_max_incidence_deg * kDegToRad)};
   for (std::size_t i = 0; i < points.size(); ++i) {
     const ScanPoint& p = points[i];
     if (!p.p_base.allFinite() || !(p.range_m > 0.f) || !std::isfinite(p.range_m) || !std::isfinite(p.azimuth_deg))
@@ -311,17 +331,17 @@ FeatureResult ExtractFeatures(const std::vector<ScanPoint>& points, Seconds t_sc
 
   FeatureResult result;
   result.features.t_s = t_scan_start_s;
-  pcl::PointCloud<pcl::PointXYZI> less_flat_raw;
+  std::vector<int> less_flat_raw;
   for (const SectorOutput& s : sectors) {  // sector order, then ring order inside: thread-count independent
     result.features.edge += s.edge;
     result.features.planar += s.planar;
     result.features.less_sharp += s.less_sharp;
-    less_flat_raw += s.less_flat;
+    less_flat_raw.insert(less_flat_raw.end(), s.less_flat.begin(), s.less_flat.end());
   }
-  result.features.less_flat = Downsample(less_flat_raw, config.less_flat_voxel_m);
   result.curvature.assign(points.size(), kNaN);
   for (const Ring& ring : ctx.rings)
     for (std::size_t i = 0; i < ring.index.size(); ++i) result.curvature[ring.index[i]] = ring.c[i];
+  result.features.less_flat = LessFlatCloud(ctx, less_flat_raw, result.curvature, config.less_flat_voxel_m);
   result.stats = CountLabels(ctx.labels, result.features, less_flat_raw.size());
   result.labels = std::move(ctx.labels);
   return result;

@@ -1,35 +1,195 @@
+// EstimatorConfig <-> YAML. Every section is described once, as a list of (key, field) pairs visited by a key
+// collector (strict key check), a parser and an emitter, so parsing and the resolved-config output cannot drift.
 #include "core/io/config_yaml.hpp"
+
+#include <map>
+#include <set>
 
 #include "core/io/yaml_util.hpp"
 
 namespace rotolidar {
+namespace {
+
+// ---- the field lists ----
+
+template <class V>
+void VisitPreprocess(V& v, PreprocessConfig& c) {
+  v("enable_range", &c.enable_range), v("min_range_m", &c.min_range_m), v("max_range_m", &c.max_range_m);
+  v("enable_sor", &c.enable_sor), v("sor_k", &c.sor_k), v("sor_std_mul", &c.sor_std_mul);
+  v("sor_range_normalized", &c.sor_range_normalized), v("enable_voxel", &c.enable_voxel), v("voxel_m", &c.voxel_m);
+}
+
+template <class V>
+void VisitFeatures(V& v, FeatureConfig& c) {
+  v("sectors", &c.sectors), v("edges_per_sector", &c.edges_per_sector);
+  v("planars_per_sector", &c.planars_per_sector), v("less_sharp_per_sector", &c.less_sharp_per_sector);
+  v("neighbours", &c.neighbours), v("edge_threshold", &c.edge_threshold), v("planar_threshold", &c.planar_threshold);
+  v("range_sigma_m", &c.range_sigma_m), v("edge_min_snr", &c.edge_min_snr);
+  v("max_neighbour_step_deg", &c.max_neighbour_step_deg), v("reject_occluded", &c.reject_occluded);
+  v("occlusion_min_jump_m", &c.occlusion_min_jump_m), v("occlusion_jump_ratio", &c.occlusion_jump_ratio);
+  v("reject_beam_parallel", &c.reject_beam_parallel);
+  v("beam_parallel_max_incidence_deg", &c.beam_parallel_max_incidence_deg);
+  v("less_flat_voxel_m", &c.less_flat_voxel_m), v("threads", &c.threads);
+}
+
+template <class V>
+void VisitRegistration(V& v, ScanToMapConfig& c) {
+  v("max_solver_iterations", &c.max_solver_iterations), v("max_correspondence_rebuilds", &c.max_correspondence_rebuilds);
+  v("num_neighbours", &c.num_neighbours), v("max_neighbour_distance_m", &c.max_neighbour_distance_m);
+  v("min_line_eigen_ratio", &c.min_line_eigen_ratio), v("max_plane_eigen_ratio", &c.max_plane_eigen_ratio);
+  v("max_plane_deviation_m", &c.max_plane_deviation_m), v("loss", &c.loss), v("loss_scale_m", &c.loss_scale_m);
+  v("convergence_translation_m", &c.convergence_translation_m);
+  v("convergence_rotation_rad", &c.convergence_rotation_rad);
+  v("min_correspondences", &c.min_correspondences), v("num_threads", &c.num_threads);
+  v("degeneracy_remap", &c.degeneracy.remap), v("degeneracy_min_eigenvalue", &c.degeneracy.min_eigenvalue);
+}
+
+template <class V>
+void VisitLocalMap(V& v, LocalMapConfig& c) {
+  v("keyframe_distance_m", &c.keyframe_distance_m), v("keyframe_angle_rad", &c.keyframe_angle_rad);
+  v("max_keyframes", &c.max_keyframes), v("max_distance_m", &c.max_distance_m);
+  v("edge_voxel_m", &c.edge_voxel_m), v("planar_voxel_m", &c.planar_voxel_m);
+}
+
+template <class V>
+void VisitWindow(V& v, SlidingWindowConfig& c) {
+  v("window_size", &c.window_size), v("marginalization", &c.marginalization);
+  v("max_iterations", &c.max_iterations), v("initial_trust_region_radius", &c.initial_trust_region_radius);
+  v("max_solver_time_s", &c.max_solver_time_s), v("function_tolerance", &c.function_tolerance);
+  v("gradient_tolerance", &c.gradient_tolerance), v("parameter_tolerance", &c.parameter_tolerance);
+  v("num_threads", &c.num_threads), v("lidar_loss", &c.lidar_loss), v("lidar_loss_scale", &c.lidar_loss_scale);
+  v("repropagate_gyro_bias_radps", &c.repropagate_gyro_bias_radps);
+  v("repropagate_accel_bias_mps2", &c.repropagate_accel_bias_mps2);
+  v("initial_position_sigma_m", &c.initial_position_sigma_m);
+  v("initial_rotation_sigma_rad", &c.initial_rotation_sigma_rad);
+  v("initial_velocity_sigma_mps", &c.initial_velocity_sigma_mps);
+  v("initial_gyro_bias_sigma_radps", &c.initial_gyro_bias_sigma_radps);
+  v("initial_accel_bias_sigma_mps2", &c.initial_accel_bias_sigma_mps2);
+  v("max_dt_mismatch_s", &c.max_dt_mismatch_s);
+}
+
+template <class V>
+void VisitImuInit(V& v, ImuInitConfig& c) {
+  v("gravity_mps2", &c.gravity_mps2), v("static_window_s", &c.static_window_s);
+  v("static_min_samples", &c.static_min_samples), v("static_max_gyro_std_radps", &c.static_max_gyro_std_radps);
+  v("static_max_accel_std_mps2", &c.static_max_accel_std_mps2);
+  v("max_gravity_error_mps2", &c.max_gravity_error_mps2), v("moving_min_poses", &c.moving_min_poses);
+  v("gyro_bias_iterations", &c.gyro_bias_iterations);
+  v("gravity_refine_iterations", &c.gravity_refine_iterations);
+}
+
+template <class V>
+void VisitTop(V& v, EstimatorConfig& c) {
+  v("cut_azimuth_deg", &c.cut_azimuth_deg), v("keyframe_every_scans", &c.keyframe_every_scans);
+  v("use_imu", &c.use_imu), v("lidar_point_sigma_m", &c.lidar_point_sigma_m);
+  v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
+  v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);
+  v("output_map_max_range_m", &c.output_map_max_range_m), v("keep_deskewed", &c.keep_deskewed);
+}
+
+/// Calls fn(section name, visit function) for each sub-section.
+template <class Fn>
+void ForEachSection(EstimatorConfig& c, Fn fn) {
+  fn("preprocess", [&](auto& v) { VisitPreprocess(v, c.preprocess); });
+  fn("features", [&](auto& v) { VisitFeatures(v, c.features); });
+  fn("registration", [&](auto& v) { VisitRegistration(v, c.registration); });
+  fn("local_map", [&](auto& v) { VisitLocalMap(v, c.local_map); });
+  fn("window", [&](auto& v) { VisitWindow(v, c.window); });
+  fn("imu_init", [&](auto& v) { VisitImuInit(v, c.imu_init); });
+}
+
+// ---- enums as words ----
+
+template <class E>
+const std::map<std::string, E>& EnumWords();
+template <>
+const std::map<std::string, RobustLoss>& EnumWords() {
+  static const std::map<std::string, RobustLoss> m{
+      {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
+  return m;
+}
+template <>
+const std::map<std::string, BackendLoss>& EnumWords() {
+  static const std::map<std::string, BackendLoss> m{
+      {"none", BackendLoss::kNone}, {"huber", BackendLoss::kHuber}, {"cauchy", BackendLoss::kCauchy}};
+  return m;
+}
+template <>
+const std::map<std::string, MarginalizationScheme>& EnumWords() {
+  static const std::map<std::string, MarginalizationScheme> m{
+      {"schur_complement", MarginalizationScheme::kSchurComplement},
+      {"drop_oldest", MarginalizationScheme::kDropOldest}};
+  return m;
+}
+
+template <class T>
+constexpr bool kIsEnum = std::is_enum<T>::value;
+
+// ---- visitors ----
+
+struct KeyCollector {
+  std::set<std::string> keys;
+  template <class T>
+  void operator()(const char* key, T*) { keys.insert(key); }
+};
+
+struct Parser {
+  const std::string& file;
+  const YAML::Node& node;
+  template <class T>
+  void operator()(const char* key, T* value) {
+    if constexpr (kIsEnum<T>) {
+      std::string word;
+      yaml::Get(file, node, key, &word);
+      if (word.empty()) return;
+      const auto& words = EnumWords<T>();
+      const auto it = words.find(word);
+      if (it == words.end()) {
+        std::string allowed;
+        for (const auto& w : words) allowed += (allowed.empty() ? "" : ", ") + w.first;
+        throw yaml::ParseError(yaml::Where(file, node[key]) + "field '" + key + "': unknown value '" + word +
+                               "' (one of: " + allowed + ")");
+      }
+      *value = it->second;
+    } else {
+      yaml::Get(file, node, key, value);
+    }
+  }
+};
+
+struct Emitter {
+  YAML::Emitter& out;
+  template <class T>
+  void operator()(const char* key, T* value) {
+    out << YAML::Key << key << YAML::Value;
+    if constexpr (kIsEnum<T>) {
+      for (const auto& w : EnumWords<T>())
+        if (w.second == *value) out << w.first;
+    } else {
+      out << *value;
+    }
+  }
+};
+
+}  // namespace
 
 Status ParseEstimatorConfig(const std::string& f, const YAML::Node& n, EstimatorConfig* c) {
-  using yaml::Get;
   try {
-    yaml::CheckKeys(f, n,
-                    {"min_range_m", "max_range_m", "scan_voxel_m", "cut_azimuth_deg", "local_map_voxel_m",
-                     "local_map_points_per_voxel", "local_map_radius_m", "target_refresh_scans",
-                     "output_map_voxel_m", "output_map_points_per_voxel", "registration"},
-                    "slam");
-    Get(f, n, "min_range_m", &c->min_range_m);
-    Get(f, n, "max_range_m", &c->max_range_m);
-    Get(f, n, "scan_voxel_m", &c->scan_voxel_m);
-    Get(f, n, "cut_azimuth_deg", &c->cut_azimuth_deg);
-    Get(f, n, "local_map_voxel_m", &c->local_map_voxel_m);
-    Get(f, n, "local_map_points_per_voxel", &c->local_map_points_per_voxel);
-    Get(f, n, "local_map_radius_m", &c->local_map_radius_m);
-    Get(f, n, "target_refresh_scans", &c->target_refresh_scans);
-    Get(f, n, "output_map_voxel_m", &c->output_map_voxel_m);
-    Get(f, n, "output_map_points_per_voxel", &c->output_map_points_per_voxel);
-    if (const YAML::Node r = n["registration"]) {
-      yaml::CheckKeys(f, r, {"max_correspondence_m", "max_iterations", "transformation_epsilon", "k_correspondences"},
-                      "slam.registration");
-      Get(f, r, "max_correspondence_m", &c->registration.max_correspondence_m);
-      Get(f, r, "max_iterations", &c->registration.max_iterations);
-      Get(f, r, "transformation_epsilon", &c->registration.transformation_epsilon);
-      Get(f, r, "k_correspondences", &c->registration.k_correspondences);
-    }
+    KeyCollector top;
+    VisitTop(top, *c);
+    ForEachSection(*c, [&](const char* name, auto) { top.keys.insert(name); });
+    yaml::CheckKeys(f, n, top.keys, "slam");
+    Parser parse{f, n};
+    VisitTop(parse, *c);
+    ForEachSection(*c, [&](const char* name, auto visit) {
+      const YAML::Node section = n[name];
+      if (!section) return;
+      KeyCollector keys;
+      visit(keys);
+      yaml::CheckKeys(f, section, keys.keys, std::string("slam.") + name);
+      Parser p{f, section};
+      visit(p);
+    });
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   }
@@ -38,25 +198,17 @@ Status ParseEstimatorConfig(const std::string& f, const YAML::Node& n, Estimator
   return Status::Ok();
 }
 
-void EmitEstimatorConfig(YAML::Emitter& out, const EstimatorConfig& c) {
+void EmitEstimatorConfig(YAML::Emitter& out, const EstimatorConfig& config) {
+  EstimatorConfig c = config;  // the visitors take non-const fields
+  Emitter emit{out};
   out << YAML::BeginMap;
-  out << YAML::Key << "min_range_m" << YAML::Value << c.min_range_m;
-  out << YAML::Key << "max_range_m" << YAML::Value << c.max_range_m;
-  out << YAML::Key << "scan_voxel_m" << YAML::Value << c.scan_voxel_m;
-  out << YAML::Key << "cut_azimuth_deg" << YAML::Value << c.cut_azimuth_deg;
-  out << YAML::Key << "local_map_voxel_m" << YAML::Value << c.local_map_voxel_m;
-  out << YAML::Key << "local_map_points_per_voxel" << YAML::Value << c.local_map_points_per_voxel;
-  out << YAML::Key << "local_map_radius_m" << YAML::Value << c.local_map_radius_m;
-  out << YAML::Key << "target_refresh_scans" << YAML::Value << c.target_refresh_scans;
-  out << YAML::Key << "output_map_voxel_m" << YAML::Value << c.output_map_voxel_m;
-  out << YAML::Key << "output_map_points_per_voxel" << YAML::Value << c.output_map_points_per_voxel;
-  const ScanMatcherConfig& r = c.registration;
-  out << YAML::Key << "registration" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "max_correspondence_m" << YAML::Value << r.max_correspondence_m;
-  out << YAML::Key << "max_iterations" << YAML::Value << r.max_iterations;
-  out << YAML::Key << "transformation_epsilon" << YAML::Value << r.transformation_epsilon;
-  out << YAML::Key << "k_correspondences" << YAML::Value << r.k_correspondences;
-  out << YAML::EndMap << YAML::EndMap;
+  VisitTop(emit, c);
+  ForEachSection(c, [&](const char* name, auto visit) {
+    out << YAML::Key << name << YAML::Value << YAML::BeginMap;
+    visit(emit);
+    out << YAML::EndMap;
+  });
+  out << YAML::EndMap;
 }
 
 }  // namespace rotolidar

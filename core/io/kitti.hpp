@@ -1,2 +1,144 @@
 #pragma once
-// Placeholder: being written.
+// The KITTI odometry format (Geiger et al., CVPR 2012; the odometry devkit's readme), read and written bit-exactly:
+//
+//   <dataset>/sequences/<NN>/velodyne/%06d.bin  frame k: float32 little-endian x y z reflectance per point, in the
+//                                               Velodyne frame of that frame [m], reflectance in [0, 1]
+//   <dataset>/sequences/<NN>/times.txt          one time [s] a line; line k = frame k
+//   <dataset>/sequences/<NN>/calib.txt          "P0: 12 numbers" .. "P3:" (3x4 projection matrices [px], row-major)
+//                                               and "Tr: 12 numbers" = T_cam0_velo (row-major [R | t], metres)
+//   <dataset>/poses/<NN>.txt                    line k: 12 numbers, row-major [R | t] of T_cam0(0)_cam0(k): the
+//                                               left camera of frame k in the left camera of frame 0
+//
+// Files are parsed strictly: every error names the file and the line (text) or the byte offset (bins) and the
+// field. Numbers are written in the shortest form that reads back to the identical double (std::to_chars), so a
+// write -> read round trip reproduces every value bit for bit. Readers leave their output untouched on failure.
+//
+// KittiScanPoints() turns one HDL-64E bin into the estimator's ScanPoints (rings from the bin's point order; see
+// its comment and docs/kitti.md). Nothing here throws or keeps state; all functions are thread-safe.
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/preprocess/filters.hpp"
+#include "core/types/geometry.hpp"
+#include "core/types/time.hpp"
+#include "core/util/log.hpp"
+
+namespace rotolidar {
+
+/// One point of a velodyne .bin (16 bytes on disk).
+struct KittiPoint {
+  float x_m = 0.f, y_m = 0.f, z_m = 0.f;  ///< Velodyne frame of the frame [m]
+  float reflectance = 0.f;                ///< [0, 1] in KITTI's bins
+};
+
+/// Reads a whole .bin. Fails (naming the file) when it cannot be opened or its size is not a multiple of 16 bytes
+/// (the message gives the offset of the trailing partial point). Non-finite values are kept as stored.
+Status ReadKittiBin(const std::string& path, std::vector<KittiPoint>* points);
+/// Writes `points` as a .bin (overwritten). Fails naming the file when it cannot be written.
+Status WriteKittiBin(const std::string& path, const std::vector<KittiPoint>& points);
+
+using Matrix34d = Eigen::Matrix<double, 3, 4>;
+
+/// calib.txt of an odometry sequence.
+struct KittiCalib {
+  /// P0..P3: projection matrices of cameras 0..3 (rectified) [px]; zero until set
+  std::array<Matrix34d, 4> P = {Matrix34d::Zero(), Matrix34d::Zero(), Matrix34d::Zero(), Matrix34d::Zero()};
+  Pose3 T_cam0_velo = Pose3::Identity();  ///< "Tr": Velodyne -> left grey camera (cam0) [m]
+};
+
+/// Reads calib.txt: lines "KEY: 12 numbers" with KEY one of P0 P1 P2 P3 Tr, each exactly once; blank lines are
+/// skipped. Any other key, a missing key, a count other than 12, a non-number or a Tr whose rotation block is not
+/// a rotation (|R^T R - I| > 1e-3) is an error naming file:line and the key.
+Status ReadKittiCalib(const std::string& path, KittiCalib* calib);
+Status WriteKittiCalib(const std::string& path, const KittiCalib& calib);
+
+/// Reads a poses file: one pose a line, 12 numbers (row-major [R | t]), kept exactly as written (no
+/// re-orthonormalisation; a rotation block farther than 1e-3 from a rotation is an error). Empty lines are allowed
+/// only at the end (line k must be frame k). Errors name file:line and the field index.
+Status ReadKittiPoses(const std::string& path, std::vector<Pose3>* poses);
+Status WriteKittiPoses(const std::string& path, const std::vector<Pose3>& poses);
+
+/// Reads times.txt: one finite, non-decreasing time [s] a line (empty lines only at the end).
+Status ReadKittiTimeList(const std::string& path, std::vector<Seconds>* times);
+Status WriteKittiTimeList(const std::string& path, const std::vector<Seconds>& times);
+
+/// KITTI's pose convention from a trajectory of the Velodyne frame: T_cam0(0)_cam0(k) = Tr * T_velo(0)_velo(k) *
+/// Tr^-1 with Tr = T_cam0_velo, and back.
+Pose3 VeloToCam0Pose(const Pose3& T_cam0_velo, const Pose3& T_velo0_velok);
+Pose3 Cam0ToVeloPose(const Pose3& T_cam0_velo, const Pose3& T_cam0_0_cam0_k);
+
+/// Where the files of one sequence are. Empty paths take the defaults named below.
+struct KittiSequencePaths {
+  std::string dir;         ///< the sequence folder: holds velodyne/ (required)
+  std::string calib_path;  ///< default <dir>/calib.txt (required)
+  std::string times_path;  ///< default <dir>/times.txt; when absent: nominal 10 Hz, t_k = 0.1 s * k
+  std::string poses_path;  ///< default <dir>/poses.txt, else <dir>/../../poses/<name of dir>.txt; may be absent
+};
+
+/// An opened sequence: the frame list and the small files (bins are read one by one with ReadKittiBin).
+struct KittiSequence {
+  std::vector<int> frame_ids;           ///< numbers of velodyne/%06d.bin, ascending (may have gaps)
+  std::vector<std::string> bin_paths;   ///< same order
+  KittiCalib calib;
+  std::string calib_path;
+  std::vector<Seconds> times;           ///< by frame id (times[id]); size > the largest frame id
+  bool nominal_times = false;           ///< no times file: times[id] = 0.1 s * id
+  std::string times_path;               ///< empty when nominal
+  std::vector<Pose3> poses;             ///< by frame id, KITTI convention (cam0); empty when there is no file
+  std::string poses_path;               ///< empty when none
+};
+
+/// Lists velodyne/*.bin (a .bin whose name is not a frame number is an error; other files are ignored), reads
+/// calib, times and poses.
+/// A times or poses file with fewer lines than the largest frame id + 1 is an error (more lines are fine: the
+/// bins may be a subset of the sequence). An explicitly given file that does not exist is an error.
+Status OpenKittiSequence(const KittiSequencePaths& paths, KittiSequence* sequence);
+
+/// Writes sequence files in the dataset layout: <root>/sequences/<name>/{velodyne/, times.txt, calib.txt} and
+/// <root>/poses/<name>.txt. Create the folders with CreateKittiDatasetFolders first.
+struct KittiDatasetLayout {
+  std::string root;
+  std::string name = "00";
+  std::string SequenceDir() const { return root + "/sequences/" + name; }
+  std::string BinPath(int frame_id) const;  ///< <sequence>/velodyne/%06d.bin
+  std::string TimesPath() const { return SequenceDir() + "/times.txt"; }
+  std::string CalibPath() const { return SequenceDir() + "/calib.txt"; }
+  std::string PosesPath() const { return root + "/poses/" + name + ".txt"; }
+};
+Status CreateKittiDatasetFolders(const KittiDatasetLayout& layout);
+
+// ---------------------------------------------------------------------------------------------------------------
+/// How a bin becomes ScanPoints (docs/kitti.md).
+struct KittiScanConfig {
+  /// A drop of the counter-clockwise azimuth atan2(y, x) in [0, 360) larger than this between consecutive points
+  /// of the bin starts a new scan line (the bins store the HDL-64E's 64 lines one after the other, each sweeping
+  /// 0 -> 360 deg; within a line the azimuth steps back by at most ~7 deg, measured on KITTI 00) [deg].
+  double line_break_deg = 180.0;
+  int expected_lines = 64;       ///< HDL-64E; a bin with another count is reported (KittiScanStats), not rejected
+  double scan_period_s = 0.1;    ///< 10 Hz: per-point t_s = t_frame + period * azimuth / 360 (ordering only) [s]
+  bool Validate(std::string* error) const;
+};
+
+struct KittiScanStats {
+  size_t num_input = 0;
+  size_t num_nonfinite = 0;        ///< dropped
+  size_t num_lines = 0;            ///< scan lines found = rings assigned
+  /// Consecutive lines whose median elevation rises although lines must descend (top beam first): 0 when the
+  /// line split is the HDL-64E's laser order.
+  size_t elevation_inversions = 0;
+  std::vector<float> line_median_elevation_deg;  ///< by line, in stored order (top first)
+};
+
+/// Converts one bin into ScanPoints of the frame at t_frame_s. p_base = the point (base = Velodyne frame);
+/// range_m = |p|; azimuth_deg = atan2(y, x) in [0, 360), counter-clockwise from +x: the HDL-64E's sweep direction,
+/// so it grows with firing time as LidarPoint::azimuth_deg does; intensity = 255 * reflectance; t_s as in
+/// KittiScanConfig; ring = (lines - 1 - line index), so ring 0 is the lowest beam as for LidarPoint::ring.
+/// Non-finite points are dropped. Fails only when more than 256 lines are found (the bin is not stored ring by
+/// ring) or the config is invalid; *stats may be null.
+Status KittiScanPoints(const std::vector<KittiPoint>& bin, Seconds t_frame_s, const KittiScanConfig& config,
+                       std::vector<ScanPoint>* points, KittiScanStats* stats = nullptr);
+
+}  // namespace rotolidar

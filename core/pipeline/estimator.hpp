@@ -1,43 +1,100 @@
 #pragma once
-// The estimator: sensor messages in, a trajectory of T_world_base and a dense map out.
+// The estimator: sensor messages in, a trajectory of T_world_base and a dense map out. The seed's LiDAR-inertial
+// core (LV-SLAM, Sensors 2025, Sec. 3), docs/estimator.md:
+//   rotary transform (encoder) -> deskew (IMU preintegration) -> preprocess -> curvature features
+//   -> feature scan-to-map (degeneracy-aware) -> sliding-window LiDAR-IMU fusion -> global voxel map
 //
 // Feed() every message in time order (LiDAR packets by capture time). Each completed VLP-16 revolution is one
-// scan; Process() runs the pipeline on every scan whose encoder coverage has arrived:
-//   rotary transform (encoder) -> deskew (carrier motion) -> preprocess -> register to the local map -> map
-// This is the M1-1 core (GICP scan-to-map, constant-velocity deskew); issue M1-5 replaces the front and back end
-// with the seed's features, Ceres registration and IMU fusion, behind this same interface.
+// scan; Process() runs the pipeline on every scan whose encoder (and, once IMU samples arrive, IMU) coverage has
+// arrived. ProcessDeskewedScan() is the entry for clouds that are already motion-compensated (KITTI).
 //
-// The world frame is the base frame at the first scan's start time.
+// The world frame is the base frame at the first scan's start time (not levelled: the sliding window carries
+// gravity expressed in this frame, estimated at IMU initialisation). Thread safety: none (one owner).
+// Failure: a malformed packet is counted and reported by Feed; a scan whose registration fails still gets a pose
+// (IMU prediction, or constant velocity without IMU) and reports registration.converged = false.
 #include <deque>
 #include <memory>
 #include <optional>
 #include <vector>
 
-#include "core/io/vlp16.hpp"
+#include "core/deskew/deskew.hpp"
 #include "core/io/scan_splitter.hpp"
+#include "core/io/vlp16.hpp"
 #include "core/pipeline/estimator_config.hpp"
 #include "core/pipeline/rotary.hpp"
-#include "core/pipeline/scan_matcher.hpp"
 #include "core/pipeline/voxel_map.hpp"
 #include "core/types/trajectory.hpp"
 
 namespace rotolidar {
 
+/// Wall time of each pipeline stage for one scan [ms].
+struct ScanTimings {
+  double deskew_ms = 0.0;      ///< rotary transform + motion compensation
+  double preprocess_ms = 0.0;  ///< range gate, SOR, voxel
+  double features_ms = 0.0;    ///< curvature features
+  double register_ms = 0.0;    ///< scan-to-map
+  double fuse_ms = 0.0;        ///< IMU initialisation / sliding window
+  double map_ms = 0.0;         ///< local feature map + global voxel map
+  double total_ms = 0.0;       ///< the whole ProcessScan
+};
+
+/// Feature counts of one scan (sizes of the FeatureSet clouds).
+struct FeatureCounts {
+  size_t edge = 0, planar = 0, less_sharp = 0, less_flat = 0;
+};
+
+/// Scan-to-map outcome (ScanToMapResult, without the matrices).
+struct RegistrationSummary {
+  bool attempted = false;  ///< false for the first scan (it defines the map) or too few features
+  bool converged = false;
+  bool remapped = false;   ///< degenerate: the solve ran again on the well-observed subspace
+  int iterations = 0;      ///< correspondence rebuilds
+  int solver_iterations = 0;
+  int edge_inliers = 0, planar_inliers = 0;
+  double initial_cost = 0.0, final_cost = 0.0;  ///< [m^2]
+  double rmse_m = 0.0;
+  Vector6d hessian_eigenvalues = Vector6d::Zero();  ///< plain eigenvalues of J^T J, ascending [m^0 .. mixed]
+  std::string message;     ///< why it failed; empty on success
+};
+
+/// Degeneracy of the scan's registration (core/registration/degeneracy.hpp).
+struct DegeneracyRecord {
+  bool degenerate = false;
+  Vector6d eigenvalues = Vector6d::Zero();  ///< generalised lambda, ascending (dimensionless)
+  int num_degenerate = 0;                   ///< directions below DegeneracyConfig::min_eigenvalue
+  /// Degenerate directions, unit, tangent [dt (world); dtheta (world)] of T_world_base.
+  std::vector<Vector6d> directions;
+  /// Largest |component| over the degenerate directions, per tangent axis [tx ty tz rx ry rz] (0 when none):
+  /// which world axes the LiDAR did not observe (the IMU holds them).
+  Vector6d axis_weight = Vector6d::Zero();
+};
+
 /// What happened to one scan.
 struct ScanReport {
   Seconds t_start_s = 0.0, t_end_s = 0.0;
   size_t num_points = 0;          ///< decoded points in the revolution
-  size_t num_registered = 0;      ///< points given to registration after filtering
+  size_t num_registered = 0;      ///< points after preprocessing (the feature extractor's input)
   size_t num_rotor_fallback = 0;  ///< points placed with the uniform-rotation model (no encoder bracket)
-  RegistrationResult registration;
-  double process_time_ms = 0.0;   ///< wall time of Process for this scan [ms]
+  size_t num_motion_extrapolated = 0;  ///< points outside the motion table's span (held at its end)
+  FeatureCounts features;
+  RegistrationSummary registration;
+  DegeneracyRecord degeneracy;
+  bool imu_initialized = false;   ///< the sliding window ran for this scan
+  bool imu_deskew = false;        ///< carrier motion came from the IMU (false: constant velocity / none)
+  ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
+  Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< base... imu origin velocity (window), world [m/s]
+  /// Only with EstimatorConfig::keep_deskewed: the decoded points (lidar frame, with t_s) and, same size and
+  /// order, each point deskewed into the base frame at t_start_s (NaN where it was not deskewed).
+  std::vector<LidarPoint> deskew_source;
+  std::vector<Eigen::Vector3f> deskewed_base;
 };
 
 class Estimator {
  public:
   /// `calib` must be valid; `config` must Validate (both ROTOLIDAR_CHECKed).
   Estimator(const RigCalib& calib, const EstimatorConfig& config);
+  ~Estimator();
 
   void Feed(const EncoderSample& sample);
   void Feed(const ImuSample& sample);
@@ -49,34 +106,57 @@ class Estimator {
   /// End of data: flushes the partial last revolution and processes everything left.
   std::vector<ScanReport> Finish();
 
+  /// Points already in the base frame at t_s, motion-compensated; skips rotary transform and deskew.
+  /// LiDAR-only (no IMU factor) when no IMU samples were fed. Rings may number up to 256 (KITTI: 64); range_m
+  /// must be the point's sensor range (the range gate uses it). Scans must come in time order.
+  ScanReport ProcessDeskewedScan(Seconds t_s, std::vector<ScanPoint> points);
+
   const Trajectory& trajectory() const { return trajectory_; }  ///< T_world_base at each scan start
   const VoxelMap& map() const { return dense_map_; }            ///< dense map of deskewed points [world]
   size_t bad_packets() const { return bad_packets_; }
+  bool imu_initialized() const;
 
  private:
+  struct Prediction;
+
   ScanReport ProcessScan(const LidarScan& scan);
-  std::vector<Eigen::Vector3d> DeskewToScanStart(const LidarScan& scan, const std::vector<Eigen::Vector3d>& p_base) const;
-  std::vector<Eigen::Vector3d> Preprocess(const std::vector<Eigen::Vector3d>& p_base) const;
-  Pose3 PredictPose(Seconds t_s) const;
-  void UpdateMap(const Pose3& T_world_base, const std::vector<Eigen::Vector3d>& p_base);
-  /// R_base(t0)_base(t1) from integrated gyro samples; nullopt when the IMU buffer does not cover [t0, t1].
-  std::optional<Eigen::Matrix3d> GyroRotation(Seconds t0_s, Seconds t1_s) const;
-  /// R_base(t0)_base(t) at t0 and at each IMU sample in (t0, t1]; empty when the IMU does not cover [t0, t1].
-  std::vector<std::pair<Seconds, Eigen::Matrix3d>> GyroRotations(Seconds t0_s, Seconds t1_s) const;
+  /// The shared back half: preprocess -> features -> register -> fuse -> map.
+  void ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const Prediction& prediction, ScanReport* report);
+  std::vector<ScanPoint> Deskew(const LidarScan& scan, const Prediction& prediction, ScanReport* report);
+  /// Preprocess + features; keeps the preprocessed points in preprocessed_ (the dense map's input).
+  FeatureSet ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report);
+  /// Scan-to-map from the guess; *information_base = the LiDAR factor's information (zero: no usable result).
+  Pose3 Register(const FeatureSet& features, const Pose3& T_world_base_guess, ScanReport* report,
+                 Matrix6d* information_base);
+  /// LiDAR pose + IMU in the sliding window (or LiDAR-only before initialisation / without IMU).
+  Pose3 Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix6d& information_base,
+             const Prediction& prediction, ScanReport* report);
+  void UpdateMap(const FeatureSet& features, const Pose3& T_world_base, ScanReport* report);
+
+  /// The motion prior for a scan spanning [t0_s, t1_s].
+  Prediction Predict(Seconds t0_s, Seconds t1_s) const;
+  Prediction PredictFromWindow(Seconds t0_s, Seconds t1_s) const;
+  Prediction PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const;
+  void TryInitializeImu();
+  bool StartWindow(const Eigen::Vector3d& gravity_world_mps2, const NavState& state);
+  void DropOldData(Seconds t_s);
 
   RigCalib calib_;
   EstimatorConfig config_;
   Vlp16Decoder decoder_;
   RevolutionSplitter splitter_;
   RotorAngleInterpolator rotor_;
-  std::deque<ImuSample> imu_;
+  std::vector<ImuSample> imu_;  ///< time-ordered; trimmed as scans are processed
   std::deque<LidarScan> pending_scans_;
   std::vector<LidarPoint> packet_points_;
-  ScanMatcher matcher_;
-  VoxelMap local_map_;
+  LocalMap local_map_;
   VoxelMap dense_map_;
+  std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;
-  int scans_since_target_ = 0;
+  std::vector<Pose3> init_poses_imu_;      ///< T_world_imu of the LiDAR-only scans before IMU initialisation
+  std::vector<Seconds> init_times_s_;
+  std::vector<ScanPoint> preprocessed_;    ///< the current scan's preprocessed points (base at scan start)
+  int scans_since_keyframe_ = 0;
   size_t bad_packets_ = 0;
 };
 

@@ -1,5 +1,7 @@
 #include "core/pipeline/estimator_config.hpp"
 
+#include <cmath>
+
 namespace rotolidar {
 
 bool EstimatorConfig::Validate(std::string* error) const {
@@ -7,16 +9,22 @@ bool EstimatorConfig::Validate(std::string* error) const {
     if (error) *error = m;
     return false;
   };
-  if (!(min_range_m >= 0 && max_range_m > min_range_m)) return fail("need 0 <= min_range_m < max_range_m");
-  if (!(scan_voxel_m > 0)) return fail("scan_voxel_m must be > 0");
   if (!(cut_azimuth_deg >= 0 && cut_azimuth_deg < 360)) return fail("cut_azimuth_deg must be in [0, 360)");
-  if (!(local_map_voxel_m > 0) || local_map_points_per_voxel < 1)
-    return fail("local_map_voxel_m must be > 0 and local_map_points_per_voxel >= 1");
-  if (!(local_map_radius_m > max_range_m * 0.25)) return fail("local_map_radius_m must exceed max_range_m / 4");
-  if (target_refresh_scans < 1) return fail("target_refresh_scans must be >= 1");
+  if (!preprocess.Validate(error) || !features.Validate(error) || !registration.Validate(error) ||
+      !local_map.Validate(error) || !window.Validate(error) || !imu_init.Validate(error))
+    return false;
+  if (!(lidar_point_sigma_m > 0) || !std::isfinite(lidar_point_sigma_m))
+    return fail("lidar_point_sigma_m must be > 0");
+  if (keyframe_every_scans < 1) return fail("keyframe_every_scans must be >= 1");
+  if (imu_init_scans < 3) return fail("imu_init_scans must be >= 3");
+  if (imu_init_scans < imu_init.moving_min_poses)
+    return fail("imu_init_scans must be >= imu_init.moving_min_poses");
+  if (!(unconverged_information_scale >= 0 && unconverged_information_scale <= 1))
+    return fail("unconverged_information_scale must be in [0, 1]");
   if (!(output_map_voxel_m > 0) || output_map_points_per_voxel < 1)
     return fail("output_map_voxel_m must be > 0 and output_map_points_per_voxel >= 1");
-  return registration.Validate(error);
+  if (!(output_map_max_range_m > 0)) return fail("output_map_max_range_m must be > 0");
+  return true;
 }
 
 }  // namespace rotolidar

@@ -1,30 +1,53 @@
 #pragma once
-// Configuration of the estimator (plain structs, defaults in-class, units in comments).
+// Configuration of the estimator (plain structs, defaults in-class, units in comments): one sub-config per
+// pipeline stage (each module's own struct) plus the estimator's glue parameters. docs/estimator.md.
 // YAML I/O lives at the edge: core/io/config_yaml.hpp.
 #include <string>
 
-#include "core/pipeline/scan_matcher.hpp"
+#include "core/backend/imu_init.hpp"
+#include "core/backend/sliding_window.hpp"
+#include "core/features/curvature_features.hpp"
+#include "core/preprocess/filters.hpp"
+#include "core/registration/local_map.hpp"
+#include "core/registration/scan_to_map.hpp"
 
 namespace rotolidar {
 
 struct EstimatorConfig {
-  // Preprocessing
-  double min_range_m = 0.8;          ///< drop returns closer than this (rig body, operator) [m]
-  double max_range_m = 60.0;         ///< drop returns farther than this [m]
-  double scan_voxel_m = 0.15;        ///< registration source downsampling [m]
-  double cut_azimuth_deg = 0.0;      ///< VLP-16 head azimuth where one revolution ends and the next begins [deg]
-  // Local map (registration target)
-  double local_map_voxel_m = 0.2;    ///< [m]
-  int local_map_points_per_voxel = 8;
-  double local_map_radius_m = 40.0;  ///< voxels farther than this from the rig are dropped [m]
-  int target_refresh_scans = 5;      ///< rebuild the registration target at least every N scans
-  // Dense output map
+  double cut_azimuth_deg = 0.0;  ///< VLP-16 head azimuth where one revolution ends and the next begins [deg]
+
+  PreprocessConfig preprocess;   ///< range gate, SOR, optional voxel (core/preprocess/filters.hpp)
+  FeatureConfig features;        ///< curvature features (core/features/curvature_features.hpp)
+  ScanToMapConfig registration;  ///< feature scan-to-map with degeneracy remapping
+  LocalMapConfig local_map;      ///< keyframe feature map (registration target)
+  /// A rotary LiDAR sees new directions every scan even when the carrier stands still, so besides the local
+  /// map's distance/angle rule a scan becomes a keyframe at least every this many scans.
+  int keyframe_every_scans = 2;
+  SlidingWindowConfig window;    ///< LiDAR-inertial sliding window (its gravity is set at IMU initialisation)
+  ImuInitConfig imu_init;        ///< static / moving IMU initialisation
+
+  /// Use the IMU when samples are fed (false: LiDAR-only with gyro-free constant-velocity deskew; an ablation).
+  bool use_imu = true;
+  /// Per-point residual sigma that turns the registration Hessian into the LiDAR factor's information [m]
+  /// (InformationFromRegistration). It absorbs the correlation between points: larger = trust the scan less.
+  double lidar_point_sigma_m = 0.05;
+  /// Scans of LiDAR-only odometry collected before the IMU is initialised (the moving start needs
+  /// imu_init.moving_min_poses of them; the static start uses the IMU's first imu_init.static_window_s).
+  int imu_init_scans = 10;
+  /// A scan whose registration did not converge still gives a LiDAR factor, with information scaled by this
+  /// (0 = IMU-only for that scan).
+  double unconverged_information_scale = 0.0;
+
+  // Dense output map (the deskewed points, world frame)
   double output_map_voxel_m = 0.05;  ///< [m]
   int output_map_points_per_voxel = 1;
-  // Registration
-  ScanMatcherConfig registration;
+  double output_map_max_range_m = 40.0;  ///< points farther from the lidar are not added to the output map [m]
 
-  bool Validate(std::string* error) const;
+  /// Keep each scan's decoded points and their deskewed positions in the ScanReport (deskew evaluation; memory
+  /// grows with the run: ~30 k points x 44 B per scan).
+  bool keep_deskewed = false;
+
+  bool Validate(std::string* error) const;  ///< false with the offending field named in *error
 };
 
 }  // namespace rotolidar

@@ -68,6 +68,132 @@ std::vector<uint8_t> RangeNormalizedSorKeep(const pcl::PointCloud<pcl::PointXYZ>
   return keep;
 }
 
+/// One ring in firing order (ties: input order), positions as contiguous arrays for the distance loops.
+struct RingCloud {
+  std::vector<uint32_t> index;  ///< input indices
+  std::vector<float> x, y, z;
+  std::vector<double> t_s;
+};
+
+/// The scan's rings. Decoded scans arrive in firing order, so the sort is usually skipped.
+std::vector<RingCloud> SplitRings(const std::vector<ScanPoint>& points) {
+  std::vector<RingCloud> rings;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (points[i].ring >= rings.size()) rings.resize(points[i].ring + 1u);
+    rings[points[i].ring].index.push_back(static_cast<uint32_t>(i));
+  }
+  const auto earlier = [&](uint32_t a, uint32_t b) { return points[a].t_s < points[b].t_s; };
+  for (RingCloud& ring : rings) {
+    if (!std::is_sorted(ring.index.begin(), ring.index.end(), earlier))
+      std::stable_sort(ring.index.begin(), ring.index.end(), earlier);
+    for (const uint32_t i : ring.index) {
+      ring.x.push_back(points[i].p_base.x()), ring.y.push_back(points[i].p_base.y());
+      ring.z.push_back(points[i].p_base.z()), ring.t_s.push_back(points[i].t_s);
+    }
+  }
+  return rings;
+}
+
+/// First of 2 * half + 1 positions centred on `centre` where possible, shifted inside [0, n).
+int WindowStart(int centre, int half, int n) { return std::max(0, std::min(centre - half, n - 1 - 2 * half)); }
+
+/// For each position of `from`, the position of `to` fired closest in time (both in time order: one merge pass).
+std::vector<int> ClosestInTime(const RingCloud& from, const RingCloud& to) {
+  std::vector<int> closest(from.t_s.size());
+  std::size_t c = 0;
+  for (std::size_t j = 0; j < from.t_s.size(); ++j) {
+    while (c + 1 < to.t_s.size() && std::abs(to.t_s[c + 1] - from.t_s[j]) <= std::abs(to.t_s[c] - from.t_s[j])) ++c;
+    closest[j] = static_cast<int>(c);
+  }
+  return closest;
+}
+
+/// The K smallest of a stream of values, kept sorted: on each new value v, slot i (slot 0 = -inf, unused slots
+/// +inf) becomes min(slot i, max(slot i - 1, v)), a branch-free update over a fixed width (near-range neighbour
+/// distances are dominated by range noise, so their order is random and a branching insertion mispredicts; this
+/// costs half of nth_element per point). Holds K <= kSlots.
+template <int kSlots>
+class KSmallest {
+ public:
+  explicit KSmallest(int k) : k_(k) { ROTOLIDAR_CHECK(k >= 1 && k <= kSlots, "k = " << k); }
+  void Clear() {
+    buf_.fill(std::numeric_limits<float>::infinity());
+    buf_[0] = -std::numeric_limits<float>::infinity();
+    n_ = 0;
+  }
+  void Add(float v) {
+    ++n_;
+    if (!(v < buf_[k_])) return;  // not among the K smallest so far (most far candidates)
+    std::array<float, kSlots> next;
+    const float* prev = buf_.data();  // prev[i] = slot i, cur[i] = slot i + 1
+    const float* cur = buf_.data() + 1;
+    for (int i = 0; i < kSlots; ++i) next[i] = std::min(cur[i], std::max(prev[i], v));
+    std::copy(next.begin(), next.end(), buf_.begin() + 1);
+  }
+  /// Mean of the square roots of the K smallest (of all values when fewer came; NaN when none).
+  float MeanSqrt() const {
+    const int use = std::min(n_, k_);
+    float sum = 0.f;
+    for (int i = 1; i <= use; ++i) sum += std::sqrt(buf_[i]);
+    return use ? sum / static_cast<float>(use) : std::numeric_limits<float>::quiet_NaN();
+  }
+
+ private:
+  int k_;
+  int n_ = 0;
+  std::array<float, kSlots + 1> buf_{};  ///< slot 0 = -inf, then the kept values ascending, +inf where unused
+};
+
+/// d_i of the ring neighbourhood (SorNeighbourhood) for every point: the mean distance to its K nearest
+/// candidates, NaN when it has none. Indexed like `points`. kSlots >= k.
+template <int kSlots>
+std::vector<float> RingNeighbourDistances(const std::vector<ScanPoint>& points, int k, const SorNeighbourhood& hood) {
+  const std::vector<RingCloud> rings = SplitRings(points);
+  const int n_rings = static_cast<int>(rings.size());
+  std::vector<float> mean_dist(points.size(), std::numeric_limits<float>::quiet_NaN());
+  KSmallest<kSlots> best(k);
+  for (int r = 0; r < n_rings; ++r) {
+    const RingCloud& ring = rings[r];
+    const int n = static_cast<int>(ring.index.size());
+    std::vector<std::pair<const RingCloud*, std::vector<int>>> others;  // adjacent rings and their closest columns
+    for (int rr = std::max(0, r - hood.adjacent_rings); rr <= std::min(n_rings - 1, r + hood.adjacent_rings); ++rr)
+      if (rr != r && !rings[rr].index.empty()) others.emplace_back(&rings[rr], ClosestInTime(ring, rings[rr]));
+    for (int j = 0; j < n; ++j) {
+      const float px = ring.x[j], py = ring.y[j], pz = ring.z[j];
+      const auto sq = [&](const RingCloud& o, int q) {
+        const float dx = o.x[q] - px, dy = o.y[q] - py, dz = o.z[q] - pz;
+        return dx * dx + dy * dy + dz * dz;
+      };
+      best.Clear();
+      const int first = WindowStart(j, hood.ring_window, n), last = std::min(n - 1, first + 2 * hood.ring_window);
+      for (int s = 1; j - s >= first || j + s <= last; ++s) {  // nearest firings first
+        if (j - s >= first) best.Add(sq(ring, j - s));
+        if (j + s <= last) best.Add(sq(ring, j + s));
+      }
+      for (const auto& [other, closest] : others) {
+        const int m = static_cast<int>(other->index.size()), c = closest[j];
+        const int lo = WindowStart(c, hood.adjacent_window, m), hi = std::min(m - 1, lo + 2 * hood.adjacent_window);
+        for (int q = lo; q <= hi; ++q) best.Add(sq(*other, q));
+      }
+      mean_dist[ring.index[j]] = best.MeanSqrt();
+    }
+  }
+  return mean_dist;
+}
+
+/// PCL's rule on per-point statistics (NaN = none: kept, outside mu and sigma): removes stat > mu + std_mul * sigma
+/// (sample sigma). Fewer than 2 statistics: no spread, everything kept.
+std::vector<uint8_t> KeepBelowThreshold(const std::vector<double>& stat, double std_mul) {
+  double sum = 0.0, sq_sum = 0.0, n = 0.0;
+  for (const double s : stat)
+    if (!std::isnan(s)) sum += s, sq_sum += s * s, n += 1.0;
+  std::vector<uint8_t> keep(stat.size(), 1);
+  if (n < 2.0) return keep;
+  const double mean = sum / n, stddev = std::sqrt(std::max(0.0, (sq_sum - sum * sum / n) / (n - 1.0)));
+  for (std::size_t i = 0; i < stat.size(); ++i) keep[i] = !(stat[i] > mean + std_mul * stddev);
+  return keep;
+}
+
 }  // namespace
 
 std::vector<ScanPoint> MakeScanPoints(const LidarScan& scan, const std::vector<Eigen::Vector3d>& p_base_start) {
@@ -100,8 +226,16 @@ bool PreprocessConfig::Validate(std::string* error) const {
   if (!(max_range_m > min_range_m) || !std::isfinite(max_range_m))
     return fail("max_range_m", "finite and > min_range_m", max_range_m);
   if (sor_k < 1) return fail("sor_k", ">= 1", sor_k);
+  if (sor_ring_neighbours && sor_k > kMaxRingSorK)
+    return fail("sor_k", "<= " + std::to_string(kMaxRingSorK) + " with sor_ring_neighbours", sor_k);
   if (!(sor_std_mul > 0.0) || !std::isfinite(sor_std_mul)) return fail("sor_std_mul", "finite and > 0", sor_std_mul);
   if (!(voxel_m > 0.0) || !std::isfinite(voxel_m)) return fail("voxel_m", "finite and > 0", voxel_m);
+  const SorNeighbourhood& h = sor_neighbourhood;
+  if (h.ring_window < 0) return fail("sor_neighbourhood.ring_window", ">= 0", h.ring_window);
+  if (h.adjacent_rings < 0) return fail("sor_neighbourhood.adjacent_rings", ">= 0", h.adjacent_rings);
+  if (h.adjacent_window < 0) return fail("sor_neighbourhood.adjacent_window", ">= 0", h.adjacent_window);
+  if (h.ring_window == 0 && h.adjacent_rings == 0)
+    return fail("sor_neighbourhood.ring_window", "> 0 when adjacent_rings is 0", h.ring_window);
   return true;
 }
 
@@ -113,7 +247,10 @@ PreprocessResult Preprocess(const std::vector<ScanPoint>& points, const Preproce
   result.points = points;
   result.removed_nonfinite = RemoveNonFinite(&result.points);
   if (config.enable_range) result.removed_range = RangeFilter(config.min_range_m, config.max_range_m, &result.points);
-  if (config.enable_sor)
+  if (config.enable_sor && config.sor_ring_neighbours)
+    result.removed_sor = RingStatisticalOutlierFilter(config.sor_k, config.sor_std_mul, config.sor_range_normalized,
+                                                      config.sor_neighbourhood, &result.points);
+  else if (config.enable_sor)
     result.removed_sor =
         StatisticalOutlierFilter(config.sor_k, config.sor_std_mul, config.sor_range_normalized, &result.points);
   if (config.enable_voxel) result.removed_voxel = VoxelFilter(config.voxel_m, &result.points);
@@ -147,38 +284,68 @@ std::size_t StatisticalOutlierFilter(int k, double std_mul, bool range_normalize
   return Compact(keep, points);
 }
 
-// A sort on integer voxel coordinates instead of pcl::VoxelGrid: VoxelGrid numbers voxels with a 32-bit index over
-// the cloud's bounding box and, when that overflows (e.g. a rotating rig's 60 m-range scan, a 120 m cube, at
-// 0.05 m: 1.4e10 voxels), logs a warning and returns the input unfiltered; and it outputs centroids, which carry no
-// ring or firing time.
+std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_normalized, const SorNeighbourhood& hood,
+                                         std::vector<ScanPoint>* points) {
+  ROTOLIDAR_CHECK(k >= 1 && k <= kMaxRingSorK, "k = " << k);
+  ROTOLIDAR_CHECK(hood.ring_window >= 0 && hood.adjacent_rings >= 0 && hood.adjacent_window >= 0,
+                  "negative SOR neighbourhood");
+  const std::vector<float> mean_dist = k <= 8    ? RingNeighbourDistances<8>(*points, k, hood)
+                                       : k <= 16 ? RingNeighbourDistances<16>(*points, k, hood)
+                                                 : RingNeighbourDistances<kMaxRingSorK>(*points, k, hood);
+  std::vector<double> stat(points->size());
+  std::vector<uint8_t> bad_range(points->size(), 0);
+  for (std::size_t i = 0; i < points->size(); ++i) {
+    const float r = (*points)[i].range_m;
+    bad_range[i] = range_normalized && !(r > 0.f);
+    stat[i] = bad_range[i] ? std::nan("") : double(mean_dist[i]) / (range_normalized ? double(r) : 1.0);
+  }
+  std::vector<uint8_t> keep = KeepBelowThreshold(stat, std_mul);
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = keep[i] && !bad_range[i];
+  return Compact(keep, points);
+}
+
+// A hash table on 64-bit integer voxel coordinates instead of pcl::VoxelGrid: VoxelGrid numbers voxels with a
+// 32-bit index over the cloud's bounding box and, when that overflows (e.g. a rotating rig's 60 m-range scan, a
+// 120 m cube, at 0.05 m: 1.4e10 voxels), logs a warning and returns the input unfiltered; and it outputs centroids,
+// which carry no ring or firing time. Linear time (a sort of the keys cost 3x more per scan).
 std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>& positions, double voxel_m) {
   ROTOLIDAR_CHECK(voxel_m > 0.0 && std::isfinite(voxel_m), "voxel_m = " << voxel_m);
   using Key = std::array<int64_t, 3>;
-  std::vector<std::pair<Key, std::size_t>> keyed;
-  keyed.reserve(positions.size());
+  struct Voxel {
+    Key key;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();  ///< summed in index order
+    std::size_t count = 0, best = 0;
+    double best_sq = std::numeric_limits<double>::infinity();
+  };
+  std::size_t capacity = 16;
+  while (capacity < 2 * positions.size()) capacity *= 2;
+  std::vector<int64_t> table(capacity, -1);  // open addressing: slot -> voxel number
+  std::vector<Voxel> voxels;
+  std::vector<int64_t> voxel_of(positions.size(), -1);
   const double inv = 1.0 / voxel_m;
   for (std::size_t i = 0; i < positions.size(); ++i) {
     const Eigen::Vector3f& p = positions[i];
     if (!p.allFinite()) continue;
-    keyed.push_back({Key{static_cast<int64_t>(std::floor(p.x() * inv)), static_cast<int64_t>(std::floor(p.y() * inv)),
-                         static_cast<int64_t>(std::floor(p.z() * inv))},
-                     i});
+    const Key key{static_cast<int64_t>(std::floor(p.x() * inv)), static_cast<int64_t>(std::floor(p.y() * inv)),
+                  static_cast<int64_t>(std::floor(p.z() * inv))};
+    uint64_t h = static_cast<uint64_t>(key[0]) * 0x9E3779B97F4A7C15ull ^
+                 static_cast<uint64_t>(key[1]) * 0xC2B2AE3D27D4EB4Full ^ static_cast<uint64_t>(key[2]) * 0x165667B19E3779F9ull;
+    std::size_t slot = (h ^ (h >> 29)) & (capacity - 1);
+    while (table[slot] >= 0 && voxels[table[slot]].key != key) slot = (slot + 1) & (capacity - 1);
+    if (table[slot] < 0) table[slot] = static_cast<int64_t>(voxels.size()), voxels.push_back(Voxel{key});
+    Voxel& v = voxels[table[slot]];
+    v.sum += p.cast<double>(), ++v.count;
+    voxel_of[i] = table[slot];
   }
-  std::sort(keyed.begin(), keyed.end());  // by voxel, then by index
+  for (std::size_t i = 0; i < positions.size(); ++i) {  // nearest to the centroid, ties to the lower index
+    if (voxel_of[i] < 0) continue;
+    Voxel& v = voxels[voxel_of[i]];
+    const double sq = (positions[i].cast<double>() - v.sum / static_cast<double>(v.count)).squaredNorm();
+    if (sq < v.best_sq) v.best_sq = sq, v.best = i;
+  }
   std::vector<std::size_t> kept;
-  for (std::size_t begin = 0, end = 0; begin < keyed.size(); begin = end) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (end = begin; end < keyed.size() && keyed[end].first == keyed[begin].first; ++end)
-      sum += positions[keyed[end].second].cast<double>();
-    const Eigen::Vector3d centroid = sum / static_cast<double>(end - begin);
-    std::size_t best = keyed[begin].second;
-    double best_sq = std::numeric_limits<double>::infinity();
-    for (auto it = keyed.begin() + begin; it != keyed.begin() + end; ++it) {
-      const double sq = (positions[it->second].cast<double>() - centroid).squaredNorm();
-      if (sq < best_sq) best_sq = sq, best = it->second;  // strict: ties keep the lower index
-    }
-    kept.push_back(best);
-  }
+  kept.reserve(voxels.size());
+  for (const Voxel& v : voxels) kept.push_back(v.best);
   std::sort(kept.begin(), kept.end());
   return kept;
 }

@@ -99,15 +99,16 @@ Status TruthWriter::Open(const std::string& recording_dir) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) return Status::Error(dir_ + ": cannot create directory: " + ec.message());
-  File* files[] = {&base_, &lidar_, &rotor_, &imu_bias_};
-  const char* names[] = {"base.tum", "lidar.tum", "rotor.csv", "imu_bias.csv"};
-  for (int i = 0; i < 4; ++i) {
+  File* files[] = {&base_, &lidar_, &rotor_, &imu_bias_, &cam_};
+  const char* names[] = {"base.tum", "lidar.tum", "rotor.csv", "imu_bias.csv", "cam.tum"};
+  for (int i = 0; i < 5; ++i) {
     files[i]->path = (fs::path(dir_) / names[i]).string();
     files[i]->stream.open(files[i]->path, std::ios::out | std::ios::trunc);
     if (!files[i]->stream) return Status::Error(files[i]->path + ": cannot open for writing");
   }
   base_.stream << "# T_world_base: t_s tx ty tz qx qy qz qw\n";
   lidar_.stream << "# T_world_lidar: t_s tx ty tz qx qy qz qw\n";
+  cam_.stream << "# T_world_cam (camera optical frame, mid-exposure): t_s tx ty tz qx qy qz qw\n";
   rotor_.stream << kRotorHeader << "\n";
   imu_bias_.stream << kImuBiasHeader << "\n";
   open_ = true;
@@ -130,6 +131,11 @@ Status TruthWriter::WriteLidar(const StampedPose& T_world_lidar) {
   return Check(lidar_);
 }
 
+Status TruthWriter::WriteCam(const StampedPose& T_world_cam) {
+  if (open_) WritePoseRow(cam_.stream, T_world_cam);
+  return Check(cam_);
+}
+
 Status TruthWriter::WriteRotor(const RotorAngleSample& s) {
   const double v[2] = {s.t_s, s.theta_rad};
   if (open_) WriteRow(rotor_.stream, v, 2, ',');
@@ -147,7 +153,7 @@ Status TruthWriter::WriteImuBias(const ImuBiasSample& s) {
 Status TruthWriter::Close() {
   if (!open_) return Status::Error("TruthWriter: not open");
   Status first = Status::Ok();
-  for (File* f : {&base_, &lidar_, &rotor_, &imu_bias_}) {
+  for (File* f : {&base_, &lidar_, &rotor_, &imu_bias_, &cam_}) {
     f->stream.flush();
     const bool ok = static_cast<bool>(f->stream);
     f->stream.close();
@@ -168,6 +174,8 @@ Status WriteTruth(const std::string& recording_dir, const TruthLog& log) {
     if (s.ok) s = w.WriteRotor(r);
   for (const auto& b : log.imu_bias)
     if (s.ok) s = w.WriteImuBias(b);
+  for (const auto& p : log.cam)
+    if (s.ok) s = w.WriteCam(p);
   if (!w.is_open()) return s;
   const Status c = w.Close();
   return s.ok ? c : s;
@@ -196,6 +204,7 @@ Status ReadTruth(const std::string& recording_dir, TruthLog* out) {
     s = ReadRows((dir / "imu_bias.csv").string(), ',', 7, kBiasNames, kImuBiasHeader, [out](const double* v) {
       out->imu_bias.push_back({v[0], Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector3d(v[4], v[5], v[6])});
     });
+  if (s.ok && fs::exists(dir / "cam.tum")) s = ReadTum((dir / "cam.tum").string(), &out->cam);
   return s;
 }
 

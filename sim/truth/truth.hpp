@@ -2,6 +2,8 @@
 // Ground truth of a simulated run, written beside the recording in <recording>/truth/ and read only by bench/:
 //   base.tum      TUM lines "t tx ty tz qx qy qz qw" of T_world_base ('#' lines are comments)
 //   lidar.tum     the same for T_world_lidar
+//   cam.tum       the same for T_world_cam (camera optical frame) at each camera frame's time (mid-exposure;
+//                 rolling shutter: the middle row's time); only header lines when the camera is off
 //   rotor.csv     header "t_s,theta_rad"; theta is the true, unwrapped rotor angle [rad]
 //   imu_bias.csv  header "t_s,bgx,bgy,bgz,bax,bay,baz"; true gyro [rad/s] and accel [m/s^2] biases, imu frame
 // Numbers are written in the shortest form that reads back to the identical double (std::to_chars).
@@ -33,6 +35,7 @@ struct ImuBiasSample {
 struct TruthLog {
   Trajectory base;   ///< T_world_base (StampedPose::T_ref_body with ref = world)
   Trajectory lidar;  ///< T_world_lidar
+  Trajectory cam;    ///< T_world_cam at the camera frames' times (empty without camera; optional file)
   std::vector<RotorAngleSample> rotor;
   std::vector<ImuBiasSample> imu_bias;
 };
@@ -49,9 +52,10 @@ class TruthWriter {
   Status Open(const std::string& recording_dir);
   Status WriteBase(const StampedPose& T_world_base);
   Status WriteLidar(const StampedPose& T_world_lidar);
+  Status WriteCam(const StampedPose& T_world_cam);
   Status WriteRotor(const RotorAngleSample& sample);
   Status WriteImuBias(const ImuBiasSample& sample);
-  /// Flushes and closes all four files; an error names the first file that failed.
+  /// Flushes and closes all five files; an error names the first file that failed.
   Status Close();
   bool is_open() const { return open_; }
   const std::string& truth_dir() const { return dir_; }
@@ -64,7 +68,7 @@ class TruthWriter {
   Status Check(File& file);
   bool open_ = false;
   std::string dir_;
-  File base_, lidar_, rotor_, imu_bias_;
+  File base_, lidar_, rotor_, imu_bias_, cam_;
 };
 
 /// Writes a whole TruthLog through TruthWriter.
@@ -72,7 +76,7 @@ Status WriteTruth(const std::string& recording_dir, const TruthLog& log);
 
 /// Reads a TUM file ("t tx ty tz qx qy qz qw", '#' comments and blank lines skipped). Errors name file:line.
 Status ReadTum(const std::string& path, Trajectory* out);
-/// Reads the four files of <recording_dir>/truth/ back. Errors name file:line and the field.
+/// Reads the files of <recording_dir>/truth/ back (cam.tum only when present: older recordings lack it). Errors name file:line and the field.
 Status ReadTruth(const std::string& recording_dir, TruthLog* out);
 
 }  // namespace rotolidar::sim

@@ -1,0 +1,153 @@
+#include "bench/report/run_evaluation.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "bench/eval/alignment.hpp"
+#include "bench/eval/statistics.hpp"
+#include "bench/eval/trajectory_metrics.hpp"
+#include "bench/report/html_report.hpp"
+#include "bench/run/truth_eval.hpp"
+#include "core/io/trajectory_io.hpp"
+#include "sim/sim_config.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+namespace fs = std::filesystem;
+
+double PathLength(const Trajectory& t) {
+  double length = 0.0;
+  for (size_t i = 1; i < t.size(); ++i)
+    length += (t[i].T_ref_body.translation() - t[i - 1].T_ref_body.translation()).norm();
+  return length;
+}
+
+/// Translation RPE over `delta_m` of travelled path (all pairs), or `frames` apart when the path is shorter.
+EvalResult ComputeRpe(const Trajectory& ref, const Trajectory& est, const RunEvaluationOptions& o,
+                      std::string* delta) {
+  EvalResult r;
+  r.unit = "m";
+  r.num_associated = est.size();
+  RpeOptions rpe;
+  rpe.relation = PoseRelation::kTranslation;
+  rpe.all_pairs = true;
+  if (PathLength(ref) >= 1.5 * o.rpe_delta_m) {
+    rpe.delta = o.rpe_delta_m, rpe.delta_unit = DeltaUnit::kMeters;
+    *delta = Fmt("%g m", o.rpe_delta_m);
+  } else {
+    rpe.delta = o.rpe_fallback_frames, rpe.delta_unit = DeltaUnit::kFrames;
+    *delta = std::to_string(o.rpe_fallback_frames) + " frames";
+  }
+  r.title = "RPE w.r.t. translation part (m) for delta = " + *delta + " (all pairs)";
+  r.status = ComputeRpeErrors(ref, est, rpe, &r.errors);
+  r.stats = ComputeStatistics(r.errors);
+  return r;
+}
+
+/// APE, RPE and the aligned trajectories; false with `truth_note` when there is no usable truth.
+Status EvaluateTrajectory(const std::string& recording_dir, const SlamRunResult& slam,
+                          const RunEvaluationOptions& options, RunEvaluation* out) {
+  const std::string truth_path = recording_dir + "/truth/base.tum";
+  if (!fs::exists(truth_path)) {
+    out->truth_note = "no ground truth (" + truth_path + " does not exist, e.g. a real-rig recording)";
+    return Status::Ok();
+  }
+  Trajectory truth_full;
+  if (Status s = ReadTrajectory(truth_path, TrajectoryFormat::kTum, &truth_full); !s) return s;
+  if (Status s = EvaluateAgainstTruth(recording_dir, slam.trajectory, &out->ape); !s) return s;
+  // The same association as EvaluateAgainstTruth: truth interpolated at the estimate's stamps it covers.
+  out->truth = InterpolateTrajectory(truth_full, slam.trajectory);
+  Trajectory est;
+  for (const StampedPose& p : slam.trajectory)
+    if (p.t_s >= truth_full.front().t_s && p.t_s <= truth_full.back().t_s) est.push_back(p);
+  if (est.size() != out->truth.size()) return Status::Error(truth_path + ": truth/estimate association mismatch");
+  out->estimate_aligned = ApplyAlignment(out->ape.alignment, est);
+  out->T_scene_slam = out->ape.alignment.T_ref_est;
+  out->rpe = ComputeRpe(out->truth, est, options, &out->rpe_delta);
+  out->has_truth = true;
+  return Status::Ok();
+}
+
+/// Map metrics of out->map_points (scene frame) against the run's scene; notes instead of errors for what is
+/// missing (no scene, no sim_config.yaml).
+Status EvaluateMap(const std::string& recording_dir, const std::string& scene_name_or_path,
+                   const RunEvaluationOptions& options, RunEvaluation* out) {
+  std::string scene_name = scene_name_or_path;
+  if (scene_name.empty()) {
+    const std::string config_path = recording_dir + "/sim_config.yaml";
+    if (!fs::exists(config_path)) {
+      out->map_note = "no map metrics: the recording has no sim_config.yaml naming its scene";
+      return Status::Ok();
+    }
+    sim::SimConfig config = sim::DefaultSimConfig();
+    if (Status s = sim::LoadSimConfig(config_path, &config); !s) return s;
+    scene_name = config.scene;
+  }
+  sim::Scene scene;
+  if (Status s = sim::LoadScene(sim::ResolveScenePath(scene_name), &scene); !s) {
+    out->map_note = "no map metrics: scene '" + scene_name + "' does not load: " + s.message;
+    return Status::Ok();
+  }
+  out->scene_name = scene.name;
+  MapMetricsConfig config = options.map;
+  config.keep_per_point = true;
+  config.keep_samples = true;
+  if (options.completeness)
+    for (const StampedPose& p : out->truth) config.viewpoints_world.push_back(p.T_ref_body.translation());
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = ComputeMapMetrics(scene, out->map_points, config, &out->map); !s) return s;
+  out->map_config = config;
+  out->map_metrics_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out->has_map_metrics = true;
+  return Status::Ok();
+}
+
+}  // namespace
+
+bool RunEvaluationOptions::Validate(std::string* error) const {
+  if (!(rpe_delta_m > 0) || !std::isfinite(rpe_delta_m)) {
+    *error = "rpe_delta_m must be > 0 and finite";
+    return false;
+  }
+  if (rpe_fallback_frames < 1) {
+    *error = "rpe_fallback_frames must be >= 1";
+    return false;
+  }
+  if (!map.Validate(error)) {
+    *error = "map: " + *error;
+    return false;
+  }
+  return true;
+}
+
+Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,
+                   const std::string& scene_name_or_path, const RunEvaluationOptions& options, RunEvaluation* out) {
+  *out = RunEvaluation{};
+  std::string why;
+  if (!options.Validate(&why)) return Status::Error("run evaluation: " + why);
+  if (Status s = EvaluateTrajectory(recording_dir, slam, options, out); !s) return s;
+  const std::string map_path = slam_dir + "/map.ply";
+  if (!fs::exists(map_path)) {
+    out->map_note = "no map (" + map_path + " does not exist)";
+    return Status::Ok();
+  }
+  if (Status s = LoadMapInSceneFrame(map_path, out->T_scene_slam, &out->map_points); !s) return s;
+  out->map_in_scene_frame = out->has_truth;
+  if (!out->has_truth) {
+    out->map_note = "no map metrics: they need the sim's truth";
+    return Status::Ok();
+  }
+  if (!options.map_metrics) {
+    out->map_note = "map metrics not requested";
+    return Status::Ok();
+  }
+  if (out->map_points.empty()) {
+    out->map_note = "no map metrics: the map is empty";
+    return Status::Ok();
+  }
+  return EvaluateMap(recording_dir, scene_name_or_path, options, out);
+}
+
+}  // namespace rotolidar::bench

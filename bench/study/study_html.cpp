@@ -1,0 +1,85 @@
+// study.html and the writing of a study's outputs (study_report.hpp).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "bench/report/svg_plot.hpp"
+#include "bench/study/study_report.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+/// A CSV line split at commas outside quotes (StudyCsv's own quoting).
+std::vector<std::string> SplitCsv(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == '"' && quoted && i + 1 < line.size() && line[i + 1] == '"') fields.back() += '"', ++i;
+    else if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) fields.emplace_back();
+    else fields.back() += c;
+  }
+  return fields;
+}
+
+const char* kStyle =
+    "body{font-family:sans-serif;margin:1.5em;color:#222}"
+    "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
+    "th{background:#eee;position:sticky;top:0}td:first-child{text-align:left}tr.failed{background:#fdd}"
+    ".figs{display:flex;flex-wrap:wrap;gap:12px}.note{color:#555;font-size:13px}";
+
+/// The table rows of study.csv as HTML (the same numbers, so page and CSV cannot disagree).
+void WriteTable(const StudyResult& result, std::ostringstream& os) {
+  std::istringstream csv(StudyCsv(result));
+  std::string line;
+  std::getline(csv, line);
+  os << "<table><tr>";
+  for (const std::string& h : SplitCsv(line)) os << "<th>" << XmlEscape(h) << "</th>";
+  os << "<th>log</th></tr>\n";
+  for (const StudyPointResult& r : result.points) {
+    std::getline(csv, line);
+    const std::vector<std::string> fields = SplitCsv(line);
+    os << "<tr" << (r.state == PointState::kFailed ? " class=\"failed\"" : "") << ">";
+    const std::string dir = "points/" + r.point.id;
+    os << "<td><a href=\"" << XmlEscape(dir) << "/\">" << XmlEscape(fields[0]) << "</a></td>";
+    for (size_t i = 1; i < fields.size(); ++i) os << "<td>" << XmlEscape(fields[i]) << "</td>";
+    os << "<td><a href=\"" << XmlEscape(dir) << "/log.txt\">log</a>";
+    if (r.state == PointState::kFailed) os << " " << XmlEscape(r.message);
+    os << "</td></tr>\n";
+  }
+  os << "</table>\n";
+}
+
+}  // namespace
+
+std::string StudyHtml(const StudyConfig& config, const StudyResult& result, const std::vector<StudyFigure>& figures) {
+  std::ostringstream os;
+  os << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>study " << XmlEscape(config.name)
+     << "</title><style>" << kStyle << "</style></head><body>\n";
+  os << "<h1>Study: " << XmlEscape(config.name) << "</h1>\n<p class=\"note\">" << result.points.size() << " points ("
+     << result.ran << " run now, " << result.resumed << " finished earlier, " << result.failed << " failed)";
+  if (!config.source_path.empty()) os << "; study file " << XmlEscape(config.source_path);
+  os << ". Table: <a href=\"study.csv\">study.csv</a>. Failed points are left out of the plots; points that "
+        "differ only in seed are averaged (error bars: standard deviation). Metric definitions: docs/studies.md, "
+        "docs/metrics.md.</p>\n<div class=\"figs\">\n";
+  for (const StudyFigure& f : figures) os << "<figure>" << f.svg << "</figure>\n";
+  os << "</div>\n<h2>Points</h2>\n";
+  WriteTable(result, os);
+  os << "</body></html>\n";
+  return os.str();
+}
+
+Status WriteStudyOutputs(const StudyConfig& config, const StudyResult& result, const std::string& out_dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir + "/plots", ec);
+  if (ec) return Status::Error(out_dir + "/plots: cannot create: " + ec.message());
+  if (Status s = WriteFileAtomically(out_dir + "/study.csv", StudyCsv(result)); !s) return s;
+  const std::vector<StudyFigure> figures = StudyFigures(config, result);
+  for (const StudyFigure& f : figures)
+    if (Status s = WriteFileAtomically(out_dir + "/plots/" + f.file_name, f.svg); !s) return s;
+  return WriteFileAtomically(out_dir + "/study.html", StudyHtml(config, result, figures));
+}
+
+}  // namespace rotolidar::bench

@@ -1,0 +1,208 @@
+// The estimator's state side: motion prediction, scan-to-map registration, LiDAR-IMU fusion in the sliding window
+// (with IMU initialisation) and the maps. docs/estimator.md.
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "core/backend/pose_factors.hpp"
+#include "core/pipeline/estimator_internal.hpp"
+
+namespace rotolidar {
+namespace {
+
+Pose3 PoseOf(const NavState& s) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = s.R_world_imu;
+  T.translation() = s.p_world_m;
+  return T;
+}
+
+/// Relative motion a -> b scaled to a fraction s of itself (constant twist; rotation and translation apart).
+Pose3 ScaleMotion(const Pose3& delta, double s) {
+  Pose3 out = Pose3::Identity();
+  out.linear() = ExpSO3(s * LogSO3(delta.linear()));
+  out.translation() = s * delta.translation();
+  return out;
+}
+
+DegeneracyRecord MakeDegeneracyRecord(const DegeneracyInfo& info) {
+  DegeneracyRecord rec;
+  rec.degenerate = info.degenerate;
+  rec.eigenvalues = info.eigenvalues;
+  rec.num_degenerate = int(info.degenerate_directions.size());
+  rec.directions = info.degenerate_directions;
+  for (const Vector6d& d : info.degenerate_directions) rec.axis_weight = rec.axis_weight.cwiseMax(d.cwiseAbs());
+  return rec;
+}
+
+}  // namespace
+
+std::optional<PreintegratedImu> PreintegrateSpan(const std::vector<ImuSample>& imu, Seconds t0_s, Seconds t1_s,
+                                                 const Eigen::Vector3d& bg, const Eigen::Vector3d& ba,
+                                                 const ImuNoise& noise) {
+  if (imu.empty() || !(t1_s > t0_s)) return std::nullopt;
+  PreintegratedImu pre(bg, ba, noise);
+  Seconds t = t0_s;
+  auto step = [&](const ImuSample& a, const ImuSample& b, Seconds until) {
+    const double dt = std::min(until, t1_s) - t;
+    if (dt <= 0) return;
+    if (pre.Integrate(0.5 * (a.gyro_radps + b.gyro_radps), 0.5 * (a.accel_mps2 + b.accel_mps2), dt)) t += dt;
+  };
+  if (imu.front().t_s > t) step(imu.front(), imu.front(), imu.front().t_s);
+  for (size_t i = 0; i + 1 < imu.size() && t < t1_s; ++i)
+    if (imu[i + 1].t_s > t) step(imu[i], imu[i + 1], imu[i + 1].t_s);
+  if (t < t1_s) step(imu.back(), imu.back(), t1_s);
+  if (pre.num_steps() == 0) return std::nullopt;
+  return pre;
+}
+
+Estimator::Prediction Estimator::Predict(Seconds t0_s, Seconds t1_s) const {
+  if (imu_initialized() && !imu_.empty()) return PredictFromWindow(t0_s, t1_s);
+  return PredictConstantVelocity(t0_s, t1_s);
+}
+
+// The window's latest state propagated by the IMU to the scan start; the scan's motion integrated from there
+// with the predicted velocity, gravity and the window's biases.
+Estimator::Prediction Estimator::PredictFromWindow(Seconds t0_s, Seconds t1_s) const {
+  Prediction out;
+  const NavState latest = window_->latest_state();
+  NavState state = latest;
+  if (t0_s > window_->latest_time_s()) {
+    out.imu_since_latest = PreintegrateSpan(imu_, window_->latest_time_s(), t0_s, latest.bias_gyro_radps,
+                                            latest.bias_accel_mps2, calib_.imu);
+    if (out.imu_since_latest) state = window_->PredictFromLatest(*out.imu_since_latest);
+  }
+  out.T_world_base = PoseOf(state) * calib_.T_base_imu.inverse();
+  ImuMotionModel model;
+  model.v_imu_mps = state.R_world_imu.transpose() * state.v_world_mps;
+  model.gravity_imu_mps2 = state.R_world_imu.transpose() * window_->config().gravity_world_mps2;
+  model.bias_gyro_radps = state.bias_gyro_radps;
+  model.bias_accel_mps2 = state.bias_accel_mps2;
+  out.imu_motion = bool(ImuMotionTable(imu_, t0_s, t1_s, model, calib_.T_base_imu, &out.motion));
+  if (!out.imu_motion) out.motion = IdentityTable(t0_s, t1_s);
+  return out;
+}
+
+// Before the IMU is initialised (or without one): constant velocity from the last two poses; where IMU samples
+// cover the span, the rotation comes from the gyro (accelerometer unused: gravity is not known yet).
+Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const {
+  Prediction out;
+  out.motion = IdentityTable(t0_s, t1_s);
+  if (trajectory_.empty()) return out;
+  const StampedPose& b = trajectory_.back();
+  Pose3 delta_per_s = Pose3::Identity();  // motion over one second, in b's frame (constant twist)
+  if (trajectory_.size() >= 2) {
+    const StampedPose& a = trajectory_[trajectory_.size() - 2];
+    if (b.t_s > a.t_s) delta_per_s = ScaleMotion(a.T_ref_body.inverse() * b.T_ref_body, 1.0 / (b.t_s - a.t_s));
+  }
+  out.T_world_base = b.T_ref_body * ScaleMotion(delta_per_s, t0_s - b.t_s);
+  if (t1_s > t0_s) out.motion = ConstantTwistTable(ScaleMotion(delta_per_s, t1_s - t0_s), t0_s, t1_s);
+  if (imu_.empty()) return out;
+  // Velocity of the imu origin in the imu frame, from the base's constant twist.
+  const Pose3& T_bi = calib_.T_base_imu;
+  const Pose3 delta_imu = T_bi.inverse() * ScaleMotion(delta_per_s, 1e-3) * T_bi;  // 1 ms of motion
+  ImuMotionModel model;
+  model.use_accel = false;
+  model.v_imu_mps = delta_imu.translation() / 1e-3;
+  MotionTable to_start;
+  if (t0_s > b.t_s && ImuMotionTable(imu_, b.t_s, t0_s, model, T_bi, &to_start))
+    out.T_world_base = b.T_ref_body * to_start.T_start_t.back();
+  MotionTable scan;
+  if (ImuMotionTable(imu_, t0_s, t1_s, model, T_bi, &scan)) out.motion = std::move(scan);
+  return out;
+}
+
+// Feature scan-to-map against the local map (degeneracy-aware); the first scan defines the map.
+Pose3 Estimator::Register(const FeatureSet& features, const Pose3& T_world_base_guess, ScanReport* report,
+                          Matrix6d* information_base) {
+  const Stopwatch watch;
+  information_base->setZero();
+  RegistrationSummary& s = report->registration;
+  if (local_map_.empty()) {
+    s.message = "first scan: defines the map";
+    report->timings.register_ms = watch.ms();
+    return T_world_base_guess;
+  }
+  s.attempted = true;
+  const ScanToMapResult r = rotolidar::Register(features, local_map_, T_world_base_guess, config_.registration);
+  s.converged = r.converged;
+  s.remapped = r.remapped;
+  s.iterations = r.iterations;
+  s.solver_iterations = r.solver_iterations;
+  s.edge_inliers = r.edge_inliers;
+  s.planar_inliers = r.planar_inliers;
+  s.initial_cost = r.initial_cost;
+  s.final_cost = r.final_cost;
+  s.rmse_m = r.rmse_m;
+  s.message = r.message;
+  s.hessian_eigenvalues = Eigen::SelfAdjointEigenSolver<Matrix6d>(r.hessian, Eigen::EigenvaluesOnly).eigenvalues();
+  report->degeneracy = MakeDegeneracyRecord(r.degeneracy);
+  // Usable: converged, or ran out of rebuilds with enough matches (then down-weighted).
+  const bool enough = r.edge_inliers + r.planar_inliers >= config_.registration.min_correspondences;
+  const double scale = r.converged ? 1.0 : (enough ? config_.unconverged_information_scale : 0.0);
+  Pose3 T = T_world_base_guess;
+  if (scale > 0 && r.T_map_scan.matrix().allFinite()) {
+    *information_base =
+        scale * InformationFromRegistration(r.hessian, config_.lidar_point_sigma_m, r.degeneracy.projection);
+    T = r.T_map_scan;
+  }
+  report->timings.register_ms = watch.ms();
+  return T;
+}
+
+// LiDAR-only until the IMU is initialised (the poses feed the moving initialisation); then one window state per
+// scan with its IMU factor and the LiDAR factor (no information along degenerate directions).
+Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix6d& information_base,
+                      const Prediction& prediction, ScanReport* report) {
+  const Stopwatch watch;
+  const Pose3& T_bi = calib_.T_base_imu;
+  Pose3 T_world_base = T_world_base_lidar;
+  if (imu_initialized() && prediction.imu_since_latest) {
+    std::optional<LidarPoseMeasurement> lidar;
+    if (information_base.norm() > 0) lidar = LidarMeasurementInImuFrame(T_world_base_lidar, information_base, T_bi);
+    if (Status st = window_->AddState(t_s, *prediction.imu_since_latest, lidar); st) {
+      window_->Optimize();
+      const NavState x = window_->latest_state();
+      T_world_base = PoseOf(x) * T_bi.inverse();
+      report->v_world_mps = x.v_world_mps;
+    } else {
+      LOG_WARN("estimator: window state at " << t_s << " s rejected: " << st.message);
+    }
+  } else if (!imu_initialized() && !imu_.empty()) {
+    init_poses_imu_.push_back(T_world_base * T_bi);
+    init_times_s_.push_back(t_s);
+    TryInitializeImu();
+  }
+  report->imu_initialized = imu_initialized();
+  report->T_world_base = T_world_base;
+  trajectory_.push_back({t_s, T_world_base});
+  report->timings.fuse_ms = watch.ms();
+  return T_world_base;
+}
+
+void Estimator::UpdateMap(const FeatureSet& features, const Pose3& T_world_base, ScanReport* report) {
+  const Stopwatch watch;
+  if (local_map_.NeedsKeyframe(T_world_base) || ++scans_since_keyframe_ >= config_.keyframe_every_scans) {
+    local_map_.AddKeyframe(features, T_world_base);
+    scans_since_keyframe_ = 0;
+  }
+  std::vector<Eigen::Vector3d> p_world;
+  p_world.reserve(preprocessed_.size());
+  for (const ScanPoint& p : preprocessed_)
+    if (p.range_m <= config_.output_map_max_range_m) p_world.push_back(T_world_base * p.p_base.cast<double>());
+  dense_map_.Add(p_world);
+  report->timings.map_ms = watch.ms();
+}
+
+void Estimator::DropOldData(Seconds t_s) {
+  // Before initialisation every sample since the first LiDAR-only pose is needed (static / moving start).
+  Seconds keep_from = t_s - 1.0;
+  if (!imu_initialized() && !init_times_s_.empty()) keep_from = std::min(keep_from, init_times_s_.front() - 2.0);
+  if (imu_initialized()) keep_from = std::min(keep_from, window_->latest_time_s() - 0.1);
+  size_t n = 0;
+  while (n + 2 < imu_.size() && imu_[n + 1].t_s < keep_from) ++n;
+  if (n > 0) imu_.erase(imu_.begin(), imu_.begin() + long(n));
+}
+
+}  // namespace rotolidar

@@ -1,1 +1,186 @@
-// Placeholder: being written.
+// `rotolidar bench camera`: camera twin speed per renderer and image size (contract in camera_perf.hpp).
+#include "bench/perf/camera_perf.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "bench/cli/options.hpp"
+#include "sim/camera/camera_stream.hpp"
+#include "sim/rig/carrier_paths.hpp"
+#include "sim/sim_config.hpp"
+#include "sim/world/embree_scene.hpp"
+#include "sim/world/scene.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+double NowS() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// The default camera scaled to another size at the same horizontal field of view.
+sim::CameraConfig CameraAtSize(const CameraBenchOptions& o, int width, int height) {
+  sim::CameraConfig c;
+  const double scale = width / static_cast<double>(c.width_px);
+  c.width_px = width;
+  c.height_px = height;
+  c.fx_px *= scale;
+  c.fy_px *= scale;
+  c.cx_px = 0.5 * width;
+  c.cy_px = 0.5 * height;
+  c.threads = o.threads;
+  sim::ParseMotionBlurKind(o.motion_blur, &c.motion_blur);
+  return c;
+}
+
+/// The scene's handheld path (or the default scripted loop when the scene has none).
+Status MakeMotion(const sim::Scene& scene, std::unique_ptr<sim::BaseMotion>* motion) {
+  sim::CarrierConfig carrier;
+  const auto it = scene.default_paths.find("handheld");
+  if (it != scene.default_paths.end()) {
+    carrier.type = sim::CarrierType::kHandheld;
+    carrier.handheld.waypoints = it->second;
+  }
+  return sim::MakeCarrierMotion(carrier, motion);
+}
+
+Status BenchOne(const CameraBenchOptions& o, const sim::Scene& scene, sim::EmbreeScene* embree,
+                const sim::BaseMotion& motion, const std::string& renderer, int w, int h, CameraBenchRow* row) {
+  sim::CameraConfig config = CameraAtSize(o, w, h);
+  sim::ParseCameraRendererKind(renderer, &config.renderer);
+  std::unique_ptr<sim::CameraSimulator> camera;
+  if (Status s = sim::CameraSimulator::Create(config, o.seed, scene, embree, &camera); !s) return s;
+  const Pose3 T_base_cam = sim::DefaultSimConfig().TrueCalib().T_base_cam;
+  const auto pose = [&](Seconds t) { return Pose3(motion.At(t).T_world_base * T_base_cam); };
+  std::vector<double> render, blur, sensor, png, total;
+  double level = 0.0;
+  cv::Mat image, grey;
+  std::vector<uchar> encoded;
+  for (int k = 0; k <= o.frames; ++k) {
+    sim::CameraFrameStats st;
+    const Seconds t = (k + 0.5) / config.rate_hz;
+    if (Status s = camera->RenderFrame(k, t, pose, &image, &st); !s) return s;
+    const double t0 = NowS();
+    cv::imencode(".png", image, encoded);
+    const double png_s = NowS() - t0;
+    if (k == 0) continue;  // warm-up: caches, first-touch allocations
+    render.push_back(st.render_s);
+    blur.push_back(st.blur_s);
+    sensor.push_back(st.sensor_s);
+    png.push_back(png_s);
+    total.push_back(st.render_s + st.blur_s + st.sensor_s);
+    level += cv::mean(image)[0] / 3 + cv::mean(image)[1] / 3 + cv::mean(image)[2] / 3;
+  }
+  *row = {renderer, w, h, Median(render), Median(blur), Median(sensor), Median(png), Median(total), level / o.frames};
+  return Status::Ok();
+}
+
+bool ParseSizes(const std::string& text, std::vector<std::pair<int, int>>* sizes) {
+  sizes->clear();
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    int w = 0, h = 0;
+    char x = 0;
+    std::stringstream one(item);
+    if (!(one >> w >> x >> h) || x != 'x') return false;
+    sizes->emplace_back(w, h);
+  }
+  return !sizes->empty();
+}
+
+}  // namespace
+
+bool CameraBenchOptions::Validate(std::string* error) const {
+  auto fail = [&](const std::string& m) { return (error ? *error = "bench camera: " + m : m), false; };
+  if (frames < 1 || frames > 100000) return fail("--frames must be in 1..100000");
+  if (renderers.empty()) return fail("--renderer: embree, osmesa or both");
+  for (const std::string& r : renderers) {
+    sim::CameraRendererKind kind;
+    if (!sim::ParseCameraRendererKind(r, &kind)) return fail("--renderer: embree, osmesa or both, got '" + r + "'");
+  }
+  sim::MotionBlurKind blur;
+  if (!sim::ParseMotionBlurKind(motion_blur, &blur)) return fail("--blur: none, velocity or subframes");
+  for (const auto& [w, h] : sizes) {
+    std::string why;
+    if (!CameraAtSize(*this, w, h).Validate(&why)) return fail("--sizes " + std::to_string(w) + "x" + std::to_string(h) + ": " + why);
+  }
+  return true;
+}
+
+Status RunCameraBench(const CameraBenchOptions& o, std::vector<CameraBenchRow>* rows) {
+  std::string why;
+  if (!o.Validate(&why)) return Status::Error(why);
+  sim::Scene scene;
+  if (Status s = sim::LoadScene(sim::ResolveScenePath(o.scene), &scene); !s) return s;
+  std::unique_ptr<sim::EmbreeScene> embree;
+  if (Status s = sim::EmbreeScene::Create(scene, &embree); !s) return s;
+  std::unique_ptr<sim::BaseMotion> motion;
+  if (Status s = MakeMotion(scene, &motion); !s) return s;
+  rows->clear();
+  for (const std::string& renderer : o.renderers) {
+    for (const auto& [w, h] : o.sizes) {
+      CameraBenchRow row;
+      if (Status s = BenchOne(o, scene, embree.get(), *motion, renderer, w, h, &row); !s) return s;
+      rows->push_back(row);
+    }
+  }
+  return Status::Ok();
+}
+
+void PrintCameraBench(const CameraBenchOptions& o, const std::vector<CameraBenchRow>& rows, std::ostream& os) {
+  os << "camera twin: scene " << o.scene << ", handheld path, " << o.frames << " frames (+1 warm-up), "
+     << o.threads << " threads, motion blur " << o.motion_blur << "; medians per frame [ms]\n";
+  os << "renderer  size        render    blur  sensor   frame  frames/s     png  mean level\n";
+  char line[256];
+  for (const CameraBenchRow& r : rows) {
+    std::snprintf(line, sizeof(line), "%-8s %5dx%-5d %7.2f %7.2f %7.2f %7.2f %9.1f %7.2f %11.1f\n", r.renderer.c_str(),
+                  r.width, r.height, 1e3 * r.render_s, 1e3 * r.blur_s, 1e3 * r.sensor_s, 1e3 * r.frame_s,
+                  1.0 / r.frame_s, 1e3 * r.png_s, r.mean_level);
+    os << line;
+  }
+  os << "frame = render + blur + sensor (frames/s = 1 / frame); png: cv::imencode of the frame (the recording "
+        "writer's cost, single thread, not in frames/s)\n";
+}
+
+int BenchCamera(int argc, char** argv) {
+  OptionParser p("bench camera", "Frames per second of the camera twin for each renderer and image size, along the "
+                                 "scene's handheld path (medians of frames).");
+  p.Add("scene", "lab", "-", "scene name (scenes/NAME.yaml) or path");
+  p.Add("renderer", "both", "-", "embree | osmesa | both");
+  p.Add("frames", "60", "-", "timed frames per renderer and size");
+  p.Add("sizes", "640x480,1280x720", "px", "comma-separated WIDTHxHEIGHT list (fx scaled to keep the field of view)");
+  p.Add("threads", "2", "-", "worker threads (render, blur, sensor)");
+  p.Add("blur", "velocity", "-", "motion blur: none | velocity | subframes");
+  p.Add("seed", "1", "-", "run seed (sensor noise)");
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
+  CameraBenchOptions o;
+  o.scene = p.Get("scene");
+  long frames = 0, threads = 0, seed = 0;
+  for (const Status& s : {p.GetInt("frames", &frames), p.GetInt("threads", &threads), p.GetInt("seed", &seed)})
+    if (!s) return std::cerr << "error: " << s.message << "\n", 2;
+  o.frames = static_cast<int>(frames);
+  o.threads = static_cast<int>(threads);
+  o.seed = static_cast<uint64_t>(seed);
+  o.motion_blur = p.Get("blur");
+  const std::string renderer = p.Get("renderer");
+  o.renderers = renderer == "both" ? std::vector<std::string>{"embree", "osmesa"} : std::vector<std::string>{renderer};
+  if (!ParseSizes(p.Get("sizes"), &o.sizes)) return std::cerr << "error: bench camera: --sizes: e.g. 640x480,1280x720\n", 2;
+  if (std::string why; !o.Validate(&why)) return std::cerr << "error: " << why << "\n", 2;
+  std::vector<CameraBenchRow> rows;
+  if (Status s = RunCameraBench(o, &rows); !s) return std::cerr << "error: " << s.message << "\n", 1;
+  PrintCameraBench(o, rows, std::cout);
+  return 0;
+}
+
+}  // namespace rotolidar::bench

@@ -44,7 +44,7 @@ std::vector<double> LogTicks(double lo, double hi) {
   std::vector<double> ticks;
   if (!(lo > 0) || !(hi > lo) || !std::isfinite(hi)) return ticks;
   const int k0 = int(std::floor(std::log10(lo))), k1 = int(std::ceil(std::log10(hi)));
-  const bool fine = (k1 - k0) <= 2;
+  const bool fine = std::log10(hi) - std::log10(lo) < 2.5;  // few decades: add 2 and 5 x 10^k
   for (int k = k0; k <= k1; ++k)
     for (double m : {1.0, 2.0, 5.0}) {
       if (m != 1.0 && !fine) continue;
@@ -146,7 +146,7 @@ void Canvas::DrawFrame(const std::vector<std::string>& x_categories) {
     for (size_t i = 0; i < x_categories.size(); ++i) xt.push_back({double(i), x_categories[i]});
   } else {
     const std::vector<double> t = options_.log_x ? LogTicks(x_.lo, x_.hi)
-                                                 : NiceTicks(x_.lo, x_.hi, std::max(3, int(width_ / 90)));
+                                                 : NiceTicks(x_.lo, x_.hi, std::max(3, int(width_ / 75)));
     for (double v : t) xt.push_back({v, FormatTick(v, options_.log_x ? v : (t.size() > 1 ? t[1] - t[0] : 1.0))});
   }
   size_t longest = 0;
@@ -169,7 +169,7 @@ void Canvas::DrawFrame(const std::vector<std::string>& x_categories) {
   }
   o << "</g>\n";
   const std::vector<double> yt = options_.log_y ? LogTicks(y_.lo, y_.hi)
-                                                : NiceTicks(y_.lo, y_.hi, std::max(3, int(height_ / 55)));
+                                                : NiceTicks(y_.lo, y_.hi, std::max(3, int(height_ / 45)));
   o << "<g class=\"y-ticks\" font-size=\"11\" fill=\"#333\">\n";
   for (double v : yt) {
     const double py = Y(v);

@@ -284,14 +284,18 @@ std::size_t StatisticalOutlierFilter(int k, double std_mul, bool range_normalize
   return Compact(keep, points);
 }
 
-std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_normalized, const SorNeighbourhood& hood,
-                                         std::vector<ScanPoint>* points) {
+std::vector<float> RingNeighbourMeanDistances(const std::vector<ScanPoint>& points, int k, const SorNeighbourhood& hood) {
   ROTOLIDAR_CHECK(k >= 1 && k <= kMaxRingSorK, "k = " << k);
   ROTOLIDAR_CHECK(hood.ring_window >= 0 && hood.adjacent_rings >= 0 && hood.adjacent_window >= 0,
                   "negative SOR neighbourhood");
-  const std::vector<float> mean_dist = k <= 8    ? RingNeighbourDistances<8>(*points, k, hood)
-                                       : k <= 16 ? RingNeighbourDistances<16>(*points, k, hood)
-                                                 : RingNeighbourDistances<kMaxRingSorK>(*points, k, hood);
+  return k <= 8    ? RingNeighbourDistances<8>(points, k, hood)
+         : k <= 16 ? RingNeighbourDistances<16>(points, k, hood)
+                   : RingNeighbourDistances<kMaxRingSorK>(points, k, hood);
+}
+
+std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_normalized, const SorNeighbourhood& hood,
+                                         std::vector<ScanPoint>* points) {
+  const std::vector<float> mean_dist = RingNeighbourMeanDistances(*points, k, hood);
   std::vector<double> stat(points->size());
   std::vector<uint8_t> bad_range(points->size(), 0);
   for (std::size_t i = 0; i < points->size(); ++i) {

@@ -103,6 +103,10 @@ std::size_t StatisticalOutlierFilter(int k, double std_mul, bool range_normalize
 std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_normalized, const SorNeighbourhood& hood,
                                          std::vector<ScanPoint>* points);
 
+/// The statistic behind RingStatisticalOutlierFilter, indexed like `points`: each point's mean distance [m] to its
+/// K nearest ring-order candidates (all of them when fewer than K), NaN when it has none. Same checks.
+std::vector<float> RingNeighbourMeanDistances(const std::vector<ScanPoint>& points, int k, const SorNeighbourhood& hood);
+
 /// One real point per occupied voxel of edge voxel_m (grid aligned at the origin): the point nearest the voxel's
 /// centroid (what PCL's VoxelGrid would output), ties to the lower index. Keeps ring, time and range attributes.
 std::size_t VoxelFilter(double voxel_m, std::vector<ScanPoint>* points);

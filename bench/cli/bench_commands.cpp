@@ -6,6 +6,7 @@
 #include "bench/perf/camera_perf.hpp"
 #include "bench/perf/lidar_perf.hpp"
 #include "bench/perf/rig_perf.hpp"
+#include "bench/perf/slam_perf.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -21,6 +22,7 @@ const Benchmark kBenchmarks[] = {
     {"allan", BenchAllan, "long static run: Allan deviation recovers the IMU's N and K within 10 %"},
     {"lidar", BenchLidar, "VLP-16 ray casting + packet encoding (target >= 20x real time, 1 core)"},
     {"decode", BenchDecode, "VLP-16 packet decoding (target >= 100x real time)"},
+    {"slam", BenchSlam, "SLAM core per-scan time per stage, ATE, deskew error (target median <= 10 ms/scan, 1 core)"},
     {"camera", BenchCamera, "camera twin frames/s per renderer and image size (target 640x480 >= 30 fps, 2 cores)"},
 };
 

@@ -20,7 +20,9 @@ struct Points {
   std::vector<Eigen::Vector3d> n;
 };
 
-// PCA normals: the smallest-eigenvalue axis of the neighbours within radius_m (at least 5 of them).
+// PCA normals: the smallest-eigenvalue axis of the neighbours within radius_m, or of the kMinNeighbours
+// nearest when the radius holds fewer.
+constexpr int kMinNeighbours = 10;
 void EstimateNormals(double radius_m, Points* pts) {
   pts->n.assign(pts->p.size(), Eigen::Vector3d::Zero());
   if (pts->p.empty()) return;
@@ -31,7 +33,10 @@ void EstimateNormals(double radius_m, Points* pts) {
   std::vector<int> idx;
   std::vector<float> sq;
   for (size_t i = 0; i < pts->p.size(); ++i) {
-    if (tree.radiusSearch(cloud->points[i], radius_m, idx, sq) < 5) continue;
+    // Sparse maps: fall back to the nearest kMinNeighbours when the radius holds fewer.
+    if (tree.radiusSearch(cloud->points[i], radius_m, idx, sq) < kMinNeighbours &&
+        tree.nearestKSearch(cloud->points[i], kMinNeighbours, idx, sq) < kMinNeighbours)
+      continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (int k : idx) mean += pts->p[static_cast<size_t>(k)];
     mean /= static_cast<double>(idx.size());
@@ -109,21 +114,26 @@ void SetHeight(double value, ElementMeasurement* m) {
 
 // The plane perpendicular to `axis` from the points in the box [lo, hi] with a normal along `axis`, searched
 // over [lo[axis], hi[axis]].
+// The clutter level comes from every point in the box, whatever its normal: a surface blurred into a slab
+// (a drifting map's double wall) has no plane to find.
 bool Plane(const Points& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int axis, const ElementFitConfig& c,
            double* offset) {
-  return PlaneOffsetByMode(Coordinates(p, lo, hi, axis, c.normal_min_cos), lo[axis], hi[axis], c, offset);
+  const std::vector<double> all = Coordinates(p, lo, hi, axis, 0.0);
+  return PlaneOffsetByMode(Coordinates(p, lo, hi, axis, c.normal_min_cos), lo[axis], hi[axis], c, offset, &all);
 }
 
 // Door or window: jambs (planes y = +-w/2) and sill/floor + lintel (planes z = -+h/2) inside the wall thickness.
 void MeasureOpening(const Points& p, double depth_m, const ElementFitConfig& c, ElementMeasurement* m) {
   const double w2 = 0.5 * m->true_width_m, h2 = 0.5 * m->true_height_m, s = c.search_margin_m;
-  const double bx = std::max(0.5 * depth_m - c.face_margin_m, 0.01);  // reveal band |x| <= bx
-  const double bz = c.band_fraction * h2, by = c.band_fraction * w2;
+  // The central part of the reveal, in all three directions: away from the wall faces, corners and edges.
+  const double bx = c.band_fraction * 0.5 * depth_m, bz = c.band_fraction * h2, by = c.band_fraction * w2;
   double left = 0, right = 0, bottom = 0, top = 0;
-  const bool l = Plane(p, {-bx, -w2 - s, -bz}, {bx, 0, bz}, 1, c, &left);
-  const bool r = Plane(p, {-bx, 0, -bz}, {bx, w2 + s, bz}, 1, c, &right);
-  const bool b = Plane(p, {-bx, -by, -h2 - s}, {bx, by, 0}, 2, c, &bottom);
-  const bool t = Plane(p, {-bx, -by, 0}, {bx, by, h2 + s}, 2, c, &top);
+  // Each plane is searched within +-s of its annotated place (not past the centre).
+  const double iw = std::max(w2 - s, 0.0), ih = std::max(h2 - s, 0.0);
+  const bool l = Plane(p, {-bx, -w2 - s, -bz}, {bx, -iw, bz}, 1, c, &left);
+  const bool r = Plane(p, {-bx, iw, -bz}, {bx, w2 + s, bz}, 1, c, &right);
+  const bool b = Plane(p, {-bx, -by, -h2 - s}, {bx, by, -ih}, 2, c, &bottom);
+  const bool t = Plane(p, {-bx, -by, ih}, {bx, by, h2 + s}, 2, c, &top);
   if (l && r) SetWidth(right - left, m);
   if (b && t) SetHeight(top - bottom, m);
   std::ostringstream why;
@@ -149,8 +159,9 @@ void MeasureColumn(const Points& p, bool round, double depth_m, const ElementFit
   } else {
     const double bx = c.band_fraction * d2;
     double left = 0, right = 0;
-    const bool l = Plane(p, {-bx, -w2 - s, -bz}, {bx, 0, bz}, 1, c, &left);
-    const bool r = Plane(p, {-bx, 0, -bz}, {bx, w2 + s, bz}, 1, c, &right);
+    const double iw = std::max(w2 - s, 0.0);
+    const bool l = Plane(p, {-bx, -w2 - s, -bz}, {bx, -iw, bz}, 1, c, &left);
+    const bool r = Plane(p, {-bx, iw, -bz}, {bx, w2 + s, bz}, 1, c, &right);
     if (l && r) SetWidth(right - left, m);
     else why << "no column faces; ";
   }
@@ -175,7 +186,6 @@ void MeasureColumn(const Points& p, bool round, double depth_m, const ElementFit
 bool ElementFitConfig::Validate(std::string* error) const {
   auto fail = [&](const char* what) { return (*error = std::string("element fit: ") + what), false; };
   if (!(search_margin_m > 0)) return fail("search_margin_m must be > 0");
-  if (!(face_margin_m >= 0)) return fail("face_margin_m must be >= 0");
   if (!(default_depth_m > 0)) return fail("default_depth_m must be > 0");
   if (!(band_fraction > 0 && band_fraction <= 1)) return fail("band_fraction must be in (0, 1]");
   if (!(bin_m > 0)) return fail("bin_m must be > 0");
@@ -187,16 +197,23 @@ bool ElementFitConfig::Validate(std::string* error) const {
   return true;
 }
 
-bool PlaneOffsetByMode(const std::vector<double>& values, double lo, double hi, const ElementFitConfig& config,
-                       double* offset) {
-  if (!(hi > lo) || values.empty()) return false;
-  const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / config.bin_m)));
+namespace {
+std::vector<double> Histogram(const std::vector<double>& values, double lo, int bins, double bin_m) {
   std::vector<double> count(static_cast<size_t>(bins), 0.0);
   for (double v : values) {
-    if (v < lo || v > hi) continue;
-    const int i = std::min(bins - 1, static_cast<int>((v - lo) / config.bin_m));
+    if (v < lo || v > lo + bins * bin_m) continue;
+    const int i = std::min(bins - 1, static_cast<int>((v - lo) / bin_m));
     count[static_cast<size_t>(i)] += 1.0;
   }
+  return count;
+}
+}  // namespace
+
+bool PlaneOffsetByMode(const std::vector<double>& values, double lo, double hi, const ElementFitConfig& config,
+                       double* offset, const std::vector<double>* clutter_values) {
+  if (!(hi > lo) || values.empty()) return false;
+  const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / config.bin_m)));
+  const std::vector<double> count = Histogram(values, lo, bins, config.bin_m);
   int best = -1;
   double best_count = 0.0;
   for (int i = 0; i < bins; ++i) {  // 3-bin smoothing; the first maximum wins (deterministic)
@@ -209,7 +226,8 @@ bool PlaneOffsetByMode(const std::vector<double>& values, double lo, double hi, 
   for (double v : values)
     if (std::abs(v - mode) <= config.refine_halfwidth_m) near.push_back(v);
   // Prominence: the peak must stand out of the clutter level (the median bin count) over its window.
-  const double clutter = Quantile(count, 0.5) * (2.0 * config.refine_halfwidth_m / config.bin_m);
+  const double level = Quantile(clutter_values ? Histogram(*clutter_values, lo, bins, config.bin_m) : count, 0.5);
+  const double clutter = level * (2.0 * config.refine_halfwidth_m / config.bin_m);
   const double needed = std::max(static_cast<double>(config.min_points), config.prominence * clutter);
   if (static_cast<double>(near.size()) < needed) return false;
   *offset = Quantile(near, 0.5);

@@ -22,18 +22,19 @@ namespace rotolidar::bench {
 
 struct ElementFitConfig {
   double search_margin_m = 0.3;     ///< search windows reach this far beyond the annotated extents
-  double face_margin_m = 0.03;      ///< reveal band: at least this far inside the wall faces (door/window)
   double default_depth_m = 0.1;     ///< wall thickness assumed when the element states depth 0
-  double band_fraction = 0.5;       ///< central share of the other extent used per plane (away from corners)
+  /// Central share of the other extents used per plane (away from corners, edges and the wall faces: a
+  /// door's or window's reveal band is |x| <= band_fraction * depth / 2)
+  double band_fraction = 0.5;
   double bin_m = 0.01;              ///< histogram bin for plane modes
   double refine_halfwidth_m = 0.03;  ///< points within this of a mode give the plane by their median
   int min_points = 15;              ///< per plane (or per circle) to report a measurement
-  double normal_radius_m = 0.06;    ///< PCA normals from the neighbours within this radius (>= 5 of them)
+  double normal_radius_m = 0.06;    ///< PCA normals: neighbours within this radius (at least the 10 nearest)
   /// A plane perpendicular to axis a uses only points with |n . a| >= this (round columns: |n_z| <= sin);
   /// keeps wall-face points that noise pushed into a reveal out of the jamb/sill/lintel planes.
   double normal_min_cos = 0.7;
   /// The peak must hold at least this many times the clutter level (median bin count) over its window.
-  double prominence = 3.0;
+  double prominence = 2.0;
 
   bool Validate(std::string* error) const;
 };
@@ -67,8 +68,9 @@ ElementSummary SummarizeElements(const std::vector<ElementMeasurement>& elements
 /// Robust position of a plane from coordinates along its normal: the mode of a histogram (bin_m, 3-bin
 /// smoothing) over [lo, hi], refined as the median of the values within refine_halfwidth_m of the mode.
 /// False when fewer than max(min_points, prominence x the clutter level) values fall within the refinement
-/// window (the clutter level: the median bin count times the window's bins). Exposed for tests.
+/// window (the clutter level: the median bin count of `clutter_values`, default `values`, times the
+/// window's bins). Exposed for tests.
 bool PlaneOffsetByMode(const std::vector<double>& values, double lo, double hi, const ElementFitConfig& config,
-                       double* offset);
+                       double* offset, const std::vector<double>* clutter_values = nullptr);
 
 }  // namespace rotolidar::bench

@@ -1,6 +1,8 @@
 // `rotolidar bench camera`: camera twin speed per renderer and image size (contract in camera_perf.hpp).
 #include "bench/perf/camera_perf.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,6 +23,12 @@ namespace rotolidar::bench {
 namespace {
 
 double NowS() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+double ProcessCpuS() {  // all threads of the process
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -62,14 +70,16 @@ Status BenchOne(const CameraBenchOptions& o, const sim::Scene& scene, sim::Embre
   if (Status s = sim::CameraSimulator::Create(config, o.seed, scene, embree, &camera); !s) return s;
   const Pose3 T_base_cam = sim::DefaultSimConfig().TrueCalib().T_base_cam;
   const auto pose = [&](Seconds t) { return Pose3(motion.At(t).T_world_base * T_base_cam); };
-  std::vector<double> render, blur, sensor, png, total;
+  std::vector<double> render, blur, sensor, png, total, cpu;
   double level = 0.0;
   cv::Mat image, grey;
   std::vector<uchar> encoded;
   for (int k = 0; k <= o.frames; ++k) {
     sim::CameraFrameStats st;
     const Seconds t = (k + 0.5) / config.rate_hz;
+    const double cpu0 = ProcessCpuS();
     if (Status s = camera->RenderFrame(k, t, pose, &image, &st); !s) return s;
+    const double cpu_s = ProcessCpuS() - cpu0;
     const double t0 = NowS();
     cv::imencode(".png", image, encoded);
     const double png_s = NowS() - t0;
@@ -79,9 +89,11 @@ Status BenchOne(const CameraBenchOptions& o, const sim::Scene& scene, sim::Embre
     sensor.push_back(st.sensor_s);
     png.push_back(png_s);
     total.push_back(st.render_s + st.blur_s + st.sensor_s);
+    cpu.push_back(cpu_s);
     level += cv::mean(image)[0] / 3 + cv::mean(image)[1] / 3 + cv::mean(image)[2] / 3;
   }
-  *row = {renderer, w, h, Median(render), Median(blur), Median(sensor), Median(png), Median(total), level / o.frames};
+  *row = {renderer, w, h, Median(render), Median(blur), Median(sensor), Median(png), Median(total), Median(cpu),
+          level / o.frames};
   return Status::Ok();
 }
 
@@ -141,16 +153,17 @@ Status RunCameraBench(const CameraBenchOptions& o, std::vector<CameraBenchRow>* 
 void PrintCameraBench(const CameraBenchOptions& o, const std::vector<CameraBenchRow>& rows, std::ostream& os) {
   os << "camera twin: scene " << o.scene << ", handheld path, " << o.frames << " frames (+1 warm-up), "
      << o.threads << " threads, motion blur " << o.motion_blur << "; medians per frame [ms]\n";
-  os << "renderer  size        render    blur  sensor   frame  frames/s     png  mean level\n";
+  os << "renderer  size        render    blur  sensor   frame  frames/s  CPU/frame     png  mean level\n";
   char line[256];
   for (const CameraBenchRow& r : rows) {
-    std::snprintf(line, sizeof(line), "%-8s %5dx%-5d %7.2f %7.2f %7.2f %7.2f %9.1f %7.2f %11.1f\n", r.renderer.c_str(),
-                  r.width, r.height, 1e3 * r.render_s, 1e3 * r.blur_s, 1e3 * r.sensor_s, 1e3 * r.frame_s,
-                  1.0 / r.frame_s, 1e3 * r.png_s, r.mean_level);
+    std::snprintf(line, sizeof(line), "%-8s %5dx%-5d %7.2f %7.2f %7.2f %7.2f %9.1f %10.2f %7.2f %11.1f\n",
+                  r.renderer.c_str(), r.width, r.height, 1e3 * r.render_s, 1e3 * r.blur_s, 1e3 * r.sensor_s,
+                  1e3 * r.frame_s, 1.0 / r.frame_s, 1e3 * r.cpu_s, 1e3 * r.png_s, r.mean_level);
     os << line;
   }
-  os << "frame = render + blur + sensor (frames/s = 1 / frame); png: cv::imencode of the frame (the recording "
-        "writer's cost, single thread, not in frames/s)\n";
+  os << "frame = render + blur + sensor, wall clock (frames/s = 1 / frame); CPU/frame: CPU time of all the "
+        "process's threads (OSMesa's llvmpipe threads included; on a loaded machine wall >> CPU / threads); png: "
+        "cv::imencode of the frame (the recording writer's cost, one thread, not in frames/s)\n";
 }
 
 int BenchCamera(int argc, char** argv) {

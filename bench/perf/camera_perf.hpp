@@ -28,6 +28,7 @@ struct CameraBenchRow {
   int width = 0, height = 0;
   double render_s = 0.0, blur_s = 0.0, sensor_s = 0.0, png_s = 0.0;
   double frame_s = 0.0;      ///< render + blur + sensor (what a frame costs before it is written)
+  double cpu_s = 0.0;        ///< CPU seconds of all the process's threads per frame (median)
   double mean_level = 0.0;   ///< mean 8-bit grey level of the frames (a sanity check that both see the scene)
 };
 

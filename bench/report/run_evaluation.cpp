@@ -100,6 +100,9 @@ Status EvaluateMap(const std::string& recording_dir, const std::string& scene_na
   if (Status s = ComputeMapMetrics(scene, out->map_points, config, &out->map); !s) return s;
   out->map_config = config;
   out->map_metrics_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  LOG_INFO("map metrics: " << out->map_points.size() << " points, " << out->map.surface_samples
+                            << " surface samples, " << config.viewpoints_world.size() << " viewpoints, "
+                            << out->map_metrics_wall_s << " s");
   out->has_map_metrics = true;
   return Status::Ok();
 }

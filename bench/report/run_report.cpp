@@ -51,10 +51,10 @@ void AddTruthRows(const RunEvaluation& ev, Rows* rows) {
   if (m.coverage.has_visibility)
     rows->push_back({"completeness (visible surfaces)", Fmt("%.1f %%", 100 * m.coverage.total.completeness)});
   if (m.element_summary.elements > 0)
-    rows->push_back({"element size RMSE", Fmt("%.3f m", m.element_summary.rmse_m) + " (" +
+    rows->push_back({"element size RMSE", Fmt("%.3f m", m.element_summary.rmse_m) + " (over " +
                                               std::to_string(m.element_summary.widths_measured +
                                                              m.element_summary.heights_measured) +
-                                              " dimensions)"});
+                                              " measured dimensions)"});
 }
 
 void AddConfigSection(const RunReportInput& in, HtmlReport* html) {

@@ -56,8 +56,9 @@ void AddTrajectorySection(const RunReportInput& in, HtmlReport* html) {
   o.x_label = "x [m]";
   o.y_label = "y [m]";
   o.equal_aspect = true;
+  o.legend_above = true;
   o.width_px = 620;
-  o.height_px = 480;
+  o.height_px = 500;
   std::vector<PlotSeries> series;
   if (ev.has_truth) {
     html->BeginSection("trajectory", "Trajectory (top view, scene frame)");
@@ -221,7 +222,8 @@ void AddMapSection(const RunReportInput& in, HtmlReport* html) {
   o.x_label = "x [m]";
   o.y_label = "y [m]";
   o.width_px = 700;
-  o.height_px = 520;
+  o.height_px = 540;
+  o.legend_above = true;
   if (by_error) {
     t.colorbar_label = "map-to-truth distance [m]";
     t.value_min = 0.0;
@@ -231,14 +233,15 @@ void AddMapSection(const RunReportInput& in, HtmlReport* html) {
     t.colorbar_label = "height z [m]";
     o.title = "map coloured by height";
   }
-  std::vector<PlotSeries> overlay = {
-      XySeries(ev.has_truth ? ev.estimate_aligned : in.slam->trajectory, "trajectory", "#ffffff")};
+  // Red shows on viridis (no red in it); black on turbo (no black in it).
+  std::vector<PlotSeries> overlay = {XySeries(ev.has_truth ? ev.estimate_aligned : in.slam->trajectory, "trajectory",
+                                              by_error ? "#e41a1c" : "#000000")};
   overlay.back().line_width_px = 1.2;
   RobustLimits(xy, overlay, &o);
   html->Figure(PointTopViewSvg(xy, values, t, o, overlay),
                std::to_string(ev.map_points.size()) + " map points, " +
                    (ev.map_in_scene_frame ? "scene frame (SE(3) alignment of the APE)" : "SLAM world frame") +
-                   "; each pixel shows the mean over the points above it. White line: the trajectory.");
+                   "; each pixel shows the mean over the points above it.");
   if (!by_error) return;
   std::vector<double> d(ev.map.point_distance_m.begin(), ev.map.point_distance_m.end());
   HistogramOptions h;
@@ -255,14 +258,14 @@ void AddMapSection(const RunReportInput& in, HtmlReport* html) {
   html->Figure(HistogramSvg(d, h, ho), "Distances up to the 99th percentile; the rest are counted in the note.");
 }
 
-void AddCoverageSection(const RunReportInput& in, HtmlReport* html) {
-  const RunEvaluation& ev = *in.evaluation;
-  if (!ev.has_map_metrics) return;
-  html->BeginSection("coverage", "Surface coverage");
+namespace {
+
+/// Top view of the covered share of the surface samples: walls only, or the other non-ceiling surfaces.
+std::string CoverageView(const RunEvaluation& ev, bool walls) {
   std::vector<Eigen::Vector2d> xy;
   std::vector<double> covered;
   for (const SurfaceSample& s : ev.map.samples) {
-    if (s.surface_class == SurfaceClass::kCeiling) continue;
+    if (s.surface_class == SurfaceClass::kCeiling || (s.surface_class == SurfaceClass::kWall) != walls) continue;
     xy.emplace_back(s.p_world.x(), s.p_world.y());
     covered.push_back(s.covered ? 1.0 : 0.0);
   }
@@ -270,18 +273,30 @@ void AddCoverageSection(const RunReportInput& in, HtmlReport* html) {
   t.colormap = Colormap::kRedYellowGreen;
   t.value_min = 0.0;
   t.value_max = 1.0;
-  t.colorbar_label = "covered share of the surface samples";
+  t.colorbar_label = "covered share";
+  // One sample per cell for floors (finer cells alias with the sample grid); walls twice as coarse so that
+  // their one-cell-wide lines stay visible.
+  t.cell_m = (walls ? 2.0 : 1.0) * ev.map_config.sample_spacing_m;
   PlotOptions o;
-  o.title = "covered (green) vs missed (red) surfaces, ceilings left out";
+  o.title = walls ? "walls: covered (green) vs missed (red)" : "floors and others: covered (green) vs missed (red)";
   o.x_label = "x [m]";
   o.y_label = "y [m]";
-  o.width_px = 700;
-  o.height_px = 520;
-  html->Figure(PointTopViewSvg(xy, covered, t, o),
-               "Scene surfaces sampled every " + Fmt("%.2f m", ev.map_config.sample_spacing_m) +
-                   "; a sample is covered when a map point lies within " +
-                   Fmt("%.2f m", ev.map_config.coverage_distance_m) +
-                   ". Each pixel shows the covered share of the samples above it (walls appear as lines).");
+  o.width_px = 540;
+  o.height_px = 440;
+  return PointTopViewSvg(xy, covered, t, o);
+}
+
+}  // namespace
+
+void AddCoverageSection(const RunReportInput& in, HtmlReport* html) {
+  const RunEvaluation& ev = *in.evaluation;
+  if (!ev.has_map_metrics) return;
+  html->BeginSection("coverage", "Surface coverage");
+  html->Figure(CoverageView(ev, false), "Floors and other upward-facing or sloped surfaces.");
+  html->Figure(CoverageView(ev, true), "Walls: each pixel is the covered share over the wall's height.");
+  html->Paragraph("Scene surfaces are sampled every " + Fmt("%.2f m", ev.map_config.sample_spacing_m) +
+                  "; a sample is covered when a map point lies within " +
+                  Fmt("%.2f m", ev.map_config.coverage_distance_m) + " of it. Ceilings are left out of the pictures.");
   const CoverageResult& c = ev.map.coverage;
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> names;
@@ -305,6 +320,7 @@ void AddCoverageSection(const RunReportInput& in, HtmlReport* html) {
   b.title = "coverage per surface class";
   b.y_label = "share of the area [%]";
   b.y_max = 100.0;
+  b.legend_above = true;
   b.width_px = 520;
   b.height_px = 300;
   html->Figure(BarChartSvg(names, bars, b), "Coverage of all sampled surfaces and completeness of the visible ones.");

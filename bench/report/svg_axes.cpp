@@ -28,12 +28,9 @@ std::vector<double> NiceTicks(double lo, double hi, int target) {
   if (!std::isfinite(lo) || !std::isfinite(hi) || lo >= hi || target < 1) return ticks;
   const double raw = (hi - lo) / target;
   const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * mag >= raw) {
-      step = m * mag;
-      break;
-    }
+  double step = mag;  // the 1-2-5 step nearest to the raw step (in ratio)
+  for (double m : {2.0, 5.0, 10.0})
+    if (std::abs(std::log(m * mag / raw)) < std::abs(std::log(step / raw))) step = m * mag;
   const double eps = step * 1e-9;
   for (double t = std::ceil((lo - eps) / step) * step; t <= hi + eps; t += step)
     ticks.push_back(std::abs(t) < eps ? 0.0 : t);
@@ -105,7 +102,7 @@ void FinalizeRange(Range* r, double fixed_min, double fixed_max, bool include_ze
 
 Canvas::Canvas(const PlotOptions& options, double right_extra_px) : options_(options) {
   left_ = kMarginLeft;
-  top_ = options.title.empty() ? 12.0 : kMarginTop;
+  top_ = (options.title.empty() ? 12.0 : kMarginTop) + (options.legend_above && options.legend ? 18.0 : 0.0);
   width_ = std::max(40.0, options.width_px - kMarginLeft - kMarginRight - right_extra_px);
   height_ = std::max(40.0, options.height_px - top_ - kMarginBottom);
 }
@@ -137,10 +134,28 @@ bool Canvas::InY(double v) const { return std::isfinite(v) && (!options_.log_y |
 
 void Canvas::DrawFrame(const std::vector<std::string>& x_categories) {
   std::ostringstream& o = body_;
-  const double bottom = top_ + height_;
   o << "<rect x=\"0\" y=\"0\" width=\"" << options_.width_px << "\" height=\"" << options_.height_px
     << "\" fill=\"white\"/>\n";
-  // x ticks (numbers or category names)
+  DrawXTicks(x_categories);
+  DrawYTicks();
+  o << "<rect class=\"plot-area\" x=\"" << Px(left_) << "\" y=\"" << Px(top_) << "\" width=\"" << Px(width_)
+    << "\" height=\"" << Px(height_) << "\" fill=\"none\" stroke=\"#333\"/>\n";
+  if (!options_.x_label.empty())
+    o << "<text class=\"x-label\" x=\"" << Px(left_ + width_ / 2) << "\" y=\"" << Px(options_.height_px - 8.0)
+      << "\" text-anchor=\"middle\">" << XmlEscape(options_.x_label) << "</text>\n";
+  if (!options_.y_label.empty())
+    o << "<text class=\"y-label\" x=\"14\" y=\"" << Px(top_ + height_ / 2) << "\" text-anchor=\"middle\" "
+      << "transform=\"rotate(-90 14 " << Px(top_ + height_ / 2) << ")\">" << XmlEscape(options_.y_label)
+      << "</text>\n";
+  if (!options_.title.empty())
+    o << "<text class=\"title\" x=\"" << Px(left_ + width_ / 2) << "\" y=\"19\" text-anchor=\"middle\" "
+      << "font-size=\"13\" font-weight=\"bold\">" << XmlEscape(options_.title) << "</text>\n";
+}
+
+void Canvas::DrawXTicks(const std::vector<std::string>& x_categories) {
+  std::ostringstream& o = body_;
+  const double bottom = top_ + height_;
+  // numbers, or one category name at each integer
   std::vector<std::pair<double, std::string>> xt;
   if (!x_categories.empty()) {
     for (size_t i = 0; i < x_categories.size(); ++i) xt.push_back({double(i), x_categories[i]});
@@ -168,6 +183,10 @@ void Canvas::DrawFrame(const std::vector<std::string>& x_categories) {
         << "</text>\n";
   }
   o << "</g>\n";
+}
+
+void Canvas::DrawYTicks() {
+  std::ostringstream& o = body_;
   const std::vector<double> yt = options_.log_y ? LogTicks(y_.lo, y_.hi)
                                                 : NiceTicks(y_.lo, y_.hi, std::max(3, int(height_ / 45)));
   o << "<g class=\"y-ticks\" font-size=\"11\" fill=\"#333\">\n";
@@ -182,35 +201,34 @@ void Canvas::DrawFrame(const std::vector<std::string>& x_categories) {
       << XmlEscape(FormatTick(v, options_.log_y ? v : (yt.size() > 1 ? yt[1] - yt[0] : 1.0))) << "</text>\n";
   }
   o << "</g>\n";
-  o << "<rect class=\"plot-area\" x=\"" << Px(left_) << "\" y=\"" << Px(top_) << "\" width=\"" << Px(width_)
-    << "\" height=\"" << Px(height_) << "\" fill=\"none\" stroke=\"#333\"/>\n";
-  if (!options_.x_label.empty())
-    o << "<text class=\"x-label\" x=\"" << Px(left_ + width_ / 2) << "\" y=\"" << Px(options_.height_px - 8.0)
-      << "\" text-anchor=\"middle\">" << XmlEscape(options_.x_label) << "</text>\n";
-  if (!options_.y_label.empty())
-    o << "<text class=\"y-label\" x=\"14\" y=\"" << Px(top_ + height_ / 2) << "\" text-anchor=\"middle\" "
-      << "transform=\"rotate(-90 14 " << Px(top_ + height_ / 2) << ")\">" << XmlEscape(options_.y_label)
-      << "</text>\n";
-  if (!options_.title.empty())
-    o << "<text class=\"title\" x=\"" << Px(left_ + width_ / 2) << "\" y=\"19\" text-anchor=\"middle\" "
-      << "font-size=\"13\" font-weight=\"bold\">" << XmlEscape(options_.title) << "</text>\n";
 }
 
 void Canvas::DrawRefLines() {
+  // Labels alternate (vertical lines: first row / second row; horizontal: left / right end) so that two
+  // nearby lines (RMSE and median) keep readable labels.
   std::ostringstream& o = body_;
+  int k = 0;
   for (const RefLine& l : options_.vlines) {
     if (!InX(l.value) || l.value < x_.lo || l.value > x_.hi) continue;
-    o << "<line class=\"ref\" x1=\"" << Px(X(l.value)) << "\" y1=\"" << Px(top_) << "\" x2=\"" << Px(X(l.value))
-      << "\" y2=\"" << Px(top_ + height_) << "\" stroke=\"" << l.color << "\" stroke-dasharray=\"4,3\"/>\n";
-    o << "<text x=\"" << Px(X(l.value) + 3) << "\" y=\"" << Px(top_ + 12) << "\" font-size=\"10\" fill=\""
-      << l.color << "\">" << XmlEscape(l.label) << "</text>\n";
+    const double px = X(l.value), ty = top_ + 12 + 12 * (k % 2);
+    const bool right = px > left_ + 0.8 * width_;  // label left of the line near the right edge
+    o << "<line class=\"ref\" x1=\"" << Px(px) << "\" y1=\"" << Px(top_) << "\" x2=\"" << Px(px) << "\" y2=\""
+      << Px(top_ + height_) << "\" stroke=\"" << l.color << "\" stroke-dasharray=\"4,3\"/>\n";
+    o << "<text x=\"" << Px(right ? px - 3 : px + 3) << "\" y=\"" << Px(ty) << "\" font-size=\"10\" fill=\""
+      << l.color << "\"" << (right ? " text-anchor=\"end\"" : "") << ">" << XmlEscape(l.label) << "</text>\n";
+    ++k;
   }
+  k = 0;
   for (const RefLine& l : options_.hlines) {
     if (!InY(l.value) || l.value < y_.lo || l.value > y_.hi) continue;
-    o << "<line class=\"ref\" x1=\"" << Px(left_) << "\" y1=\"" << Px(Y(l.value)) << "\" x2=\"" << Px(left_ + width_)
-      << "\" y2=\"" << Px(Y(l.value)) << "\" stroke=\"" << l.color << "\" stroke-dasharray=\"4,3\"/>\n";
-    o << "<text x=\"" << Px(left_ + 4) << "\" y=\"" << Px(Y(l.value) - 3) << "\" font-size=\"10\" fill=\""
-      << l.color << "\">" << XmlEscape(l.label) << "</text>\n";
+    const double py = Y(l.value), ty = py - 3 < top_ + 12 ? py + 12 : py - 3;
+    const bool right = k % 2 == 1;
+    o << "<line class=\"ref\" x1=\"" << Px(left_) << "\" y1=\"" << Px(py) << "\" x2=\"" << Px(left_ + width_)
+      << "\" y2=\"" << Px(py) << "\" stroke=\"" << l.color << "\" stroke-dasharray=\"4,3\"/>\n";
+    o << "<text x=\"" << Px(right ? left_ + width_ - 4 : left_ + 4) << "\" y=\"" << Px(ty)
+      << "\" font-size=\"10\" fill=\"" << l.color << "\"" << (right ? " text-anchor=\"end\"" : "") << ">"
+      << XmlEscape(l.label) << "</text>\n";
+    ++k;
   }
 }
 
@@ -222,13 +240,21 @@ void Canvas::DrawLegend(const std::vector<LegendEntry>& all) {
   size_t chars = 0;
   for (const LegendEntry& e : entries) chars = std::max(chars, e.label.size());
   const double w = 36.0 + 6.3 * double(chars), h = 8.0 + 16.0 * double(entries.size());
-  const double x0 = left_ + width_ - w - 6, y0 = top_ + 6;
+  double x0 = left_ + width_ - w - 6;
+  const double y0 = top_ + 6;
   std::ostringstream& o = body_;
-  o << "<g class=\"legend\" font-size=\"11\">\n<rect x=\"" << Px(x0) << "\" y=\"" << Px(y0) << "\" width=\"" << Px(w)
-    << "\" height=\"" << Px(h) << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#bbb\"/>\n";
+  o << "<g class=\"legend\" font-size=\"11\">\n";
+  if (!options_.legend_above)
+    o << "<rect x=\"" << Px(x0) << "\" y=\"" << Px(y0) << "\" width=\"" << Px(w) << "\" height=\"" << Px(h)
+      << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#bbb\"/>\n";
+  double row_x = left_;  // legend_above: entries side by side just above the plot area
   for (size_t i = 0; i < entries.size(); ++i) {
     const LegendEntry& e = entries[i];
-    const double cy = y0 + 12 + 16.0 * double(i);
+    double cy = y0 + 12 + 16.0 * double(i);
+    if (options_.legend_above) {
+      x0 = row_x - 6, cy = top_ - 10;
+      row_x += 40.0 + 6.3 * double(e.label.size());
+    }
     if (e.box)
       o << "<rect x=\"" << Px(x0 + 8) << "\" y=\"" << Px(cy - 5) << "\" width=\"16\" height=\"10\" fill=\"" << e.color
         << "\"/>\n";

@@ -74,6 +74,8 @@ class Canvas {
   std::string Finish() const;
 
  private:
+  void DrawXTicks(const std::vector<std::string>& x_categories);
+  void DrawYTicks();
   PlotOptions options_;
   double left_ = 0.0, top_ = 0.0, width_ = 0.0, height_ = 0.0;
   Range x_, y_;

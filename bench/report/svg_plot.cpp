@@ -123,8 +123,8 @@ std::string HistogramSvg(const std::vector<double>& values, const HistogramOptio
   b << "</g>\n";
   if (!data.valid) canvas.NoData();
   if (outside > 0)
-    b << "<text x=\"" << Px(canvas.plot_left() + 6) << "\" y=\"" << Px(canvas.plot_top() + 14)
-      << "\" font-size=\"10\" fill=\"#555\">" << outside << " values outside the range</text>\n";
+    b << "<text x=\"" << Px(canvas.plot_left() + canvas.plot_width() - 6) << "\" y=\"" << Px(canvas.plot_top() + 38)
+      << "\" font-size=\"10\" fill=\"#555\" text-anchor=\"end\">" << outside << " values outside the range</text>\n";
   canvas.DrawRefLines();
   return canvas.Finish();
 }

@@ -58,6 +58,8 @@ struct PlotOptions {
   bool y_include_zero = false;  ///< extend the automatic y range to 0 (ignored on a log axis)
   std::vector<RefLine> vlines;  ///< vertical reference lines at x = value
   std::vector<RefLine> hlines;  ///< horizontal reference lines at y = value
+  /// Legend in one row above the plot area (never covers data) instead of inside its top-right corner.
+  bool legend_above = false;
 };
 
 /// Line plot of `series` (each drawn per its line/markers flags).

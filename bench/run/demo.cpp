@@ -1,6 +1,7 @@
 #include "bench/run/demo.hpp"
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -62,9 +63,17 @@ Status WriteDemoMetrics(const std::string& path, const DemoOptions& options, con
               {"lidar_packets", r.sim.lidar_packets}, {"lidar_returns", r.sim.lidar_returns},
               {"scene_triangles", r.sim.scene_triangles}};
   AddRunMetricsJson(r.slam, r.evaluation, &j);
-  std::ofstream file(path);
-  file << j.dump(2) << "\n";
-  return file ? Status::Ok() : Status::Error(path + ": write failed");
+  // Written whole to a temporary file and renamed: its presence marks a finished run (`rotolidar study` resumes
+  // by it), so an interrupted write must never leave a partial metrics.json.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream file(tmp);
+    file << j.dump(2) << "\n";
+    if (!file.flush()) return Status::Error(tmp + ": write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  return ec ? Status::Error(path + ": rename failed: " + ec.message()) : Status::Ok();
 }
 
 }  // namespace rotolidar::bench

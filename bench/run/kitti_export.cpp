@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "bench/metrics/deskew_error.hpp"  // PoseAt: the truth interpolation the deskew metric uses
 #include "core/io/recording.hpp"
 #include "core/io/scan_splitter.hpp"
 #include "core/pipeline/estimator.hpp"
@@ -16,21 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using ProgressFn = std::function<void(double)>;
-
-/// T_ref_body at t, linear in position and slerp in rotation between the bracketing poses; false outside the span.
-bool InterpolatePose(const Trajectory& traj, Seconds t, Pose3* T) {
-  if (traj.empty() || t < traj.front().t_s || t > traj.back().t_s) return false;
-  const auto it = std::upper_bound(traj.begin(), traj.end(), t,
-                                   [](Seconds a, const StampedPose& p) { return a < p.t_s; });
-  if (it == traj.end()) {
-    *T = traj.back().T_ref_body;
-    return true;
-  }
-  const StampedPose& a = *(it - 1);
-  const double dt = it->t_s - a.t_s;
-  *T = Interpolate(a.T_ref_body, it->T_ref_body, dt > 0.0 ? (t - a.t_s) / dt : 0.0);
-  return true;
-}
 
 /// Return mode of the first parsable data packet (kStrongest when there is none).
 Vlp16ReturnMode RecordingReturnMode(const Recording& rec) {
@@ -70,7 +56,7 @@ std::vector<KittiPoint> DeskewWithTruth(const LidarScan& scan, const Trajectory&
                                         size_t* skipped) {
   std::vector<KittiPoint> out;
   Pose3 T_world_base0;
-  if (!InterpolatePose(base, scan.t_start_s, &T_world_base0)) {
+  if (!PoseAt(base, scan.t_start_s, &T_world_base0)) {
     *skipped += scan.points.size();
     return out;
   }
@@ -78,7 +64,7 @@ std::vector<KittiPoint> DeskewWithTruth(const LidarScan& scan, const Trajectory&
   out.reserve(scan.points.size());
   for (const LidarPoint& p : scan.points) {
     Pose3 T_world_lidar;
-    if (!InterpolatePose(lidar, p.t_s, &T_world_lidar)) {
+    if (!PoseAt(lidar, p.t_s, &T_world_lidar)) {
       ++*skipped;
       continue;
     }
@@ -188,11 +174,11 @@ KittiCalib RigAsKittiCalib(const RigCalib& calib) {
 
 Status WritePosesFromTruth(const Trajectory& base, const KittiDatasetLayout& layout, KittiExportResult* r) {
   Pose3 T_world_base0;
-  if (r->times.empty() || !InterpolatePose(base, r->times.front(), &T_world_base0))
+  if (r->times.empty() || !PoseAt(base, r->times.front(), &T_world_base0))
     return Status::Error(layout.PosesPath() + ": the truth does not cover the first frame");
   for (Seconds t : r->times) {
     Pose3 T_world_base;
-    if (!InterpolatePose(base, t, &T_world_base))
+    if (!PoseAt(base, t, &T_world_base))
       return Status::Error(layout.PosesPath() + ": the truth does not cover t = " + std::to_string(t) + " s");
     r->poses.push_back(VeloToCam0Pose(r->calib.T_cam0_velo, T_world_base0.inverse() * T_world_base));
   }

@@ -172,6 +172,7 @@ EstimatorConfig KittiEstimatorConfig() {
   EstimatorConfig c;
   c.preprocess.min_range_m = 2.0;
   c.preprocess.max_range_m = 80.0;
+  c.features.range_sigma_m = 0.01;  // KITTI has no calib.yaml: the real-sensor value (docs/features.md)
   return c;
 }
 

@@ -44,7 +44,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
   if (Status s = csv.Open(path, {"t_start_s", "t_end_s", "num_points", "num_registered", "num_rotor_fallback",
                                  "num_edge", "num_planar", "num_less_sharp", "num_less_flat", "imu_initialized",
                                  "imu_deskew", "reg_attempted", "converged", "remapped", "iterations",
-                                 "edge_inliers", "planar_inliers", "final_cost", "rmse_m", "degenerate",
+                                 "edge_inliers", "planar_inliers", "initial_cost", "final_cost", "rmse_m", "degenerate",
                                  "num_degenerate", "lambda0", "lambda1", "lambda2", "lambda3", "lambda4", "lambda5",
                                  "degen_tx", "degen_ty", "degen_tz", "degen_rx", "degen_ry", "degen_rz",
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
@@ -60,7 +60,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                double(r.features.less_sharp), double(r.features.less_flat),
                                double(r.imu_initialized), double(r.imu_deskew), double(g.attempted),
                                double(g.converged), double(g.remapped), double(g.iterations),
-                               double(g.edge_inliers), double(g.planar_inliers), g.final_cost, g.rmse_m,
+                               double(g.edge_inliers), double(g.planar_inliers), g.initial_cost, g.final_cost, g.rmse_m,
                                double(d.degenerate), double(d.num_degenerate)};
     for (int i = 0; i < 6; ++i) row.push_back(d.eigenvalues[i]);
     for (int i = 0; i < 6; ++i) row.push_back(d.axis_weight[i]);
@@ -71,7 +71,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
   return csv.Close();
 }
 
-Status WriteOutputs(const std::string& out_dir, const EstimatorConfig& config, const Estimator& estimator,
+Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
                     const SlamRunResult& result) {
   const Trajectory& traj = estimator.trajectory();
   if (Status s = WriteTrajectory(out_dir + "/trajectory.tum", TrajectoryFormat::kTum, traj); !s) return s;
@@ -82,7 +82,7 @@ Status WriteOutputs(const std::string& out_dir, const EstimatorConfig& config, c
   if (Status s = SavePointCloud(out_dir + "/map.pcd", map); !s) return s;
   if (Status s = WriteScanTable(out_dir + "/scans.csv", result.scans); !s) return s;
   YAML::Emitter out;
-  EmitEstimatorConfig(out, config);
+  EmitEstimatorConfig(out, estimator.config());  // resolved against calib.yaml
   std::ofstream file(out_dir + "/slam_config.yaml");
   file << "# Resolved estimator configuration of this run (rotolidar slam).\n" << out.c_str() << "\n";
   return file ? Status::Ok() : Status::Error(out_dir + "/slam_config.yaml: write failed");
@@ -119,7 +119,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   for (const auto& r : result->scans) times.push_back(r.timings.total_ms);
   result->median_scan_ms = Median(times);
   if (result->trajectory.empty()) return Status::Error(recording_dir + ": no complete LiDAR revolution in the data");
-  return WriteOutputs(out_dir, config, estimator, *result);
+  return WriteOutputs(out_dir, estimator, *result);
 }
 
 }  // namespace rotolidar::bench

@@ -80,7 +80,9 @@ struct StudyConfig {
 struct StudyMetric {
   std::string name;          ///< column name, e.g. "ate_rmse_m"
   std::string label;         ///< axis label with unit, e.g. "ATE RMSE [m]"
-  std::string json_pointer;  ///< RFC 6901 pointer into metrics.json; "" = measured by the study (runtime_s)
+  /// RFC 6901 pointers into metrics.json, the first present one wins (a key whose writer is still settling may
+  /// list its candidate spellings); empty = measured by the study itself (runtime_s).
+  std::vector<std::string> json_pointers;
 };
 /// Every metric the study table carries, in column order (docs/studies.md lists them).
 const std::vector<StudyMetric>& StudyMetrics();

@@ -46,12 +46,17 @@ std::vector<std::pair<std::string, std::string>> Parameters(const StudyPoint& p)
           {"duration_s", Num(p.sim.duration_s)}};
 }
 
-/// "axis=value, ..." over the swept axes not in `skip` ("all points" when none is left).
+/// "axis=value, ..." over the swept axes not in `skip`; just the value when one axis is left, "all points" when
+/// none is.
 std::string GroupLabel(const StudyPoint& p, const std::set<std::string>& skip) {
-  std::string label;
-  for (const auto& [axis, value] : p.swept)
-    if (!skip.count(axis)) label += (label.empty() ? "" : ", ") + axis + "=" + value;
-  return label.empty() ? "all points" : label;
+  std::string label, single;
+  int axes = 0;
+  for (const auto& [axis, value] : p.swept) {
+    if (skip.count(axis)) continue;
+    label += (label.empty() ? "" : ", ") + axis + "=" + value;
+    single = value, ++axes;
+  }
+  return axes == 0 ? "all points" : axes == 1 ? single : label;
 }
 
 struct MeanStd {

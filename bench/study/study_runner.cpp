@@ -186,25 +186,27 @@ Status ReadPointMetrics(const std::string& path, std::vector<double>* values) {
   if (j.is_discarded() || !j.is_object()) return Status::Error(path + ": not a JSON object");
   values->assign(StudyMetrics().size(), kNaN);
   for (size_t i = 0; i < StudyMetrics().size(); ++i) {
-    const std::string& pointer = StudyMetrics()[i].json_pointer;
-    if (pointer.empty()) continue;
-    const nlohmann::json::json_pointer ptr(pointer);
-    if (j.contains(ptr) && j.at(ptr).is_number()) (*values)[i] = j.at(ptr).get<double>();
+    for (const std::string& pointer : StudyMetrics()[i].json_pointers) {
+      const nlohmann::json::json_pointer ptr(pointer);
+      if (!j.contains(ptr)) continue;
+      if (j.at(ptr).is_number()) (*values)[i] = j.at(ptr).get<double>();
+      break;
+    }
   }
   return Status::Ok();
 }
 
-Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const PointRunner& runner,
-                StudyResult* result) {
-  std::vector<StudyPoint> points;
-  if (Status s = ExpandStudy(config, &points); !s) return s;
-  StudyResult res;
-  std::vector<size_t> pending;
+namespace {
+
+/// One row per point: finished points read back (kResumed), the others get their sim_config.yaml and are
+/// listed in *pending.
+Status PreparePoints(const std::vector<StudyPoint>& points, const std::string& out_dir, StudyResult* res,
+                     std::vector<size_t>* pending) {
   for (const StudyPoint& p : points) {
     StudyPointResult r;
     r.point = p;
     r.metrics.assign(StudyMetrics().size(), kNaN);
-    const std::string dir = options.out_dir + "/points/" + p.id, text = PointConfigText(p);
+    const std::string dir = out_dir + "/points/" + p.id, text = PointConfigText(p);
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) return Status::Error(dir + ": cannot create: " + ec.message());
@@ -215,10 +217,22 @@ Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const
     } else {
       fs::remove(dir + "/metrics.json", ec);  // stale results of an older config
       if (Status s = WriteFileAtomically(dir + "/sim_config.yaml", text); !s) return s;
-      pending.push_back(res.points.size());
+      pending->push_back(res->points.size());
     }
-    res.points.push_back(std::move(r));
+    res->points.push_back(std::move(r));
   }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const PointRunner& runner,
+                StudyResult* result) {
+  std::vector<StudyPoint> points;
+  if (Status s = ExpandStudy(config, &points); !s) return s;
+  StudyResult res;
+  std::vector<size_t> pending;
+  if (Status s = PreparePoints(points, options.out_dir, &res, &pending); !s) return s;
   const size_t total = res.points.size();
   std::mutex mutex;
   size_t done = total - pending.size();

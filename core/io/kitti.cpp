@@ -220,12 +220,24 @@ Status WriteKittiTimeList(const std::string& path, const std::vector<Seconds>& t
   return WriteText(path, text);
 }
 
+namespace {
+
+/// The general 4x4 inverse, as KITTI's devkit takes it: KITTI's Tr is orthonormal only to ~1e-7, so the rigid
+/// inverse (transposed rotation) would leave Tr * Tr^-1 that far from the identity.
+Pose3 MatrixInverse(const Pose3& T) {
+  Pose3 inv;
+  inv.matrix() = T.matrix().inverse();
+  return inv;
+}
+
+}  // namespace
+
 Pose3 VeloToCam0Pose(const Pose3& T_cam0_velo, const Pose3& T_velo0_velok) {
-  return T_cam0_velo * T_velo0_velok * T_cam0_velo.inverse();
+  return Pose3(T_cam0_velo.matrix() * T_velo0_velok.matrix() * MatrixInverse(T_cam0_velo).matrix());
 }
 
 Pose3 Cam0ToVeloPose(const Pose3& T_cam0_velo, const Pose3& T_cam0_0_cam0_k) {
-  return T_cam0_velo.inverse() * T_cam0_0_cam0_k * T_cam0_velo;
+  return Pose3(MatrixInverse(T_cam0_velo).matrix() * T_cam0_0_cam0_k.matrix() * T_cam0_velo.matrix());
 }
 
 }  // namespace rotolidar

@@ -66,7 +66,8 @@ Status ReadKittiTimeList(const std::string& path, std::vector<Seconds>* times);
 Status WriteKittiTimeList(const std::string& path, const std::vector<Seconds>& times);
 
 /// KITTI's pose convention from a trajectory of the Velodyne frame: T_cam0(0)_cam0(k) = Tr * T_velo(0)_velo(k) *
-/// Tr^-1 with Tr = T_cam0_velo, and back.
+/// Tr^-1 with Tr = T_cam0_velo, and back. Tr^-1 is the general matrix inverse (KITTI's Tr is a rotation only to
+/// ~1e-7), so the identity maps to the identity to round-off.
 Pose3 VeloToCam0Pose(const Pose3& T_cam0_velo, const Pose3& T_velo0_velok);
 Pose3 Cam0ToVeloPose(const Pose3& T_cam0_velo, const Pose3& T_cam0_0_cam0_k);
 

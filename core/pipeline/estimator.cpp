@@ -31,6 +31,7 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
       local_map_(config.local_map),
       dense_map_(config.output_map_voxel_m, config.output_map_points_per_voxel) {
   std::string why;
+  if (config_.features.range_sigma_m == kRangeSigmaFromCalib) config_.features.range_sigma_m = calib_.lidar.range_sigma_m;
   ROTOLIDAR_CHECK(calib_.Validate(&why), why);
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
 }

@@ -83,7 +83,7 @@ struct ScanReport {
   bool imu_deskew = false;        ///< carrier motion came from the IMU (false: constant velocity / none)
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
-  Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< base... imu origin velocity (window), world [m/s]
+  Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< imu origin velocity from the window, world [m/s] (0 before IMU init)
   /// Only with EstimatorConfig::keep_deskewed: the decoded points (lidar frame, with t_s) and, same size and
   /// order, each point deskewed into the base frame at t_start_s (NaN where it was not deskewed).
   std::vector<LidarPoint> deskew_source;
@@ -94,6 +94,9 @@ class Estimator {
  public:
   /// `calib` must be valid; `config` must Validate (both ROTOLIDAR_CHECKed).
   Estimator(const RigCalib& calib, const EstimatorConfig& config);
+
+  /// The configuration in use, resolved against the calibration (features.range_sigma_m from calib.yaml).
+  const EstimatorConfig& config() const { return config_; }
   ~Estimator();
 
   void Feed(const EncoderSample& sample);

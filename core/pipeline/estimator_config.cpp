@@ -4,13 +4,36 @@
 
 namespace rotolidar {
 
+FeatureConfig EstimatorFeatureDefaults() {
+  FeatureConfig c;
+  c.planars_per_sector = 20;
+  c.edge_min_snr = 5.0;
+  c.range_sigma_m = kRangeSigmaFromCalib;
+  return c;
+}
+
+LocalMapConfig EstimatorLocalMapDefaults() {
+  LocalMapConfig c;
+  c.planar_voxel_m = 0.2;
+  c.max_keyframes = 40;
+  return c;
+}
+
+ScanToMapConfig EstimatorRegistrationDefaults() {
+  ScanToMapConfig c;
+  c.num_neighbours = 10;
+  return c;
+}
+
 bool EstimatorConfig::Validate(std::string* error) const {
   auto fail = [&](const std::string& m) {
     if (error) *error = m;
     return false;
   };
   if (!(cut_azimuth_deg >= 0 && cut_azimuth_deg < 360)) return fail("cut_azimuth_deg must be in [0, 360)");
-  if (!preprocess.Validate(error) || !features.Validate(error) || !registration.Validate(error) ||
+  FeatureConfig features_resolved = features;  // kRangeSigmaFromCalib is resolved by the Estimator
+  if (features_resolved.range_sigma_m == kRangeSigmaFromCalib) features_resolved.range_sigma_m = 0.0;
+  if (!preprocess.Validate(error) || !features_resolved.Validate(error) || !registration.Validate(error) ||
       !local_map.Validate(error) || !window.Validate(error) || !imu_init.Validate(error))
     return false;
   if (!(lidar_point_sigma_m > 0) || !std::isfinite(lidar_point_sigma_m))

@@ -13,16 +13,26 @@
 
 namespace rotolidar {
 
+/// The estimator's stage defaults where they differ from the modules' own (measured on the sim's lab recording,
+/// docs/estimator.md): a rotary VLP-16 scan is a 30 deg fan, so registration needs many planar points and a
+/// denser map than LOAM's full-revolution defaults.
+/// features.range_sigma_m = kRangeSigmaFromCalib: the Estimator takes calib.yaml's lidar.range_sigma_m (the
+/// sensor's noise belongs to the rig's calibration; the sim writes its caster's sigma there).
+constexpr double kRangeSigmaFromCalib = -1.0;
+FeatureConfig EstimatorFeatureDefaults();          ///< planars_per_sector 20, edge_min_snr 5, range sigma from calib
+LocalMapConfig EstimatorLocalMapDefaults();        ///< planar_voxel_m 0.2, max_keyframes 40
+ScanToMapConfig EstimatorRegistrationDefaults();   ///< num_neighbours 10
+
 struct EstimatorConfig {
   double cut_azimuth_deg = 0.0;  ///< VLP-16 head azimuth where one revolution ends and the next begins [deg]
 
   PreprocessConfig preprocess;   ///< range gate, SOR, optional voxel (core/preprocess/filters.hpp)
-  FeatureConfig features;        ///< curvature features (core/features/curvature_features.hpp)
-  ScanToMapConfig registration;  ///< feature scan-to-map with degeneracy remapping
-  LocalMapConfig local_map;      ///< keyframe feature map (registration target)
+  FeatureConfig features = EstimatorFeatureDefaults();  ///< curvature features (core/features/curvature_features.hpp)
+  ScanToMapConfig registration = EstimatorRegistrationDefaults();  ///< feature scan-to-map with degeneracy remapping
+  LocalMapConfig local_map = EstimatorLocalMapDefaults();  ///< keyframe feature map (registration target)
   /// A rotary LiDAR sees new directions every scan even when the carrier stands still, so besides the local
   /// map's distance/angle rule a scan becomes a keyframe at least every this many scans.
-  int keyframe_every_scans = 2;
+  int keyframe_every_scans = 1;
   SlidingWindowConfig window;    ///< LiDAR-inertial sliding window (its gravity is set at IMU initialisation)
   ImuInitConfig imu_init;        ///< static / moving IMU initialisation
 

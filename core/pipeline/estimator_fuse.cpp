@@ -89,7 +89,16 @@ Estimator::Prediction Estimator::PredictFromWindow(Seconds t0_s, Seconds t1_s) c
 Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const {
   Prediction out;
   out.motion = IdentityTable(t0_s, t1_s);
-  if (trajectory_.empty()) return out;
+  if (trajectory_.empty()) {
+    // The first scan: no velocity yet, but the gyro still removes the carrier's rotation during the scan.
+    ImuMotionModel gyro_only;
+    gyro_only.use_accel = false;
+    MotionTable scan;
+    if (!imu_.empty() && ImuMotionTable(imu_, t0_s, t1_s, gyro_only, calib_.T_base_imu, &scan)) {
+      out.motion = std::move(scan);
+    }
+    return out;
+  }
   const StampedPose& b = trajectory_.back();
   Pose3 delta_per_s = Pose3::Identity();  // motion over one second, in b's frame (constant twist)
   if (trajectory_.size() >= 2) {

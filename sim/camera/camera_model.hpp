@@ -68,7 +68,7 @@ struct CameraConfig {
   double gain = 1.0;                    ///< digital gain (> 0)
   double gamma = 1.0;                   ///< output = 255 (DN / 255)^(1 / gamma); 1 = linear like the renderers
   // Rendering.
-  CameraRendererKind renderer = CameraRendererKind::kEmbree;
+  CameraRendererKind renderer = CameraRendererKind::kEmbree;  ///< why not osmesa: docs/camera_model.md
   MotionBlurKind motion_blur = MotionBlurKind::kVelocity;
   int blur_subframes = 4;     ///< renders per frame for kSubframes (>= 2)
   int threads = 2;            ///< worker threads for rendering, blur and noise (the bytes do not depend on it)

@@ -12,23 +12,23 @@
 namespace rotolidar::sim {
 namespace {
 
-/// A texture as linear albedo (bytes / 255), with its mip levels (each half the size of the one before).
+/// A texture as albedo bytes (RGBX, 4 bytes a texel: one aligned load per tap), with its mip levels (each half
+/// the size of the one before, box-filtered).
 struct MipTexture {
-  std::vector<int> sizes;                 ///< level width = height [texels]
-  std::vector<std::vector<float>> levels;  ///< RGB per level
-  float tiles_per_m = 1.0f;               ///< 1 / size_m
+  std::vector<int> sizes;                    ///< level width = height [texels]
+  std::vector<std::vector<uint8_t>> levels;  ///< RGBX per level
+  float tiles_per_m = 1.0f;                  ///< 1 / size_m
 };
 
 MipTexture MakeMipTexture(const TextureSpec& spec) {
   const RgbImage image = RenderTexture(spec);
-  cv::Mat level(image.height, image.width, CV_32FC3);
-  for (int i = 0; i < image.width * image.height * 3; ++i)
-    level.ptr<float>()[i] = image.rgb[static_cast<std::size_t>(i)] / 255.0f;
+  cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.rgb.data())), level;
+  cv::cvtColor(rgb, level, cv::COLOR_RGB2RGBA);
   MipTexture t;
   t.tiles_per_m = static_cast<float>(1.0 / spec.size_m);
   while (true) {
     t.sizes.push_back(level.cols);
-    t.levels.emplace_back(level.ptr<float>(), level.ptr<float>() + 3 * level.total());
+    t.levels.emplace_back(level.ptr<uint8_t>(), level.ptr<uint8_t>() + 4 * level.total());
     if (level.cols == 1) break;
     cv::Mat half;
     const int n = std::max(1, (level.cols + 1) / 2);
@@ -38,17 +38,29 @@ MipTexture MakeMipTexture(const TextureSpec& spec) {
   return t;
 }
 
+int FloorToInt(float x) {  // std::floor is a libm call without SSE4.1
+  const int i = static_cast<int>(x);
+  return x < static_cast<float>(i) ? i - 1 : i;
+}
+
 /// Bilinear, wrapping lookup of level `l` at texture coordinates (s, t) in tiles.
 Eigen::Array3f SampleLevel(const MipTexture& tex, int l, float s, float t) {
   const int n = tex.sizes[static_cast<std::size_t>(l)];
-  const float x = (s - std::floor(s)) * n - 0.5f, y = (t - std::floor(t)) * n - 0.5f;
-  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const float x = (s - static_cast<float>(FloorToInt(s))) * n - 0.5f;  // in [-0.5, n - 0.5)
+  const float y = (t - static_cast<float>(FloorToInt(t))) * n - 0.5f;
+  const int x0 = FloorToInt(x), y0 = FloorToInt(y);  // in [-1, n - 1]
   const float fx = x - x0, fy = y - y0;
-  const auto wrap = [n](int i) { return ((i % n) + n) % n; };
-  const int xa = wrap(x0), xb = wrap(x0 + 1), ya = wrap(y0), yb = wrap(y0 + 1);
-  const float* d = tex.levels[static_cast<std::size_t>(l)].data();
-  const auto at = [&](int xi, int yi) { return Eigen::Array3f::Map(d + 3 * (yi * n + xi)); };
-  return (1 - fy) * ((1 - fx) * at(xa, ya) + fx * at(xb, ya)) + fy * ((1 - fx) * at(xa, yb) + fx * at(xb, yb));
+  const int xa = x0 < 0 ? n - 1 : x0, ya = y0 < 0 ? n - 1 : y0;
+  const int xb = x0 + 1 >= n ? 0 : x0 + 1, yb = y0 + 1 >= n ? 0 : y0 + 1;
+  const uint8_t* d = tex.levels[static_cast<std::size_t>(l)].data();
+  const uint8_t* p00 = d + 4 * (ya * n + xa);
+  const uint8_t* p01 = d + 4 * (ya * n + xb);
+  const uint8_t* p10 = d + 4 * (yb * n + xa);
+  const uint8_t* p11 = d + 4 * (yb * n + xb);
+  const float w00 = (1 - fx) * (1 - fy), w01 = fx * (1 - fy), w10 = (1 - fx) * fy, w11 = fx * fy;
+  Eigen::Array3f out;
+  for (int c = 0; c < 3; ++c) out[c] = (w00 * p00[c] + w01 * p01[c] + w10 * p10[c] + w11 * p11[c]) * (1.0f / 255.0f);
+  return out;
 }
 
 /// Trilinear lookup: `texels_per_px` is the pixel's footprint in level-0 texels.
@@ -102,6 +114,26 @@ struct Light {
 constexpr float kSpotCosCutoff = 0.70710678f;  // MuJoCo's default cutoff: 45 deg
 constexpr double kShadowBias_m = 2e-3;
 
+/// Irradiance from one light at point p with normal n; *to_light: unit direction, *distance_m its range.
+inline float LightTerm(const Light& light, const Eigen::Vector3f& p, const Eigen::Vector3f& n, Eigen::Vector3f* to_light,
+                float* distance_m) {
+  if (light.directional) {
+    *to_light = -light.direction;
+    *distance_m = 1e30f;
+    return light.intensity * std::max(0.0f, n.dot(*to_light));
+  }
+  const Eigen::Vector3f v = light.position - p;
+  *distance_m = v.norm();
+  const float inv = 1.0f / *distance_m;
+  const float c = -v.dot(light.direction) * inv;  // cosine to the spot's axis
+  if (c < kSpotCosCutoff) return 0.0f;
+  const float ndotl = n.dot(v) * inv;
+  if (ndotl <= 0.0f) return 0.0f;
+  *to_light = v * inv;
+  const float c2 = c * c, c4 = c2 * c2;
+  return light.intensity * c4 * c4 * c2 * ndotl;  // spot exponent 10
+}
+
 }  // namespace
 
 struct EmbreeCameraRenderer::Impl {
@@ -118,6 +150,9 @@ struct EmbreeCameraRenderer::Impl {
   Eigen::Array3f sky = Eigen::Array3f::Zero();
 
   void RenderRow(int v, const Pose3& T_world_cam, const PixelRayTable& rays, RadianceImage* out) const;
+  /// Adds a shadow-casting light's irradiance where a shadow ray reaches it (one batch for the row).
+  void AddShadowedLight(const Light& light, const std::vector<RayHit>& hits, const std::vector<Eigen::Vector3d>& points,
+                        std::vector<RayQuery>* queries, std::vector<float>* irradiance) const;
   Eigen::Array3f Albedo(const RayHit& hit, const Eigen::Vector3d& p_world, float texels_scale) const;
 };
 
@@ -183,6 +218,27 @@ Eigen::Array3f EmbreeCameraRenderer::Impl::Albedo(const RayHit& hit, const Eigen
                                          texels_per_px);
 }
 
+void EmbreeCameraRenderer::Impl::AddShadowedLight(const Light& light, const std::vector<RayHit>& hits,
+                                                  const std::vector<Eigen::Vector3d>& points,
+                                                  std::vector<RayQuery>* queries,
+                                                  std::vector<float>* irradiance) const {
+  std::vector<float> term(queries->size(), 0.0f);
+  for (std::size_t i = 0; i < queries->size(); ++i) {
+    (*queries)[i].t_max_m = 0.0;  // no shadow ray
+    if (!hits[i].hit) continue;
+    Eigen::Vector3f l;
+    float distance;
+    term[i] = LightTerm(light, points[i].cast<float>(), hits[i].normal_world.cast<float>(), &l, &distance);
+    if (term[i] > 0.0f)
+      (*queries)[i] = {points[i] + kShadowBias_m * hits[i].normal_world, l.cast<double>(),
+                       std::min<double>(distance, config.max_range_m) - kShadowBias_m};
+  }
+  std::vector<RayHit> blockers(queries->size());
+  embree->IntersectBatch(queries->data(), queries->size(), blockers.data());
+  for (std::size_t i = 0; i < queries->size(); ++i)
+    if (!blockers[i].hit) (*irradiance)[i] += term[i];
+}
+
 void EmbreeCameraRenderer::Impl::RenderRow(int v, const Pose3& T_world_cam, const PixelRayTable& rays,
                                            RadianceImage* out) const {
   const int w = rays.width;
@@ -218,49 +274,19 @@ void EmbreeCameraRenderer::Impl::RenderRow(int v, const Pose3& T_world_cam, cons
     const Eigen::Vector3f n = hit.normal_world.cast<float>();
     const float cos_view = std::max(0.25f, static_cast<float>(-hit.normal_world.dot(dir)));
     irradiance[i] = ambient + headlight * std::max(0.0f, -n.dot(forward));
+    const Eigen::Vector3f p = points[i].cast<float>();
     for (const Light& light : lights) {
-      if (light.shadow) continue;  // added below, after its shadow rays
-      Eigen::Vector3f l = -light.direction;
-      float spot = 1.0f;
-      if (!light.directional) {
-        l = (light.position - points[i].cast<float>()).normalized();
-        const float c = -l.dot(light.direction);
-        const float c2 = c * c, c4 = c2 * c2;
-        spot = c >= kSpotCosCutoff ? c4 * c4 * c2 : 0.0f;  // cos^10
-      }
-      irradiance[i] += light.intensity * spot * std::max(0.0f, n.dot(l));
+      Eigen::Vector3f l;
+      float distance;
+      if (!light.shadow) irradiance[i] += LightTerm(light, p, n, &l, &distance);  // shadowed ones: below
     }
     const float footprint_m = static_cast<float>(hit.distance_m) / (f_px * cos_view);
     const Eigen::Array3f albedo = Albedo(hit, points[i], footprint_m);
     Eigen::Array3f::Map(px) = albedo;  // times the irradiance once shadows are known
     out->depth_m[static_cast<std::size_t>(v) * w + i] = static_cast<float>(hit.distance_m) / ray_norm[i];
   }
-  for (const Light& light : lights) {
-    if (!light.shadow) continue;
-    std::vector<float> term(queries.size(), 0.0f);
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(u);
-      queries[i].t_max_m = 0.0;  // no shadow ray
-      if (!hits[i].hit) continue;
-      const Eigen::Vector3f n = hits[i].normal_world.cast<float>();
-      Eigen::Vector3f l = -light.direction;
-      float spot = 1.0f, distance = static_cast<float>(config.max_range_m);
-      if (!light.directional) {
-        const Eigen::Vector3f to_light = light.position - points[i].cast<float>();
-        distance = to_light.norm();
-        l = to_light / distance;
-        const float c = -l.dot(light.direction), c2 = c * c, c4 = c2 * c2;
-        spot = c >= kSpotCosCutoff ? c4 * c4 * c2 : 0.0f;
-      }
-      term[i] = light.intensity * spot * std::max(0.0f, n.dot(l));
-      if (term[i] > 0.0f)
-        queries[i] = {points[i] + kShadowBias_m * hits[i].normal_world, l.cast<double>(), distance - kShadowBias_m};
-    }
-    std::vector<RayHit> blockers(queries.size());
-    embree->IntersectBatch(queries.data(), queries.size(), blockers.data());
-    for (std::size_t i = 0; i < queries.size(); ++i)
-      if (!blockers[i].hit) irradiance[i] += term[i];
-  }
+  for (const Light& light : lights)
+    if (light.shadow) AddShadowedLight(light, hits, points, &queries, &irradiance);
   for (int u = 0; u < w; ++u) {
     const std::size_t i = static_cast<std::size_t>(u);
     if (!hits[i].hit) continue;

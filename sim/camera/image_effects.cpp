@@ -169,8 +169,8 @@ void ExposeSensor(const CameraConfig& config, const RadianceImage& radiance, uin
         const float n = normal[bits & 0xffff];
         bits >>= 16;
         --left;
-        const float e = std::min(std::max(in[i], 0.0f) * e_per_radiance, full_well);
-        const float measured = std::clamp(e + std::sqrt(e + read_var) * n, 0.0f, full_well);
+        const float e = std::max(in[i], 0.0f) * e_per_radiance;  // a full well reads full: clip after the noise
+        const float measured = std::clamp(e + std::sqrt(std::min(e, full_well) + read_var) * n, 0.0f, full_well);
         float dn = std::min(measured * dn_per_e, 255.0f);
         if (!gamma_lut.empty()) {
           const float x = dn * (4096.0f / 255.0f);

@@ -195,7 +195,7 @@ bool WheeledConfig::Validate(std::string* error) const {
 
 bool CarConfig::Validate(std::string* error) const {
   if (waypoints_file.empty() && waypoints.size() < 2)
-    return Fail(error, "car: waypoints_file or >= 2 waypoints required (or a scene with a car default path)");
+    return Fail(error, "car.waypoints_file: required, or car.waypoints with >= 2 points (or a scene with a car default path)");
   return InRange(error, "car.height_m", height_m, 0.0, 5.0) &&
          InRange(error, "car.cruise_speed_mps", cruise_speed_mps, 0.5, 70.0) &&
          InRange(error, "car.max_lateral_accel_mps2", max_lateral_accel_mps2, 0.1, 15.0) &&

@@ -107,13 +107,16 @@ TEST(Coverage, VisibilityHidesWhatABoxOccludes) {
   scene.primitives.push_back(crate);
   const sim::TriangleMesh mesh = sim::BuildMesh(scene);
   auto samples = SampleSurfaces(mesh, 0.05, Eigen::AlignedBox3d());
-  // Seen from two points above the crate on both sides, everything is visible except the floor under the
-  // crate and the crate's bottom face (1 m^2 each).
-  ASSERT_TRUE(MarkVisible(mesh, {Eigen::Vector3d(-1.2, 0, 2.0), Eigen::Vector3d(1.2, 0, 2.0)}, 0.1, 30.0, &samples));
+  // Seen from four points above the room around the crate (each shadow of one is lit by another), everything
+  // is visible except the floor under the crate and the crate's bottom face (1 m^2 each).
+  const std::vector<Eigen::Vector3d> views = {{-1.2, 0, 2}, {1.2, 0, 2}, {0, -1.2, 2}, {0, 1.2, 2}};
+  ASSERT_TRUE(MarkVisible(mesh, views, 0.1, 30.0, &samples));
   const CoverageResult r = SummarizeCoverage(samples, true);
   // Bound: a 5 cm row of samples along the 4 m perimeter of each hidden square may fall either way: 2 * 0.2 m^2.
   EXPECT_NEAR(r.total.area_m2 - r.total.visible_area_m2, 2.0, 0.4);
-  EXPECT_NEAR(r.per_class[int(SurfaceClass::kCeiling)].visible_area_m2, 12.0, 1e-3);
+  // Ceiling class: the room's ceiling (12 m^2, all visible) and the crate's bottom (1 m^2, hidden but its rim row).
+  EXPECT_NEAR(r.per_class[int(SurfaceClass::kCeiling)].area_m2, 13.0, 1e-3);
+  EXPECT_NEAR(r.per_class[int(SurfaceClass::kCeiling)].visible_area_m2, 12.0, 0.2);
   // A range limit of 1 m from the same points hides most of the room.
   ASSERT_TRUE(MarkVisible(mesh, {Eigen::Vector3d(-1.2, 0, 2.0)}, 0.1, 1.0, &samples));
   EXPECT_LT(SummarizeCoverage(samples, true).total.visible_area_m2, 0.2 * r.total.area_m2);

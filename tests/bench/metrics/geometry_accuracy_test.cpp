@@ -91,6 +91,20 @@ TEST(GeometryAccuracy, WindowWithSillAndAnnotationOffset) {
   EXPECT_NEAR(m.height_m, 1.3, kPlaneBoundM);
 }
 
+TEST(GeometryAccuracy, UnseenJambIsReportedNotGuessed) {
+  RandomStream rng(3, "unseen_jamb_test");
+  std::vector<Eigen::Vector3f> pts;
+  // The door of OpenDoorOfKnownSize (yaw 0, at the origin) without its right jamb (local x = +0.45): the
+  // faces' noise still leaks points into the reveal, but no plane stands out of them.
+  for (const Eigen::Vector3f& p : WallWithOpening(0.9, 2.1, 0.0, 0.15, 0.0, Eigen::Vector3d::Zero(), &rng))
+    if (!(std::abs(p.x() - 0.45) < 0.03 && std::abs(p.y()) < 0.075 + 0.03)) pts.push_back(p);
+  const ElementMeasurement m = MeasureElement(sim::Scene(), Opening("door", 0.9, 2.1, 0, 0.15, 0.0,
+                                              Eigen::Vector3d::Zero()), pts, ElementFitConfig());
+  EXPECT_FALSE(m.width_measured) << m.width_m;
+  EXPECT_TRUE(m.height_measured) << m.message;
+  EXPECT_NE(m.message.find("jamb"), std::string::npos) << m.message;
+}
+
 TEST(GeometryAccuracy, TooFewPointsIsReportedNotGuessed) {
   std::vector<Eigen::Vector3f> pts(10, Eigen::Vector3f(0, 0, 1));
   const ElementMeasurement m = MeasureElement(sim::Scene(), Opening("door", 1, 2, 0, 0.2, 0, Eigen::Vector3d::Zero()),

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "bench/run/kitti_export.hpp"
@@ -21,7 +23,8 @@ namespace fs = std::filesystem;
 class KittiExport : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string((fs::temp_directory_path() / "rotolidar_kitti_export").string());
+    // One folder per process: ctest runs each test in its own process, possibly two at once (-j2).
+    dir_ = new std::string((fs::temp_directory_path() / ("rotolidar_kitti_export_" + std::to_string(getpid()))).string());
     fs::remove_all(*dir_);
     sim::SimConfig config = sim::DefaultSimConfig();
     config.scene = "lab";
@@ -30,6 +33,7 @@ class KittiExport : public ::testing::Test {
     sim_status_ = new Status(sim::RunSimulation(config, *dir_ + "/recording", &summary));
   }
   static void TearDownTestSuite() {
+    fs::remove_all(*dir_);
     delete dir_;
     delete sim_status_;
   }
@@ -83,7 +87,11 @@ TEST_F(KittiExport, ReadsBackAsOneFramePerRevolutionWithTruthPoses) {
   ASSERT_EQ(seq.poses.size(), r.frames);
   size_t points = 0;
   for (size_t k = 0; k < r.frames; ++k) {
-    if (k > 0) EXPECT_NEAR(seq.times[k] - seq.times[k - 1], 0.1, 0.002) << k;  // 600 rpm head
+    // 600 rpm head; a frame's time is its first return's, up to ~12 ms after the cut where the head looks at
+    // nothing (measured: first frame 11.9 ms late, gaps 95.4-100.0 ms)
+    if (k > 0) {
+      EXPECT_NEAR(seq.times[k] - seq.times[k - 1], 0.1, 0.01) << k;
+    }
     EXPECT_EQ(seq.times[k], r.times[k]);
     std::vector<KittiPoint> bin;
     ASSERT_TRUE(ReadKittiBin(seq.bin_paths[k], &bin));
@@ -138,16 +146,25 @@ TEST_F(KittiExport, TruthAndEstimatorDeskewAgreePointByPoint) {
     std::vector<KittiPoint> pa, pb;
     ASSERT_TRUE(ReadKittiBin(la.BinPath(int(k)), &pa));
     ASSERT_TRUE(ReadKittiBin(lb.BinPath(int(k)), &pb));
-    ASSERT_EQ(pa.size(), pb.size() + 0) << "frame " << k << " (estimator skipped " << b.points_skipped << ")";
+    ASSERT_EQ(pa.size(), pb.size()) << "frame " << k << " (estimator skipped " << b.points_skipped << ")";
+    std::vector<double> frame;
     for (size_t i = 0; i < pa.size(); ++i)
-      errors.push_back((Eigen::Vector3f(pa[i].x_m, pa[i].y_m, pa[i].z_m) -
-                        Eigen::Vector3f(pb[i].x_m, pb[i].y_m, pb[i].z_m)).norm());
+      frame.push_back((Eigen::Vector3f(pa[i].x_m, pa[i].y_m, pa[i].z_m) -
+                       Eigen::Vector3f(pb[i].x_m, pb[i].y_m, pb[i].z_m)).norm());
+    std::sort(frame.begin(), frame.end());
+    if (k == 0 || k + 1 == a.frames)
+      std::printf("frame %zu: median %.4f m, max %.4f m\n", k, frame[frame.size() / 2], frame.back());
+    errors.insert(errors.end(), frame.begin(), frame.end());
   }
   std::sort(errors.begin(), errors.end());
   const double median = errors[errors.size() / 2], p99 = errors[errors.size() * 99 / 100];
   std::printf("truth vs estimator deskew over %zu points: median %.4f m, p99 %.4f m, max %.4f m\n", errors.size(),
               median, p99, errors.back());
-  EXPECT_LT(median, 1.0);  // placeholder until measured
+  // Measured (seed 1, lab, 2 s): median 3.3 cm, p99 9.9 cm, max 10.9 cm; per frame the median grows steadily from
+  // 1.8 cm (frame 0) to 5.4 cm (frame 17): the core's encoder/IMU deskew against the exact one. Bounds ~1.5x:
+  // a frame convention slip (wrong scan-start frame, lidar instead of base, a revolution off) gives decimetres.
+  EXPECT_LT(median, 0.05);
+  EXPECT_LT(p99, 0.15);
 }
 
 }  // namespace

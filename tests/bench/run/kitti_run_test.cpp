@@ -60,7 +60,6 @@ TEST_F(Kitti00Run, BinsSplitIntoSixtyFourDescendingLinesAndPosesConvert) {
     EXPECT_NEAR(stats.line_median_elevation_deg.back(), -23.7, 0.3) << k;
   }
   // The shipped velodyne-frame truth was converted as T_velo_k = Tr^-1 * P_k * Tr.
-  std::ifstream in(std::string(DataRoot()) + "/kitti00/gt_velo_poses_00_frames_0-5.txt");
   std::vector<Pose3> velo;
   ASSERT_TRUE(ReadKittiPoses(std::string(DataRoot()) + "/kitti00/gt_velo_poses_00_frames_0-5.txt", &velo));
   ASSERT_EQ(velo.size(), 6u);
@@ -144,9 +143,13 @@ TEST_F(Kitti00Run, RunnerFollowsPclGicpFrameToFrame) {
   }
   std::printf("KITTI 00 vs GT: APE (no align) rmse %.4f m max %.4f m, RPE rmse %.4f m / %.4f deg\n", r.ape.stats.rmse,
               r.ape.stats.max, r.rpe_translation.stats.rmse, r.rpe_rotation.stats.rmse);
-  EXPECT_LT(worst_gicp_m, 1.0);  // placeholder until measured
-  EXPECT_LT(worst_gicp_deg, 1.0);
-  EXPECT_LT(worst_gt_m, 1.0);
+  // Measured: <= 10.4 mm / 0.049 deg from PCL GICP per frame (our features + scan-to-map against GICP on 0.3 m
+  // voxels); 2.5 cm / 0.1 deg keeps ~2x headroom. Against the shipped truth 0.12-0.19 m per frame (the data issue
+  // above: it says 0.86 m per frame, both registrations 0.68-0.75 m); 0.25 m still fails on a lost frame (a frame
+  // left at constant velocity or unregistered is off by the whole 0.7 m step).
+  EXPECT_LT(worst_gicp_m, 0.025);
+  EXPECT_LT(worst_gicp_deg, 0.1);
+  EXPECT_LT(worst_gt_m, 0.25);
 }
 
 }  // namespace

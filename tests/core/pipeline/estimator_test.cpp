@@ -82,7 +82,10 @@ TEST(Estimator, DeskewedScansTrackAKnownPathLidarOnly) {
   RigCalib calib;
   calib.motor_speed_radps = 2.6;
   EstimatorConfig config;
+  // A 64-ring full-revolution scan: LOAM's module defaults (4 planar points per cell) suffice and keep this fast.
+  config.features = FeatureConfig();
   config.features.range_sigma_m = 0.0;  // noise-free ranges: no noise gate
+  config.registration.num_neighbours = 5;
   Estimator estimator(calib, config);
   const Pose3 T0 = TruePose(0.0);
   std::vector<ScanReport> reports;
@@ -98,9 +101,10 @@ TEST(Estimator, DeskewedScansTrackAKnownPathLidarOnly) {
     max_err_m = std::max(max_err_m, (est.translation() - truth.translation()).norm());
     max_err_rad = std::max(max_err_rad, LogSO3(est.linear().transpose() * truth.linear()).norm());
   }
-  // Noise-free, exactly deskewed scans of planes and box edges: measured max error 2 mm / 0.2 mrad over 1.2 m of
-  // travel (feature quantisation on the 0.4 deg grid). 1 cm / 2 mrad bounds leave room without hiding a drift.
-  EXPECT_LT(max_err_m, 0.01);
+  // Noise-free, exactly deskewed scans of planes and box edges: measured max error 6.6 mm / 1.3 mrad over 1.2 m
+  // of travel (the 0.2 m map voxels' plane fits near the room's corners bias the planes slightly). 1.2 cm / 2 mrad
+  // bounds; a frame or sign error gives decimetres.
+  EXPECT_LT(max_err_m, 0.012);
   EXPECT_LT(max_err_rad, 2e-3);
   // Report fields: the first scan defines the map; later ones register and converge.
   EXPECT_FALSE(reports[0].registration.attempted);

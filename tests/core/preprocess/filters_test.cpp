@@ -157,33 +157,48 @@ TEST(RingStatisticalOutlierFilter, RemovesStrayReturnsKeepsFarSurfaceAnyInputOrd
   EXPECT_TRUE(a == b);
 }
 
-// The K nearest of the candidates, not the K nearest firings: at the border of a pillar 2 m in front of an 8 m wall
-// half of a point's same-ring firings lie on the wall, yet its nearest candidates (same side, adjacent rings) lie
-// on the pillar. With range noise, exact and ring search must remove nearly the same points and keep the borders.
-TEST(RingStatisticalOutlierFilter, KeepsOccluderBordersAndAgreesWithExactSearch) {
+// Kept-or-removed decisions of two filter outputs of the same input (points identified by t_s) that differ.
+std::size_t DecisionsDiffer(const std::vector<ScanPoint>& input, const std::vector<ScanPoint>& a,
+                            const std::vector<ScanPoint>& b) {
+  std::set<double> in_a, in_b;
+  for (const ScanPoint& p : a) in_a.insert(p.t_s);
+  for (const ScanPoint& p : b) in_b.insert(p.t_s);
+  std::size_t differ = 0;
+  for (const ScanPoint& p : input) differ += in_a.count(p.t_s) != in_b.count(p.t_s);
+  return differ;
+}
+
+// The K nearest of the candidates, not the K nearest firings: a pillar 2 m in front of an 8 m wall. At the pillar's
+// border half of a point's same-ring firings lie on the wall; the exact search finds its neighbours on the pillar
+// (same side, adjacent rings), and so does the ring neighbourhood. Noise-free, the decisions are identical (the
+// one-sided points at the pillar's and the scan's borders stand out of the noise-free spread in both); with range
+// noise both remove the tail of a noisy statistic (near returns) and agree on nearly every point.
+TEST(RingStatisticalOutlierFilter, AgreesWithExactSearchAtOccluders) {
   const float deg = 3.14159265f / 180.f;
   auto range = [&](float az, float el) {  // pillar |y| <= 0.15 m at x = 2 m, wall x = 8 m, azimuth -40..40 deg
     const double wall = 8.0 / (std::cos(el * deg) * std::cos(az * deg));
     const double pillar = 2.0 / (std::cos(el * deg) * std::cos(az * deg));
     return std::abs(pillar * std::cos(el * deg) * std::sin(az * deg)) <= 0.15 ? pillar : wall;
   };
-  const std::vector<ScanPoint> pts = Revolution(range, 0.01, -40.0, 40.0);
-  std::vector<ScanPoint> ring = pts, exact = pts;
-  RingStatisticalOutlierFilter(8, 3.0, true, SorNeighbourhood{}, &ring);
-  StatisticalOutlierFilter(8, 3.0, true, &exact);
-  auto pillar_count = [](const std::vector<ScanPoint>& v) {
-    return std::count_if(v.begin(), v.end(), [](const ScanPoint& p) { return p.range_m < 3.f; });
-  };
-  EXPECT_EQ(pillar_count(ring), pillar_count(pts));  // measured: every pillar point kept (both searches)
-  EXPECT_EQ(pillar_count(exact), pillar_count(pts));
-  std::set<double> kept_ring, kept_exact;
-  for (const ScanPoint& p : ring) kept_ring.insert(p.t_s);
-  for (const ScanPoint& p : exact) kept_exact.insert(p.t_s);
-  std::size_t differ = 0;
-  for (const ScanPoint& p : pts) differ += kept_ring.count(p.t_s) != kept_exact.count(p.t_s);
-  // Both remove the tail of a noisy statistic, so threshold cases flip; measured 0 of 6,400 differ, allowed 0.5 %.
-  EXPECT_LT(differ, pts.size() / 200) << "removed ring " << pts.size() - ring.size() << " exact "
-                                      << pts.size() - exact.size();
+  for (const double noise_m : {0.0, 0.01}) {
+    const std::vector<ScanPoint> pts = Revolution(range, noise_m, -40.0, 40.0);
+    std::vector<ScanPoint> ring = pts, exact = pts, firings = pts;
+    RingStatisticalOutlierFilter(8, 3.0, true, SorNeighbourhood{}, &ring);
+    StatisticalOutlierFilter(8, 3.0, true, &exact);
+    RingStatisticalOutlierFilter(8, 3.0, true, SorNeighbourhood{4, 0, 0}, &firings);  // the 8 nearest firings
+    const std::size_t differ = DecisionsDiffer(pts, ring, exact);
+    const std::size_t differ_firings = DecisionsDiffer(pts, firings, exact);
+    SCOPED_TRACE("noise " + std::to_string(noise_m) + ": removed ring " + std::to_string(pts.size() - ring.size()) +
+                 ", exact " + std::to_string(pts.size() - exact.size()) + ", firings only " +
+                 std::to_string(pts.size() - firings.size()) + "; differ " + std::to_string(differ) + " / " +
+                 std::to_string(differ_firings));
+    EXPECT_GT(pts.size() - exact.size(), 0u);  // the comparison is not vacuous
+    // Measured: clean 128 removed by both, 0 differ (firings only: 160 differ); 1 cm noise: 164 vs 166 removed,
+    // 12 of 6,400 decisions differ (0.19 %), allowed 0.5 %.
+    if (noise_m == 0.0) EXPECT_EQ(differ, 0u);
+    EXPECT_LT(differ, pts.size() / 200);
+    if (noise_m == 0.0) EXPECT_GT(differ_firings, 0u);
+  }
 }
 
 TEST(StatisticalOutlierFilter, FewerPointsThanKKeepsAll) {

@@ -1,5 +1,6 @@
 #include "bench/cli/options.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <iomanip>
 #include <iostream>
@@ -70,14 +71,23 @@ void OptionParser::PrintHelp(std::ostream& os) const {
     for (const auto& p : positionals_) os << "  " << std::left << std::setw(24) << p.name << p.help << "\n";
     os << "\n";
   }
-  os << std::left << "  " << std::setw(26) << "option" << std::setw(20) << "default" << std::setw(9) << "unit"
-     << "description\n";
-  os << "  " << std::string(26 + 20 + 9 + 40, '-') << "\n";
+  // Columns wide enough for the longest entry, so a long default never runs into its unit.
+  size_t name_w = 26, default_w = 20, unit_w = 9;
   for (const auto& s : specs_) {
-    os << "  " << std::setw(26) << ("--" + s.name) << std::setw(20) << (s.default_value.empty() ? "(none)" : s.default_value)
-       << std::setw(9) << (s.unit.empty() ? "-" : s.unit) << s.help << "\n";
+    name_w = std::max(name_w, s.name.size() + 4);
+    default_w = std::max(default_w, s.default_value.size() + 2);
+    unit_w = std::max(unit_w, s.unit.size() + 2);
   }
-  os << "  " << std::setw(26) << "--help" << std::setw(20) << "" << std::setw(9) << "-" << "show this table\n";
+  const int nw = int(name_w), dw = int(default_w), uw = int(unit_w);
+  os << std::left << "  " << std::setw(nw) << "option" << std::setw(dw) << "default" << std::setw(uw) << "unit"
+     << "description\n";
+  os << "  " << std::string(name_w + default_w + unit_w + 40, '-') << "\n";
+  for (const auto& s : specs_) {
+    os << "  " << std::setw(nw) << ("--" + s.name) << std::setw(dw)
+       << (s.default_value.empty() ? "(none)" : s.default_value) << std::setw(uw) << (s.unit.empty() ? "-" : s.unit)
+       << s.help << "\n";
+  }
+  os << "  " << std::setw(nw) << "--help" << std::setw(dw) << "" << std::setw(uw) << "-" << "show this table\n";
 }
 
 std::string OptionParser::Get(const std::string& name) const {

@@ -48,7 +48,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "num_degenerate", "lambda0", "lambda1", "lambda2", "lambda3", "lambda4", "lambda5",
                                  "degen_tx", "degen_ty", "degen_tz", "degen_rx", "degen_ry", "degen_rz",
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
-                                 "total_ms"});
+                                 "total_ms", "held_static"});
       !s)
     return s;
   for (const ScanReport& r : scans) {
@@ -66,6 +66,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
     for (int i = 0; i < 6; ++i) row.push_back(d.axis_weight[i]);
     for (double ms : {t.deskew_ms, t.preprocess_ms, t.features_ms, t.register_ms, t.fuse_ms, t.map_ms, t.total_ms})
       row.push_back(ms);
+    row.push_back(double(r.held_static));
     csv.Row(row);
   }
   return csv.Close();

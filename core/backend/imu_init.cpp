@@ -115,6 +115,7 @@ bool ImuInitConfig::Validate(std::string* error) const {
   if (static_min_samples < 2) return fail("static_min_samples must be >= 2");
   if (!positive(static_max_gyro_std_radps)) return fail("static_max_gyro_std_radps must be > 0");
   if (!positive(static_max_accel_std_mps2)) return fail("static_max_accel_std_mps2 must be > 0");
+  if (!positive(still_max_gyro_mean_radps)) return fail("still_max_gyro_mean_radps must be > 0");
   if (!positive(max_gravity_error_mps2)) return fail("max_gravity_error_mps2 must be > 0");
   if (moving_min_poses < 3) return fail("moving_min_poses must be >= 3 (fewer leave velocity and gravity free)");
   if (gyro_bias_iterations < 1) return fail("gyro_bias_iterations must be >= 1");
@@ -169,6 +170,33 @@ ImuInitResult InitializeStatic(const std::vector<ImuSample>& samples, const ImuI
   r.states = {s};
   r.success = true;
   return r;
+}
+
+bool ImuIsStill(const std::vector<ImuSample>& samples, Seconds t0_s, Seconds t1_s, const ImuInitConfig& config,
+                std::string* why) {
+  auto no = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  std::vector<Eigen::Vector3d> gyro, accel;
+  for (const ImuSample& s : samples) {
+    if (s.t_s < t0_s || s.t_s > t1_s) continue;
+    if (!s.gyro_radps.allFinite() || !s.accel_mps2.allFinite()) return no("a sample is not finite");
+    gyro.push_back(s.gyro_radps);
+    accel.push_back(s.accel_mps2);
+  }
+  if (static_cast<int>(gyro.size()) < config.static_min_samples)
+    return no(std::to_string(gyro.size()) + " samples < static_min_samples");
+  Eigen::Vector3d mean_gyro, mean_accel;
+  double gyro_std = 0.0, accel_std = 0.0;
+  MeanAndMaxStd(gyro, &mean_gyro, &gyro_std);
+  MeanAndMaxStd(accel, &mean_accel, &accel_std);
+  if (gyro_std > config.static_max_gyro_std_radps) return no("gyro std " + Num(gyro_std) + " rad/s");
+  if (accel_std > config.static_max_accel_std_mps2) return no("accel std " + Num(accel_std) + " m/s^2");
+  if (mean_gyro.norm() > config.still_max_gyro_mean_radps) return no("|mean gyro| " + Num(mean_gyro.norm()) + " rad/s");
+  if (std::abs(mean_accel.norm() - config.gravity_mps2) > config.max_gravity_error_mps2)
+    return no("|mean accel| " + Num(mean_accel.norm()) + " m/s^2");
+  return true;
 }
 
 ImuInitResult InitializeMoving(const std::vector<Pose3>& T_odom_imu, const std::vector<PreintegratedImu>& imu_between,

@@ -73,6 +73,7 @@ void VisitImuInit(V& v, ImuInitConfig& c) {
   v("gravity_mps2", &c.gravity_mps2), v("static_window_s", &c.static_window_s);
   v("static_min_samples", &c.static_min_samples), v("static_max_gyro_std_radps", &c.static_max_gyro_std_radps);
   v("static_max_accel_std_mps2", &c.static_max_accel_std_mps2);
+  v("still_max_gyro_mean_radps", &c.still_max_gyro_mean_radps);
   v("max_gravity_error_mps2", &c.max_gravity_error_mps2), v("moving_min_poses", &c.moving_min_poses);
   v("gyro_bias_iterations", &c.gyro_bias_iterations);
   v("gravity_refine_iterations", &c.gravity_refine_iterations);
@@ -82,6 +83,7 @@ template <class V>
 void VisitTop(V& v, EstimatorConfig& c) {
   v("cut_azimuth_deg", &c.cut_azimuth_deg), v("keyframe_every_scans", &c.keyframe_every_scans);
   v("use_imu", &c.use_imu), v("lidar_point_sigma_m", &c.lidar_point_sigma_m);
+  v("hold_static_start", &c.hold_static_start);
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
   v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);
   v("output_map_max_range_m", &c.output_map_max_range_m), v("keep_deskewed", &c.keep_deskewed);

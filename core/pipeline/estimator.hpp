@@ -81,6 +81,7 @@ struct ScanReport {
   DegeneracyRecord degeneracy;
   bool imu_initialized = false;   ///< the sliding window ran for this scan
   bool imu_deskew = false;        ///< carrier motion came from the IMU (false: constant velocity / none)
+  bool held_static = false;       ///< static start: the IMU was still, the pose was held (no registration)
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
   Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< imu origin velocity from the window, world [m/s] (0 before IMU init)
@@ -129,6 +130,7 @@ class Estimator {
   /// Preprocess + features; keeps the preprocessed points in preprocessed_ (the dense map's input).
   FeatureSet ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report);
   /// Scan-to-map from the guess; *information_base = the LiDAR factor's information (zero: no usable result).
+  bool HoldStaticStart(ScanReport* report);
   Pose3 Register(const FeatureSet& features, const Pose3& T_world_base_guess, ScanReport* report,
                  Matrix6d* information_base);
   /// LiDAR pose + IMU in the sliding window (or LiDAR-only before initialisation / without IMU).
@@ -160,6 +162,7 @@ class Estimator {
   std::vector<Seconds> init_times_s_;
   std::vector<ScanPoint> preprocessed_;    ///< the current scan's preprocessed points (base at scan start)
   int scans_since_keyframe_ = 0;
+  bool static_start_ = true;  ///< every scan so far was still (EstimatorConfig::hold_static_start)
   size_t bad_packets_ = 0;
 };
 

@@ -33,6 +33,9 @@ struct EstimatorConfig {
   /// A rotary LiDAR sees new directions every scan even when the carrier stands still, so besides the local
   /// map's distance/angle rule a scan becomes a keyframe at least every this many scans.
   int keyframe_every_scans = 1;
+  /// Before IMU initialisation, hold the pose while the IMU has been still since the start (ImuIsStill with the
+  /// imu_init thresholds over the last static_window_s): the first bands then form the map (docs/estimator.md).
+  bool hold_static_start = true;
   SlidingWindowConfig window;    ///< LiDAR-inertial sliding window (its gravity is set at IMU initialisation)
   ImuInitConfig imu_init;        ///< static / moving IMU initialisation
 

@@ -133,6 +133,11 @@ Pose3 Estimator::Register(const FeatureSet& features, const Pose3& T_world_base_
     report->timings.register_ms = watch.ms();
     return T_world_base_guess;
   }
+  if (HoldStaticStart(report)) {
+    s.message = "static start: IMU still, pose held";
+    report->timings.register_ms = watch.ms();
+    return trajectory_.back().T_ref_body;
+  }
   s.attempted = true;
   const ScanToMapResult r = rotolidar::Register(features, local_map_, T_world_base_guess, config_.registration);
   s.converged = r.converged;
@@ -158,6 +163,18 @@ Pose3 Estimator::Register(const FeatureSet& features, const Pose3& T_world_base_
   }
   report->timings.register_ms = watch.ms();
   return T;
+}
+
+// A rotary LiDAR standing still sees one new band of the sphere per scan: registering a band against the few
+// bands before it is ill-posed (a static lab start drifted 10 cm / 3.8 deg in 1 s). While the IMU says the rig
+// has not moved since the start, the pose is held and the bands build the map instead.
+bool Estimator::HoldStaticStart(ScanReport* report) {
+  if (!config_.hold_static_start || !static_start_ || imu_initialized() || imu_.empty() || trajectory_.empty())
+    return false;
+  const Seconds t1 = report->t_end_s;
+  static_start_ = ImuIsStill(imu_, t1 - config_.imu_init.static_window_s, t1, config_.imu_init, nullptr);
+  report->held_static = static_start_;
+  return static_start_;
 }
 
 // LiDAR-only until the IMU is initialised (the poses feed the moving initialisation); then one window state per

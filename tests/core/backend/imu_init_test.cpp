@@ -97,6 +97,31 @@ TEST(ImuInit, StaticRejectsMotionAndShortData) {
   EXPECT_FALSE(InitializeStatic({}, {}).success);
 }
 
+TEST(ImuIsStill, AcceptsARestingVibratingRigAndRejectsMotion) {
+  const Eigen::Matrix3d R = Rpy(0.05, -0.1, 0.3);
+  const Eigen::Vector3d bg(0.004, -0.003, 0.002);  // a turn-on gyro bias of a few mrad/s is still "still"
+  std::vector<ImuSample> still = StillSamples(R, bg, Eigen::Vector3d::Zero(), 2.0);
+  const ImuInitConfig c;
+  std::string why;
+  EXPECT_TRUE(ImuIsStill(still, 0.0, 1.0, c, &why)) << why;
+  // Rotor vibration: a 0.2 m/s^2 per-axis 40 Hz shake (what the twin's imbalance gives a standing rig) is still.
+  for (ImuSample& s : still) s.accel_mps2 += 0.2 * std::sqrt(2.0) * std::sin(2 * M_PI * 40.0 * s.t_s) * Eigen::Vector3d::Ones();
+  EXPECT_TRUE(ImuIsStill(still, 0.0, 1.0, c, &why)) << why;
+  // A walk's 2 Hz, 0.6 m/s^2 bounce is not; nor a slow 0.1 rad/s turn (std small, mean large); nor a tilt away
+  // from gravity's magnitude; nor too few samples.
+  std::vector<ImuSample> bounce = StillSamples(R, bg, Eigen::Vector3d::Zero(), 2.0);
+  for (ImuSample& s : bounce) s.accel_mps2.z() += 0.85 * std::sin(2 * M_PI * 2.0 * s.t_s);
+  EXPECT_FALSE(ImuIsStill(bounce, 0.0, 1.0, c, &why));
+  EXPECT_NE(why.find("accel std"), std::string::npos) << why;
+  EXPECT_FALSE(ImuIsStill(StillSamples(R, Eigen::Vector3d(0.0, 0.0, 0.1), Eigen::Vector3d::Zero(), 2.0), 0.0, 1.0,
+                          c, &why));
+  EXPECT_NE(why.find("mean gyro"), std::string::npos) << why;
+  EXPECT_FALSE(ImuIsStill(StillSamples(R, bg, Eigen::Vector3d(0.0, 0.0, 1.0), 2.0), 0.0, 1.0, c, &why));
+  EXPECT_NE(why.find("mean accel"), std::string::npos) << why;
+  EXPECT_FALSE(ImuIsStill(still, 0.0, 0.05, c, &why));  // 11 samples < static_min_samples = 20
+  EXPECT_NE(why.find("static_min_samples"), std::string::npos) << why;
+}
+
 /// Motion for the moving start: R = Rz Ry Rx of smooth angles, p sinusoidal (|v| ~1 m/s, |a| ~1 m/s^2).
 struct Motion {
   static Eigen::Vector3d Angles(double t) {

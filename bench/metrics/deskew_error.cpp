@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "sim/truth/truth.hpp"
+
 namespace rotolidar::bench {
 
 ErrorStats SummarizeErrors(std::vector<float> e) {
@@ -26,6 +28,18 @@ ErrorStats SummarizeErrors(std::vector<float> e) {
   s.rmse_m = std::sqrt(sq / static_cast<double>(n));
   s.max_m = e.back();
   return s;
+}
+
+Status LoadDeskewTruth(const std::string& recording_dir, DeskewTruth* truth) {
+  DeskewTruth t;
+  const std::pair<const char*, Trajectory*> files[] = {{"base.tum", &t.T_world_base}, {"lidar.tum", &t.T_world_lidar}};
+  for (const auto& [name, trajectory] : files) {
+    const std::string path = recording_dir + "/truth/" + name;
+    if (Status s = sim::ReadTum(path, trajectory); !s) return s;
+    if (trajectory->size() < 2) return Status::Error(path + ": the deskew error needs >= 2 truth poses");
+  }
+  *truth = std::move(t);
+  return Status::Ok();
 }
 
 bool PoseAt(const Trajectory& trajectory, Seconds t_s, Pose3* T) {

@@ -12,6 +12,7 @@
 // the base frame at t_start) and range noise cancels (both use the same decoded p_lidar_i), so it measures the
 // rotary transform (encoder interpolation, calibration) plus the motion compensation only.
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "core/pipeline/estimator.hpp"
@@ -35,6 +36,10 @@ struct DeskewTruth {
   Trajectory T_world_base;
   Trajectory T_world_lidar;
 };
+
+/// Reads <recording_dir>/truth/base.tum and truth/lidar.tum (the sim's truth log). Fails naming the file when
+/// one is missing or unreadable or holds fewer than 2 poses.
+Status LoadDeskewTruth(const std::string& recording_dir, DeskewTruth* truth);
 
 /// The pose at t_s of a time-sorted trajectory: linear in translation, slerp in rotation between the bracketing
 /// samples (the sample itself at an exact stamp). False when t_s lies outside the trajectory's span.

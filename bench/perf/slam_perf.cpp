@@ -17,7 +17,6 @@
 #include "core/io/recording.hpp"
 #include "core/pipeline/estimator.hpp"
 #include "sim/sim_runner.hpp"
-#include "sim/truth/truth.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -98,6 +97,7 @@ Status Simulate(const SlamBenchOptions& o) {
   config.scene = o.scene;
   config.duration_s = o.duration_s;
   config.seed = o.seed;
+  config.camera.enabled = false;  // the LiDAR-inertial core reads no images: rendering them would only cost time
   if (o.carrier == "handheld") config.carrier.type = sim::CarrierType::kHandheld;  // the scene's default walk
   else config.carrier.type = sim::CarrierType::kScriptedLoop;
   sim::SimSummary summary;
@@ -122,8 +122,8 @@ Status RunSlamBench(const SlamBenchOptions& o, SlamBenchResult* result) {
   if (Status s = Simulate(o); !s) return Status::Error("bench slam: simulation: " + s.message);
   Recording rec;
   if (Status s = LoadRecording(o.recording_dir, &rec); !s) return s;
-  sim::TruthLog truth;
-  if (Status s = sim::ReadTruth(o.recording_dir, &truth); !s) return s;
+  DeskewTruth truth;
+  if (Status s = LoadDeskewTruth(o.recording_dir, &truth); !s) return s;
   EstimatorConfig config;
   config.keep_deskewed = true;
   config.features.threads = o.threads;
@@ -132,7 +132,7 @@ Status RunSlamBench(const SlamBenchOptions& o, SlamBenchResult* result) {
   if (!config.Validate(&why)) return Status::Error("bench slam: estimator config: " + why);
 
   *result = SlamBenchResult();
-  DeskewErrorAccumulator deskew(DeskewTruth{truth.base, truth.lidar});
+  DeskewErrorAccumulator deskew(std::move(truth));
   std::vector<double> cpu, wall;
   std::vector<double> total, desk, pre, feat, reg, fuse, map;
   std::vector<double> points;

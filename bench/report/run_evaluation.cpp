@@ -70,6 +70,30 @@ Status EvaluateTrajectory(const std::string& recording_dir, const SlamRunResult&
   return Status::Ok();
 }
 
+/// The deskew error over the scans that kept their points (every slam.deskew_scan_stride-th); a note instead of
+/// an error when the run kept none or the truth has no lidar.tum.
+Status EvaluateDeskewError(const std::string& recording_dir, const SlamRunResult& slam, RunEvaluation* out) {
+  const size_t k = slam.deskew_scan_stride;
+  if (k == 0) {
+    out->deskew_note = "no deskew error: the run kept no deskewed points (EstimatorConfig::keep_deskewed)";
+    return Status::Ok();
+  }
+  if (!fs::exists(recording_dir + "/truth/lidar.tum")) {
+    out->deskew_note = "no deskew error: " + recording_dir + "/truth/lidar.tum does not exist";
+    return Status::Ok();
+  }
+  DeskewTruth truth;
+  if (Status s = LoadDeskewTruth(recording_dir, &truth); !s) return s;
+  DeskewErrorAccumulator acc(std::move(truth));
+  for (size_t i = 0; i < slam.scans.size(); i += k)
+    if (Status s = acc.Add(slam.scans[i]); !s) return s;
+  out->deskew = acc.Result();
+  out->deskew_scan_stride = k;
+  out->has_deskew = out->deskew.all.count > 0;
+  if (!out->has_deskew) out->deskew_note = "no deskew error: no deskewed point lies inside the truth's span";
+  return Status::Ok();
+}
+
 /// Map metrics of out->map_points (scene frame) against the run's scene; notes instead of errors for what is
 /// missing (no scene, no sim_config.yaml).
 Status EvaluateMap(const std::string& recording_dir, const std::string& scene_name_or_path,
@@ -131,6 +155,8 @@ Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir
   std::string why;
   if (!options.Validate(&why)) return Status::Error("run evaluation: " + why);
   if (Status s = EvaluateTrajectory(recording_dir, slam, options, out); !s) return s;
+  if (!out->has_truth) out->deskew_note = "no deskew error: it needs the sim's truth";
+  else if (Status s = EvaluateDeskewError(recording_dir, slam, out); !s) return s;
   const std::string map_path = slam_dir + "/map.ply";
   if (!fs::exists(map_path)) {
     out->map_note = "no map (" + map_path + " does not exist)";

@@ -2,8 +2,10 @@
 // Everything a run report shows beyond the SLAM outputs themselves, gathered once per run: the trajectory
 // errors against the sim's truth (<recording>/truth/base.tum: APE after SE(3) Umeyama, RPE over 1 m of path)
 // and the map metrics against the scene (bench/metrics/map_metrics.hpp), with the map moved into the scene
-// frame by the same SE(3) alignment as the APE. A real-rig recording has no truth/: the truth parts stay
-// empty and `truth_note` / `map_note` say why (the report leaves their sections out), never faked.
+// frame by the same SE(3) alignment as the APE, and the per-point deskew error (bench/metrics/deskew_error.hpp)
+// when the run kept its deskewed points (EstimatorConfig::keep_deskewed; `rotolidar demo` does). A real-rig
+// recording has no truth/: the truth parts stay empty and `truth_note` / `map_note` / `deskew_note` say why
+// (the report leaves their sections out), never faked.
 //
 // Only bench/ reads truth; the core never sees it. Not thread-safe per result; no randomness.
 #include <string>
@@ -12,6 +14,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "bench/metrics/deskew_error.hpp"
 #include "bench/metrics/map_metrics.hpp"
 #include "bench/run/eval_run.hpp"
 #include "bench/run/slam_run.hpp"
@@ -46,6 +49,13 @@ struct RunEvaluation {
   Trajectory estimate_aligned;  ///< the estimate mapped into the scene frame by the APE alignment
   Eigen::Isometry3d T_scene_slam = Eigen::Isometry3d::Identity();  ///< = ape.alignment.T_ref_est
 
+  // Deskew error (has_deskew = truth, truth/lidar.tum, the run kept deskew data and >= 1 point was scored):
+  // over the scans that kept their points, every deskew_scan_stride-th one (SlamRunResult::deskew_scan_stride).
+  bool has_deskew = false;
+  std::string deskew_note;  ///< why there is no deskew error; empty when has_deskew
+  DeskewErrorResult deskew;
+  size_t deskew_scan_stride = 0;
+
   // Map metrics (has_map_metrics = truth, a loadable scene and ComputeMapMetrics succeeded).
   bool has_map_metrics = false;
   std::string scene_name;
@@ -55,8 +65,9 @@ struct RunEvaluation {
 };
 
 /// Evaluates a finished run. Reads <slam_dir>/map.ply; with <recording_dir>/truth/base.tum computes APE / RPE;
-/// with truth and a scene (`scene_name_or_path`, or when empty the scene of <recording_dir>/sim_config.yaml)
-/// computes map metrics. Missing truth or scene is not an error (notes say what is missing); an unreadable
+/// with truth, truth/lidar.tum and slam.deskew_scan_stride > 0 the deskew error; with truth and a scene
+/// (`scene_name_or_path`, or when empty the scene of <recording_dir>/sim_config.yaml) computes map metrics.
+/// Missing truth, lidar truth, deskew data or scene is not an error (notes say what is missing); an unreadable
 /// map or a failing metric is an error only for files that exist (the Status names the file).
 Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,
                    const std::string& scene_name_or_path, const RunEvaluationOptions& options, RunEvaluation* out);

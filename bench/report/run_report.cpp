@@ -42,6 +42,13 @@ void AddTruthRows(const RunEvaluation& ev, Rows* rows) {
   if (ev.rpe.status.ok && ev.rpe.stats.count > 0)
     rows->push_back({"RPE RMSE / max over " + ev.rpe_delta,
                      Fmt("%.4f", ev.rpe.stats.rmse) + " / " + Fmt("%.4f m", ev.rpe.stats.max)});
+  if (ev.has_deskew) {
+    const ErrorStats& d = ev.deskew.all;
+    std::string over = std::to_string(d.count) + " points";
+    if (ev.deskew_scan_stride > 1) over += ", 1 scan in " + std::to_string(ev.deskew_scan_stride);
+    rows->push_back({"deskew error median / p90 per point",
+                     Fmt("%.4f", d.median_m) + " / " + Fmt("%.4f m", d.p90_m) + " (" + over + ")"});
+  }
   if (!ev.has_map_metrics) return;
   const MapMetrics& m = ev.map;
   rows->push_back({"map-to-truth median / RMSE / p95", Fmt("%.4f", m.map_to_truth.median_m) + " / " +
@@ -121,6 +128,20 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
     const ErrorStatistics& r = ev.rpe.stats;
     j["rpe_translation_m"] = {{"delta", ev.rpe_delta}, {"all_pairs", true}, {"pairs", r.count}, {"rmse", r.rmse},
                               {"mean", r.mean},        {"median", r.median}, {"std", r.std},    {"max", r.max}};
+  }
+  if (ev.has_deskew) {  // the names of ape_translation_m's statistics; the study reads deskew_error_m.median
+    const ErrorStats& d = ev.deskew.all;
+    j["deskew_error_m"] = {{"points", d.count},
+                           {"scans", ev.deskew.per_scan.size()},
+                           {"scan_stride", ev.deskew_scan_stride},
+                           {"median", d.median_m},
+                           {"p90", d.p90_m},
+                           {"p95", d.p95_m},
+                           {"rmse", d.rmse_m},
+                           {"mean", d.mean_m},
+                           {"max", d.max_m},
+                           {"not_deskewed", ev.deskew.num_not_deskewed},
+                           {"outside_truth", ev.deskew.num_outside_truth}};
   }
   if (ev.has_map_metrics) {
     nlohmann::json map;

@@ -1,7 +1,8 @@
 #pragma once
 // The HTML report of one run (`rotolidar demo`, `rotolidar slam`): a self-contained report.html beside the
 // run's outputs (inline SVG plots, base64 PNG rasters; bench/report/html_report.hpp). Sections, by id:
-//   headline     run facts, ATE / RPE / runtime / real-time factor / scans / map points / map metrics
+//   headline     run facts, ATE / RPE / deskew error / runtime / real-time factor / scans / map points / map
+//                metrics
 //   trajectory   top view of the estimate (SE(3)-aligned) against the truth [scene frame, m]
 //   ape          APE per pose over time                                      (truth only)
 //   rpe          histogram of the translation RPE over 1 m of path           (truth only)
@@ -39,8 +40,9 @@ std::string RenderRunReport(const RunReportInput& input);
 Status WriteRunReport(const std::string& path, const RunReportInput& input);
 
 /// metrics.json members of a run: "slam" (scans, timings, real-time factor, map points, per-stage mean ms),
-/// and with truth "ape_translation_m", "rpe_translation_m" and "map" (map_metrics.hpp ToJson). Existing
-/// members of `out` are kept.
+/// and with truth "ape_translation_m", "rpe_translation_m", "deskew_error_m" (when evaluation.has_deskew:
+/// points, scans, scan_stride, median, p90, p95, rmse, mean, max [m], not_deskewed, outside_truth) and "map"
+/// (map_metrics.hpp ToJson). Existing members of `out` are kept.
 void AddRunMetricsJson(const SlamRunResult& slam, const RunEvaluation& evaluation, nlohmann::json* out);
 
 /// For `rotolidar slam`: evaluates the run (EvaluateRun; truth and map metrics when the recording has them),

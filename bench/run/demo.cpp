@@ -43,12 +43,16 @@ Status RunDemo(const DemoOptions& options, DemoResult* result) {
                          << recording);
   if (Status s = sim::RunSimulation(options.sim, recording, &result->sim, MakeProgressPrinter("sim")); !s) return s;
   LOG_INFO("running the SLAM core on the recording");
-  if (Status s = RunSlam(recording, options.slam, slam_dir, &result->slam, MakeProgressPrinter("slam")); !s) return s;
-  LOG_INFO("evaluating against truth (trajectory, map metrics)");
+  // The deskew error needs every scan's deskewed points; RunSlam bounds how many it keeps (DeskewScanStride).
+  EstimatorConfig slam_config = options.slam;
+  slam_config.keep_deskewed = true;
+  if (Status s = RunSlam(recording, slam_config, slam_dir, &result->slam, MakeProgressPrinter("slam")); !s) return s;
+  LOG_INFO("evaluating against truth (trajectory, deskew error, map metrics)");
   if (Status s = EvaluateRun(recording, slam_dir, result->slam, options.sim.scene, options.evaluation,
                              &result->evaluation);
       !s)
     return s;
+  ReleaseDeskewData(&result->slam);  // scored: the points are not needed for metrics.json or the report
   if (!result->evaluation.has_truth) return Status::Error(recording + ": " + result->evaluation.truth_note);
   result->ape = result->evaluation.ape;
   if (Status s = WriteDemoMetrics(options.out_dir + "/metrics.json", options, *result); !s) return s;

@@ -4,7 +4,8 @@
 //   <out>/recording/    the simulated recording (same format as a real rig's; its sim_config.yaml is the
 //                       resolved sim config of the run)
 //   <out>/slam/         the core's outputs (trajectory.tum/.kitti, map.ply/.pcd, scans.csv, slam_config.yaml)
-//   <out>/metrics.json  the headline numbers: sim, slam (timings), APE, RPE, map metrics ("map")
+//   <out>/metrics.json  the headline numbers: sim, slam (timings), APE, RPE, deskew error ("deskew_error_m"),
+//                       map metrics ("map")
 //   <out>/report.html   the self-contained HTML report (bench/report/run_report.hpp)
 #include <string>
 
@@ -32,7 +33,8 @@ struct DemoResult {
   std::string report_path;    ///< <out>/report.html when written
 };
 
-/// Simulates, runs SLAM, evaluates (EvaluateRun with the sim's scene), writes metrics.json and report.html.
+/// Simulates, runs SLAM (with EstimatorConfig::keep_deskewed forced on, so the deskew error can be scored),
+/// evaluates (EvaluateRun with the sim's scene), writes metrics.json and report.html.
 /// Progress lines go to stderr for the long stages. Fails naming the stage's file or field.
 Status RunDemo(const DemoOptions& options, DemoResult* result);
 

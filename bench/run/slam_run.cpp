@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -16,6 +17,17 @@
 namespace rotolidar::bench {
 namespace {
 
+/// Appends a report; with deskew data kept (result->deskew_scan_stride > 0) drops it from the scans between
+/// every k-th one, so memory follows DeskewScanStride's bound.
+void Keep(ScanReport report, SlamRunResult* result) {
+  const size_t k = result->deskew_scan_stride;
+  if (k > 0 && result->scans.size() % k != 0) {
+    report.deskew_source = {};
+    report.deskewed_base = {};
+  }
+  result->scans.push_back(std::move(report));
+}
+
 /// Feeds every message to the estimator in time order (packets by capture time), as a live rig would.
 void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
               const std::function<void(double)>& progress) {
@@ -28,7 +40,7 @@ void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
       estimator->Feed(rec.encoder[i_enc++]);
     while (i_imu < rec.imu.size() && rec.imu[i_imu].t_s <= packet.t_capture_s) estimator->Feed(rec.imu[i_imu++]);
     if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << i << ": " << s.message);
-    for (auto& r : estimator->Process()) result->scans.push_back(r);
+    for (ScanReport& r : estimator->Process()) Keep(std::move(r), result);
     if (progress && i >= next_report) {
       progress(double(i) / double(n));
       next_report += n / 10;
@@ -36,7 +48,7 @@ void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
   }
   while (i_enc < rec.encoder.size()) estimator->Feed(rec.encoder[i_enc++]);
   while (i_imu < rec.imu.size()) estimator->Feed(rec.imu[i_imu++]);
-  for (auto& r : estimator->Finish()) result->scans.push_back(r);
+  for (ScanReport& r : estimator->Finish()) Keep(std::move(r), result);
 }
 
 Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& scans) {
@@ -48,7 +60,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "num_degenerate", "lambda0", "lambda1", "lambda2", "lambda3", "lambda4", "lambda5",
                                  "degen_tx", "degen_ty", "degen_tz", "degen_rx", "degen_ry", "degen_rz",
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
-                                 "total_ms", "held_static"});
+                                 "total_ms", "held_static", "vx_mps", "vy_mps", "vz_mps", "bgx_radps", "bgy_radps",
+                                 "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2"});
       !s)
     return s;
   for (const ScanReport& r : scans) {
@@ -67,6 +80,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
     for (double ms : {t.deskew_ms, t.preprocess_ms, t.features_ms, t.register_ms, t.fuse_ms, t.map_ms, t.total_ms})
       row.push_back(ms);
     row.push_back(double(r.held_static));
+    for (const Eigen::Vector3d* v : {&r.v_world_mps, &r.bias_gyro_radps, &r.bias_accel_mps2})
+      for (int i = 0; i < 3; ++i) row.push_back((*v)[i]);
     csv.Row(row);
   }
   return csv.Close();
@@ -97,6 +112,19 @@ double Median(std::vector<double> v) {
 
 }  // namespace
 
+size_t DeskewScanStride(double data_span_s) {
+  if (!(data_span_s > kDeskewKeepAllSpanS)) return 1;  // also NaN / negative spans: keep everything
+  return static_cast<size_t>(std::ceil(data_span_s / kDeskewKeepAllSpanS));
+}
+
+void ReleaseDeskewData(SlamRunResult* result) {
+  for (ScanReport& r : result->scans) {
+    r.deskew_source = {};
+    r.deskewed_base = {};
+  }
+  result->deskew_scan_stride = 0;
+}
+
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
                SlamRunResult* result, const std::function<void(double)>& progress) {
   std::string why;
@@ -108,6 +136,9 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   if (ec) return Status::Error(out_dir + ": cannot create folder: " + ec.message());
 
   *result = SlamRunResult{};
+  if (config.keep_deskewed && !rec.lidar_packets.empty())
+    result->deskew_scan_stride =
+        DeskewScanStride(rec.lidar_packets.back().t_capture_s - rec.lidar_packets.front().t_capture_s);
   Estimator estimator(rec.calib, config);
   const auto t0 = std::chrono::steady_clock::now();
   Playback(rec, &estimator, result, progress);

@@ -4,6 +4,12 @@
 //   map.ply, map.pcd                                            the dense map [world, m]
 //   scans.csv          per scan: stage timings [ms], feature counts, registration, degeneracy (eigenvalues, axes)
 //   slam_config.yaml                                            the resolved estimator config
+//
+// With EstimatorConfig::keep_deskewed the reports also keep each scan's decoded points and their deskewed
+// positions (the deskew error's input, bench/metrics/deskew_error.hpp): ~30 k points x 44 B per scan, so a 20 s
+// run holds ~5.7 M points (~250 MB), which is fine. Longer runs keep them for every k-th scan only
+// (DeskewScanStride), so the kept points stay at about 20 s worth whatever the run's length.
+#include <cstddef>
 #include <functional>
 #include <string>
 #include <vector>
@@ -22,7 +28,20 @@ struct SlamRunResult {
   double data_duration_s = 0.0;     ///< span of the LiDAR data [s]
   double wall_time_s = 0.0;         ///< estimator time only (excludes loading) [s]
   double median_scan_ms = 0.0;      ///< median Process time per scan [ms]
+  /// 0: no scan kept its deskew data (keep_deskewed off, or ReleaseDeskewData). k >= 1: scans[i] with
+  /// i % k == 0 hold deskew_source / deskewed_base, the others hold none.
+  size_t deskew_scan_stride = 0;
 };
+
+/// Seconds of LiDAR data whose every scan keeps its deskew data; longer runs keep every k-th scan.
+inline constexpr double kDeskewKeepAllSpanS = 20.0;
+
+/// The deterministic subsampling rule for a run spanning `data_span_s` of LiDAR data:
+/// k = max(1, ceil(data_span_s / kDeskewKeepAllSpanS)); the scans with index 0, k, 2k, ... keep their points.
+size_t DeskewScanStride(double data_span_s);
+
+/// Frees every scan's deskew data (once it has been evaluated) and sets deskew_scan_stride to 0.
+void ReleaseDeskewData(SlamRunResult* result);
 
 /// `progress(fraction)` is called about every 10 % of the data.
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,

@@ -108,6 +108,7 @@ std::string LineSvg(const StudyPlot& plot, const StudyResult& result, const std:
   o.x_label = plot.x == "seed" ? "seed [-]" : "motor speed [rad/s]";
   o.y_label = StudyMetrics()[m].label;
   o.y_include_zero = true;
+  o.legend_above = true;  // one line per combination: keep the legend off the data
   return LinePlotSvg(series, o);
 }
 
@@ -149,6 +150,7 @@ std::string BarsSvg(const StudyPlot& plot, const StudyResult& result, const std:
   o.y_label = plot.metrics.size() == 1 ? StudyMetrics()[MetricIndex(plot.metrics[0])].label
                                        : "value " + (same_unit ? Unit(plot.metrics[0]) : std::string());
   o.y_include_zero = true;
+  o.legend_above = true;  // bars reach the top of the plot area: a legend inside would cover the tallest
   return BarChartSvg(categories, series, o);
 }
 

@@ -97,14 +97,58 @@ MotionTable IdentityTable(Seconds t0_s, Seconds t1_s) {
   return table;
 }
 
+namespace {
+
+/// MotionTable::At for a stream of times, with the same values: each interval's relative rotation is logged once
+/// (not per point), and the interval of the previous time is tried before a search (points come in firing order).
+class TableInterpolator {
+ public:
+  explicit TableInterpolator(const MotionTable& table) : table_(table) {
+    ROTOLIDAR_CHECK(!table.t_s.empty() && table.t_s.size() == table.T_start_t.size(),
+                    "MotionTable: empty or mismatched sizes");
+    for (size_t k = 1; k < table.t_s.size(); ++k)
+      log_.push_back(LogSO3(table.T_start_t[k - 1].linear().transpose() * table.T_start_t[k].linear()));
+  }
+
+  Pose3 At(Seconds t, bool* outside) {
+    const std::vector<Seconds>& ts = table_.t_s;
+    *outside = false;
+    if (t <= ts.front() || ts.size() == 1) {
+      *outside = t < ts.front();
+      return table_.T_start_t.front();
+    }
+    if (t >= ts.back()) {
+      *outside = t > ts.back();
+      return table_.T_start_t.back();
+    }
+    if (!(ts[k_ - 1] <= t && t < ts[k_]))  // t_s[k-1] <= t < t_s[k], as At's upper_bound finds it
+      k_ = size_t(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin());
+    const Pose3& a = table_.T_start_t[k_ - 1];
+    const Pose3& b = table_.T_start_t[k_];
+    const double s = (t - ts[k_ - 1]) / (ts[k_] - ts[k_ - 1]);
+    Pose3 out = Pose3::Identity();
+    out.linear() = a.linear() * ExpSO3(s * log_[k_ - 1]);
+    out.translation() = (1.0 - s) * a.translation() + s * b.translation();
+    return out;
+  }
+
+ private:
+  const MotionTable& table_;
+  std::vector<Eigen::Vector3d> log_;  ///< log_[k - 1] = Log(R_{k-1}^T R_k)
+  size_t k_ = 1;                      ///< interval of the previous time
+};
+
+}  // namespace
+
 size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
                     const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start) {
   ROTOLIDAR_CHECK(t_s.size() == p_base.size(), "DeskewPoints: times and points differ in size");
   p_start->resize(p_base.size());
+  TableInterpolator interpolate(table);
   size_t outside_count = 0;
   for (size_t i = 0; i < p_base.size(); ++i) {
     bool outside = false;
-    (*p_start)[i] = table.At(t_s[i], &outside) * p_base[i];
+    (*p_start)[i] = interpolate.At(t_s[i], &outside) * p_base[i];
     outside_count += outside ? 1 : 0;
   }
   return outside_count;

@@ -85,6 +85,8 @@ struct ScanReport {
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
   Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< imu origin velocity from the window, world [m/s] (0 before IMU init)
+  Eigen::Vector3d bias_gyro_radps = Eigen::Vector3d::Zero();  ///< the window's gyro bias estimate, imu frame (0 before init)
+  Eigen::Vector3d bias_accel_mps2 = Eigen::Vector3d::Zero();  ///< the window's accelerometer bias estimate, imu frame
   /// Only with EstimatorConfig::keep_deskewed: the decoded points (lidar frame, with t_s) and, same size and
   /// order, each point deskewed into the base frame at t_start_s (NaN where it was not deskewed).
   std::vector<LidarPoint> deskew_source;

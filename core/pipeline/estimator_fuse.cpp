@@ -192,6 +192,8 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
       const NavState x = window_->latest_state();
       T_world_base = PoseOf(x) * T_bi.inverse();
       report->v_world_mps = x.v_world_mps;
+      report->bias_gyro_radps = x.bias_gyro_radps;
+      report->bias_accel_mps2 = x.bias_accel_mps2;
     } else {
       LOG_WARN("estimator: window state at " << t_s << " s rejected: " << st.message);
     }

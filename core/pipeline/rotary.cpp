@@ -46,6 +46,8 @@ void RotorAngleInterpolator::DropBefore(Seconds t_s) {
   theta_rad_.erase(theta_rad_.begin(), theta_rad_.begin() + (n - 1));
 }
 
+// T_base_lidar(theta) * p applied as T_base_motor * (RotZ(theta) * (T_rotor_lidar * p)): the fixed transforms
+// stay fixed and the rotor turn is a 2D rotation, instead of composing two 4x4 poses per point.
 size_t LidarToBase(const RigCalib& calib, const RotorAngleInterpolator& rotor, const LidarScan& scan,
                    std::vector<Eigen::Vector3d>* p_base) {
   p_base->clear();
@@ -55,7 +57,10 @@ size_t LidarToBase(const RigCalib& calib, const RotorAngleInterpolator& rotor, c
     RotorAngleSource source;
     const double theta = rotor.AngleAt(p.t_s, &source);
     if (source == RotorAngleSource::kUniformFallback) ++fallback;
-    p_base->push_back(calib.T_base_lidar(theta) * Eigen::Vector3d(p.x_m, p.y_m, p.z_m));
+    const Eigen::Vector3d p_rotor = calib.T_rotor_lidar * Eigen::Vector3d(p.x_m, p.y_m, p.z_m);
+    const double c = std::cos(theta), s = std::sin(theta);
+    const Eigen::Vector3d p_turned(c * p_rotor.x() - s * p_rotor.y(), s * p_rotor.x() + c * p_rotor.y(), p_rotor.z());
+    p_base->push_back(calib.T_base_motor * p_turned);
   }
   return fallback;
 }

@@ -1,5 +1,6 @@
 #include "core/pipeline/voxel_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/util/log.hpp"
@@ -18,48 +19,84 @@ VoxelMap::Key VoxelMap::KeyOf(const Eigen::Vector3d& p) const {
           int32_t(std::floor(p.z() / voxel_size_m_))};
 }
 
+size_t VoxelMap::HomeSlot(const Key& key) const {
+  const uint64_t h = uint64_t(uint32_t(key.x)) * 0x9E3779B97F4A7C15ull ^
+                     uint64_t(uint32_t(key.y)) * 0xC2B2AE3D27D4EB4Full ^ uint64_t(uint32_t(key.z)) * 0x165667B19E3779F9ull;
+  return size_t(h ^ (h >> 29)) & (table_.size() - 1);
+}
+
+size_t VoxelMap::SlotOf(const Key& key) const {
+  const size_t mask = table_.size() - 1;
+  size_t slot = HomeSlot(key);
+  while (table_[slot].voxel != kEmpty && !(table_[slot].key == key)) slot = (slot + 1) & mask;
+  return slot;
+}
+
+void VoxelMap::Rehash(size_t num_slots) {
+  table_.assign(num_slots, Slot{{0, 0, 0}, kEmpty});
+  for (size_t v = 0; v < keys_.size(); ++v) table_[SlotOf(keys_[v])] = Slot{keys_[v], uint32_t(v)};
+}
+
 void VoxelMap::Add(const std::vector<Eigen::Vector3d>& p_world) {
+  // Room for every point to open a voxel, so the table stays put during the loop. It is far larger than the
+  // caches: each point's home slot is requested kLookahead points ahead, so the misses overlap.
+  constexpr size_t kLookahead = 8;
+  size_t num_slots = std::max<size_t>(table_.size(), 1024);
+  while (2 * (keys_.size() + p_world.size()) > num_slots) num_slots *= 2;
+  if (num_slots != table_.size()) Rehash(num_slots);
   const double min_sq = min_spacing_m_ * min_spacing_m_;
-  for (const Eigen::Vector3d& p : p_world) {
+  const size_t per_voxel = size_t(max_points_per_voxel_);
+  for (size_t i = 0; i < p_world.size(); ++i) {
+    if (i + kLookahead < p_world.size()) __builtin_prefetch(&table_[HomeSlot(KeyOf(p_world[i + kLookahead]))]);
+    const Eigen::Vector3d& p = p_world[i];
     const Key key = KeyOf(p);
-    auto [it, inserted] = voxels_.try_emplace(key);
-    if (inserted) insertion_order_.push_back(key);
-    std::vector<Eigen::Vector3d>& pts = it->second;
-    if (int(pts.size()) >= max_points_per_voxel_) continue;
+    const size_t slot = SlotOf(key);
+    if (table_[slot].voxel == kEmpty) {  // a new voxel: its first point always fits
+      table_[slot] = Slot{key, uint32_t(keys_.size())};
+      keys_.push_back(key);
+      counts_.push_back(0);
+      points_.resize(points_.size() + per_voxel);
+    }
+    const size_t v = table_[slot].voxel;
+    uint32_t& count = counts_[v];
+    if (count >= per_voxel) continue;
+    Eigen::Vector3d* pts = points_.data() + v * per_voxel;
     bool far_enough = true;
-    for (const auto& q : pts) far_enough = far_enough && (q - p).squaredNorm() >= min_sq;
-    if (far_enough) pts.push_back(p);
+    for (uint32_t j = 0; j < count; ++j) far_enough = far_enough && (pts[j] - p).squaredNorm() >= min_sq;
+    if (!far_enough) continue;
+    pts[count++] = p;
+    ++num_points_;
   }
 }
 
 void VoxelMap::RemoveFar(const Eigen::Vector3d& center_world, double max_distance_m) {
   const double max_sq = max_distance_m * max_distance_m;
-  std::vector<Key> kept;
-  kept.reserve(insertion_order_.size());
-  for (const Key& key : insertion_order_) {
-    auto it = voxels_.find(key);
-    if (it->second.empty() || (it->second.front() - center_world).squaredNorm() > max_sq)
-      voxels_.erase(it);
-    else
-      kept.push_back(key);
+  const size_t per_voxel = size_t(max_points_per_voxel_);
+  size_t kept = 0;
+  num_points_ = 0;
+  for (size_t v = 0; v < keys_.size(); ++v) {  // compact in place, insertion order kept
+    if (counts_[v] == 0 || (points_[v * per_voxel] - center_world).squaredNorm() > max_sq) continue;
+    keys_[kept] = keys_[v];
+    counts_[kept] = counts_[v];
+    std::copy_n(points_.begin() + long(v * per_voxel), per_voxel, points_.begin() + long(kept * per_voxel));
+    num_points_ += counts_[kept];
+    ++kept;
   }
-  insertion_order_.swap(kept);
+  keys_.resize(kept);
+  counts_.resize(kept);
+  points_.resize(kept * per_voxel);
+  if (!table_.empty()) Rehash(table_.size());
 }
 
 std::vector<Eigen::Vector3d> VoxelMap::Points() const {
   std::vector<Eigen::Vector3d> out;
-  out.reserve(NumPoints());
-  for (const Key& key : insertion_order_) {
-    const auto& pts = voxels_.at(key);
-    out.insert(out.end(), pts.begin(), pts.end());
-  }
+  out.reserve(num_points_);
+  const size_t per_voxel = size_t(max_points_per_voxel_);
+  for (size_t v = 0; v < keys_.size(); ++v)
+    out.insert(out.end(), points_.begin() + long(v * per_voxel), points_.begin() + long(v * per_voxel + counts_[v]));
   return out;
 }
 
-size_t VoxelMap::NumPoints() const {
-  size_t n = 0;
-  for (const auto& kv : voxels_) n += kv.second.size();
-  return n;
-}
+size_t VoxelMap::NumPoints() const { return num_points_; }
 
 }  // namespace rotolidar

@@ -3,7 +3,6 @@
 // voxel, so density stays bounded however long the rig dwells. Used as the local map (registration target)
 // and as the global map (the dense output).
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,7 +22,7 @@ class VoxelMap {
   /// All points (order unspecified but deterministic for the same insertion sequence).
   std::vector<Eigen::Vector3d> Points() const;
   size_t NumPoints() const;
-  bool Empty() const { return voxels_.empty(); }
+  bool Empty() const { return keys_.empty(); }
   double voxel_size_m() const { return voxel_size_m_; }
 
  private:
@@ -31,19 +30,27 @@ class VoxelMap {
     int32_t x, y, z;
     bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
   };
-  struct KeyHash {
-    size_t operator()(const Key& k) const {
-      return (size_t(uint32_t(k.x)) * 73856093u) ^ (size_t(uint32_t(k.y)) * 19349669u) ^
-             (size_t(uint32_t(k.z)) * 83492791u);
-    }
+  /// One slot of the open-addressing table: a voxel's key and number (kEmpty: unused).
+  struct Slot {
+    Key key;
+    uint32_t voxel;
   };
+  static constexpr uint32_t kEmpty = UINT32_MAX;
   Key KeyOf(const Eigen::Vector3d& p) const;
+  size_t HomeSlot(const Key& key) const;  ///< where the key's probe starts (its hash)
+  size_t SlotOf(const Key& key) const;    ///< the key's slot, or the empty slot where it would go
+  void Rehash(size_t num_slots);         ///< rebuilds the table from keys_ (num_slots: a power of two)
 
   double voxel_size_m_;
   int max_points_per_voxel_;
   double min_spacing_m_;
-  std::unordered_map<Key, std::vector<Eigen::Vector3d>, KeyHash> voxels_;
-  std::vector<Key> insertion_order_;  // keeps Points() deterministic
+  // Flat storage instead of a node-based hash map of vectors: a dense map of ~1e6 voxels gets ~3e4 lookups per
+  // scan, and one probe into a flat table (plus one into the voxel's points) is what they cost.
+  std::vector<Slot> table_;              ///< linear probing, power-of-two size, at most half full
+  std::vector<Key> keys_;                ///< per voxel, in insertion order (keeps Points() deterministic)
+  std::vector<uint32_t> counts_;         ///< per voxel: points kept
+  std::vector<Eigen::Vector3d> points_;  ///< voxel v's points at [v * max_points_per_voxel, + counts_[v])
+  size_t num_points_ = 0;
 };
 
 }  // namespace rotolidar

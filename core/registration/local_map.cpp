@@ -14,11 +14,11 @@ namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZI>;
 
-Cloud Downsample(const Cloud& in, double voxel_m) {
+Cloud Downsample(const Cloud::ConstPtr& in, double voxel_m) {
   Cloud out;
-  if (in.empty()) return out;
+  if (in->empty()) return out;
   pcl::VoxelGrid<pcl::PointXYZI> grid;
-  grid.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  grid.setInputCloud(in);
   const float leaf = float(voxel_m);
   grid.setLeafSize(leaf, leaf, leaf);
   grid.filter(out);
@@ -65,6 +65,7 @@ struct LocalMap::Impl {
   LocalMapConfig config;
   std::deque<Keyframe> keyframes;
   Searchable edge, planar;
+  Cloud::Ptr edge_union{new Cloud}, planar_union{new Cloud};  ///< Rebuild's scratch, capacity kept across scans
 
   const Searchable& Get(FeatureKind kind) const { return kind == FeatureKind::kEdge ? edge : planar; }
 
@@ -75,14 +76,24 @@ struct LocalMap::Impl {
       keyframes.pop_front();  // the newest keyframe is at distance 0, so the loop ends
   }
 
-  void Rebuild() {
-    Cloud edges, planes;
+  /// The keyframes' `member` clouds concatenated into *out (oldest first), reusing its memory.
+  void Union(Cloud Keyframe::*member, Cloud* out) const {
+    size_t total = 0;
+    for (const Keyframe& kf : keyframes) total += (kf.*member).size();
+    out->clear();
+    out->reserve(total);
+    out->is_dense = true;
     for (const Keyframe& kf : keyframes) {
-      edges += kf.edge_map;
-      planes += kf.planar_map;
+      out->insert(out->end(), (kf.*member).begin(), (kf.*member).end());
+      out->is_dense = out->is_dense && (kf.*member).is_dense;  // as PointCloud::operator+= (VoxelGrid's NaN check)
     }
-    edge.Reset(Downsample(edges, config.edge_voxel_m));
-    planar.Reset(Downsample(planes, config.planar_voxel_m));
+  }
+
+  void Rebuild() {
+    Union(&Keyframe::edge_map, edge_union.get());
+    Union(&Keyframe::planar_map, planar_union.get());
+    edge.Reset(Downsample(edge_union, config.edge_voxel_m));
+    planar.Reset(Downsample(planar_union, config.planar_voxel_m));
   }
 };
 
@@ -106,10 +117,10 @@ void LocalMap::AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan) 
   Keyframe kf;
   kf.T_map_scan = T_map_scan;
   const Eigen::Matrix4f M = T_map_scan.matrix().cast<float>();
-  Cloud transformed;
-  pcl::transformPointCloud(features.less_sharp, transformed, M);
+  Cloud::Ptr transformed(new Cloud);
+  pcl::transformPointCloud(features.less_sharp, *transformed, M);
   kf.edge_map = Downsample(transformed, impl_->config.edge_voxel_m);
-  pcl::transformPointCloud(features.less_flat, transformed, M);
+  pcl::transformPointCloud(features.less_flat, *transformed, M);
   kf.planar_map = Downsample(transformed, impl_->config.planar_voxel_m);
   impl_->keyframes.push_back(std::move(kf));
   impl_->Trim();

@@ -1,5 +1,6 @@
 #include "core/registration/scan_to_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -35,27 +36,86 @@ void MeanCovariance(const std::vector<Eigen::Vector3d>& points, Eigen::Vector3d*
   *cov /= double(points.size());
 }
 
-/// Correspondences of every scan edge and planar point at the pose T_map_scan.
-Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan, const ScanToMapConfig& c) {
-  Matches m;
-  const float max_sq = float(c.max_neighbour_distance_m * c.max_neighbour_distance_m);
-  std::vector<Eigen::Vector3d> nbrs;
-  std::vector<float> sq;
-  for (const auto& pt : scan.edge.points) {
-    const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
-    if (map.Nearest(FeatureKind::kEdge, T_map_scan * p_scan, c.num_neighbours, &nbrs, &sq) < c.num_neighbours ||
-        sq.back() > max_sq)
-      continue;
-    EdgeMatch e{p_scan, {}, {}};
-    if (FitLine(nbrs, c.min_line_eigen_ratio, &e.a_map, &e.u_map)) m.edges.push_back(e);
+/// A scan point's last neighbour search. Its k nearest map points stay the k nearest while the query moves less
+/// than half the gap between the k-th and (k+1)-th distance (triangle inequality), so the rebuilds of one
+/// registration (the outer iterations converge in mm steps; the remapped solve restarts at the guess) reuse the
+/// set and its line / plane fit instead of searching the kd-tree again. Exact up to distance ties (never reused).
+struct NeighbourSet {
+  enum class Fit { kUnknown, kAccepted, kRejected };
+  bool searched = false;
+  Eigen::Vector3d q_map = Eigen::Vector3d::Zero();  ///< where the set was searched (map frame)
+  double reuse_radius_m = -1.0;                     ///< the set is exact within this distance of q_map (< 0: never)
+  float kth_sq_m2 = 0.f;                            ///< squared distance of the k-th neighbour from q_map
+  std::vector<Eigen::Vector3d> points;              ///< the k nearest, nearest first (fewer: a sparse map)
+  Fit fit = Fit::kUnknown;
+  Eigen::Vector3d a_or_n = Eigen::Vector3d::Zero();  ///< line point (edge) or plane normal (planar)
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();       ///< line direction (edge)
+  double d_m = 0.0;                                  ///< plane offset (planar)
+};
+
+/// The neighbour sets of one scan's features, shared by every FindMatches of one Register call.
+struct MatchCache {
+  std::vector<NeighbourSet> edges, planes;
+};
+
+/// Kd-tree distances are float: the reuse radius keeps this margin against their rounding [m].
+constexpr double kReuseMarginM = 1e-5;
+
+/// Squared distance of the k-th neighbour of q_map: the search's own value, or recomputed for a reused set.
+/// Searches again (and forgets the fit) unless q_map lies within the set's reuse radius.
+double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Vector3d& q_map, int k,
+                          NeighbourSet* set) {
+  if (set->searched && (q_map - set->q_map).norm() <= set->reuse_radius_m) {
+    double max_sq = 0.0;
+    for (const Eigen::Vector3d& p : set->points) max_sq = std::max(max_sq, (p - q_map).squaredNorm());
+    return max_sq;
   }
-  for (const auto& pt : scan.planar.points) {
+  thread_local std::vector<float> sq;
+  const int found = map.Nearest(kind, q_map, k + 1, &set->points, &sq);
+  set->searched = true;
+  set->q_map = q_map;
+  set->fit = NeighbourSet::Fit::kUnknown;
+  set->reuse_radius_m = -1.0;
+  if (found == k + 1) {
+    const double gap_m = std::sqrt(double(sq[size_t(k)])) - std::sqrt(double(sq[size_t(k - 1)]));
+    set->reuse_radius_m = 0.5 * gap_m - kReuseMarginM;
+  }
+  if (found > k) set->points.resize(size_t(k));
+  set->kth_sq_m2 = found >= k ? sq[size_t(k - 1)] : 0.f;
+  return set->kth_sq_m2;
+}
+
+/// Correspondences of every scan edge and planar point at the pose T_map_scan (neighbour sets from *cache where
+/// still exact).
+Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan, const ScanToMapConfig& c,
+                    MatchCache* cache) {
+  using Fit = NeighbourSet::Fit;
+  Matches m;
+  const int k = c.num_neighbours;
+  const float max_sq = float(c.max_neighbour_distance_m * c.max_neighbour_distance_m);
+  cache->edges.resize(scan.edge.points.size());
+  cache->planes.resize(scan.planar.points.size());
+  for (size_t i = 0; i < scan.edge.points.size(); ++i) {
+    const auto& pt = scan.edge.points[i];
     const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
-    if (map.Nearest(FeatureKind::kPlanar, T_map_scan * p_scan, c.num_neighbours, &nbrs, &sq) < c.num_neighbours ||
-        sq.back() > max_sq)
-      continue;
-    PlaneMatch p{p_scan, {}, 0.0};
-    if (FitPlane(nbrs, c.max_plane_eigen_ratio, c.max_plane_deviation_m, &p.n_map, &p.d_m)) m.planes.push_back(p);
+    NeighbourSet& s = cache->edges[i];
+    const double kth_sq = KthSquaredDistance(map, FeatureKind::kEdge, T_map_scan * p_scan, k, &s);
+    if (int(s.points.size()) < k || kth_sq > max_sq) continue;
+    if (s.fit == Fit::kUnknown)
+      s.fit = FitLine(s.points, c.min_line_eigen_ratio, &s.a_or_n, &s.u) ? Fit::kAccepted : Fit::kRejected;
+    if (s.fit == Fit::kAccepted) m.edges.push_back({p_scan, s.a_or_n, s.u});
+  }
+  for (size_t i = 0; i < scan.planar.points.size(); ++i) {
+    const auto& pt = scan.planar.points[i];
+    const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
+    NeighbourSet& s = cache->planes[i];
+    const double kth_sq = KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, &s);
+    if (int(s.points.size()) < k || kth_sq > max_sq) continue;
+    if (s.fit == Fit::kUnknown)
+      s.fit = FitPlane(s.points, c.max_plane_eigen_ratio, c.max_plane_deviation_m, &s.a_or_n, &s.d_m)
+                  ? Fit::kAccepted
+                  : Fit::kRejected;
+    if (s.fit == Fit::kAccepted) m.planes.push_back({p_scan, s.a_or_n, s.d_m});
   }
   return m;
 }
@@ -196,17 +256,17 @@ bool FitPlane(const std::vector<Eigen::Vector3d>& points, double max_ratio, doub
 
 namespace {
 
-/// One outer loop from `guess`. With num_degenerate > 0, every update is remapped: its components along the
+/// One outer loop from `guess` (neighbour sets kept in *cache). With num_degenerate > 0, every update is remapped: its components along the
 /// num_degenerate weakest eigen-directions of the current linearisation are removed.
 ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& guess, const ScanToMapConfig& config,
-                      int num_degenerate) {
+                      int num_degenerate, MatchCache* cache) {
   ScanToMapResult result;
   result.T_map_scan = guess;
   PoseParameters x;
   std::unique_ptr<MatchProblem> problem;
   Matches matches;
   for (int it = 0; it < config.max_correspondence_rebuilds; ++it) {
-    matches = FindMatches(scan, map, result.T_map_scan, config);
+    matches = FindMatches(scan, map, result.T_map_scan, config, cache);
     if (int(matches.size()) < config.min_correspondences) {
       result.message = "only " + std::to_string(matches.size()) + " correspondences at outer iteration " +
                        std::to_string(it) + " (min_correspondences = " + std::to_string(config.min_correspondences) +
@@ -259,12 +319,13 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   // Phase 1: the full solve. Its converged correspondences tell which directions the scene observes; deciding
   // that at the guess instead (as LOAM does at its first iteration) misjudges a far guess (KITTI 0->1 from
   // identity, 0.7 m off, looks degenerate there and would freeze the very direction it has to move along).
-  ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0);
+  MatchCache cache;
+  ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0, &cache);
   if (!config.degeneracy.remap || !full.degeneracy.degenerate) return full;
   // Phase 2 (Zhang et al.'s solution remapping): solve again from the guess with every update projected onto
   // the well-observed subspace, so the degenerate directions keep the guess (the prior / IMU's value).
   ScanToMapResult remapped =
-      Solve(scan, map, T_map_scan_guess, config, int(full.degeneracy.degenerate_directions.size()));
+      Solve(scan, map, T_map_scan_guess, config, int(full.degeneracy.degenerate_directions.size()), &cache);
   remapped.remapped = true;
   remapped.iterations += full.iterations;
   remapped.solver_iterations += full.solver_iterations;

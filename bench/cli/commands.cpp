@@ -96,6 +96,9 @@ int CmdDemo(int argc, char** argv) {
     std::printf("  map   : map-to-truth median %.4f m, coverage %.1f %%, element size RMSE %.3f m\n",
                 r.evaluation.map.map_to_truth.median_m, 100 * r.evaluation.map.coverage.total.coverage,
                 r.evaluation.map.element_summary.rmse_m);
+  if (r.evaluation.has_deskew)
+    std::printf("  deskew: per-point error median %.4f m, p90 %.4f m over %zu points\n",
+                r.evaluation.deskew.all.median_m, r.evaluation.deskew.all.p90_m, r.evaluation.deskew.all.count);
   std::printf("  output: %s (report.html)\n", std::filesystem::absolute(options.out_dir).c_str());
   return 0;
 }

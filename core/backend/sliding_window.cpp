@@ -56,6 +56,8 @@ bool SlidingWindowConfig::Validate(std::string* error) const {
   if (!positive(initial_gyro_bias_sigma_radps)) return fail("initial_gyro_bias_sigma_radps must be > 0");
   if (!positive(initial_accel_bias_sigma_mps2)) return fail("initial_accel_bias_sigma_mps2 must be > 0");
   if (!(max_dt_mismatch_s >= 0.0)) return fail("max_dt_mismatch_s must be >= 0");
+  if (!positive(gravity_random_walk_rad_per_sqrt_s)) return fail("gravity_random_walk_rad_per_sqrt_s must be > 0");
+  if (!positive(initial_gravity_sigma_rad)) return fail("initial_gravity_sigma_rad must be > 0");
   std::string ceres_error;
   if (!SolverOptions().IsValid(&ceres_error)) return fail("linear_solver: " + ceres_error);
   return true;
@@ -82,17 +84,18 @@ struct SlidingWindow::State {
   double pose[kImuPoseBlockSize];
   double speed_bias[kImuSpeedBiasBlockSize];
   std::optional<PreintegratedImu> imu;     ///< [previous state, this state]; unused for the oldest state
-  std::unique_ptr<ImuFactor> imu_factor;   ///< built from `imu`
+  std::unique_ptr<ceres::CostFunction> imu_factor;  ///< built from `imu` (MakeImuFactor)
   std::unique_ptr<LidarPoseFactor> lidar;  ///< null when the state has no LiDAR measurement
   BlockRef PoseRef() { return {pose, BlockKind::kPose, kImuPoseBlockSize}; }
   BlockRef SpeedBiasRef() { return {speed_bias, BlockKind::kVector, kImuSpeedBiasBlockSize}; }
 };
 
 SlidingWindow::SlidingWindow(const SlidingWindowConfig& config)
-    : config_(config), pose_manifold_(MakeImuPoseManifold()) {
+    : config_(config), pose_manifold_(MakeImuPoseManifold()), gravity_manifold_(MakeGravityManifold()) {
   std::string error;
   ROTOLIDAR_CHECK(config.Validate(&error), error);
   lidar_loss_ = MakeLoss(config.lidar_loss, config.lidar_loss_scale);
+  Eigen::Vector3d::Map(gravity_) = config.gravity_world_mps2;
 }
 
 SlidingWindow::~SlidingWindow() = default;
@@ -101,6 +104,12 @@ void SlidingWindow::Reset() {
   prior_.reset();
   states_.clear();
   num_marginalized_ = 0;
+  Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
+}
+
+std::unique_ptr<ceres::CostFunction> SlidingWindow::MakeImuFactor(const PreintegratedImu& imu) const {
+  if (config_.estimate_gravity) return std::make_unique<ImuGravityFactor>(imu);
+  return std::make_unique<ImuFactor>(imu, config_.gravity_world_mps2);
 }
 
 Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
@@ -113,18 +122,27 @@ Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
   s->t_s = t_s;
   PackImuState(initial_state, s->pose, s->speed_bias);
   if (lidar) s->lidar = std::make_unique<LidarPoseFactor>(*lidar);
-  // Gaussian prior on [pose (6); speed-bias (9)] around the initial state, diagonal sqrt information 1 / sigma.
-  Eigen::Matrix<double, 15, 1> inv_sigma;
-  inv_sigma << Eigen::Vector3d::Constant(1.0 / config_.initial_position_sigma_m),
+  // Gaussian prior on [pose (6); speed-bias (9); gravity (3, ambient)] around the initial state, diagonal sqrt
+  // information 1 / sigma (gravity's radial axis carries no error: the sphere keeps |g|).
+  Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
+  const int n = config_.estimate_gravity ? 18 : 15;
+  Eigen::VectorXd inv_sigma(n);
+  inv_sigma.head<15>() << Eigen::Vector3d::Constant(1.0 / config_.initial_position_sigma_m),
       Eigen::Vector3d::Constant(1.0 / config_.initial_rotation_sigma_rad),
       Eigen::Vector3d::Constant(1.0 / config_.initial_velocity_sigma_mps),
       Eigen::Vector3d::Constant(1.0 / config_.initial_gyro_bias_sigma_radps),
       Eigen::Vector3d::Constant(1.0 / config_.initial_accel_bias_sigma_mps2);
+  std::vector<BlockRef> blocks = {s->PoseRef(), s->SpeedBiasRef()};
   std::vector<Eigen::VectorXd> x0 = {Eigen::Map<const Eigen::VectorXd>(s->pose, kImuPoseBlockSize),
                                      Eigen::Map<const Eigen::VectorXd>(s->speed_bias, kImuSpeedBiasBlockSize)};
-  prior_ = std::make_unique<LinearizedPriorFactor>(std::vector<BlockRef>{s->PoseRef(), s->SpeedBiasRef()},
-                                                   std::move(x0), Eigen::MatrixXd(inv_sigma.asDiagonal()),
-                                                   Eigen::VectorXd::Zero(15));
+  if (config_.estimate_gravity) {
+    const double g = config_.gravity_world_mps2.norm();
+    inv_sigma.tail<3>().setConstant(1.0 / (config_.initial_gravity_sigma_rad * g));
+    blocks.push_back(GravityRef());
+    x0.push_back(Eigen::Map<const Eigen::VectorXd>(gravity_, kGravityBlockSize));
+  }
+  prior_ = std::make_unique<LinearizedPriorFactor>(std::move(blocks), std::move(x0),
+                                                   Eigen::MatrixXd(inv_sigma.asDiagonal()), Eigen::VectorXd::Zero(n));
   states_.push_back(std::move(s));
   return Status::Ok();
 }
@@ -151,9 +169,9 @@ Status SlidingWindow::AddState(Seconds t_s, const PreintegratedImu& imu_from_pre
   if (size() >= config_.window_size) SlideOut();
   auto s = std::make_unique<State>();
   s->t_s = t_s;
-  PackImuState(imu_from_previous.Predict(latest_state(), config_.gravity_world_mps2), s->pose, s->speed_bias);
+  PackImuState(imu_from_previous.Predict(latest_state(), gravity_world_mps2()), s->pose, s->speed_bias);
   s->imu.emplace(imu_from_previous);
-  s->imu_factor = std::make_unique<ImuFactor>(*s->imu, config_.gravity_world_mps2);
+  s->imu_factor = MakeImuFactor(*s->imu);
   if (lidar) s->lidar = std::make_unique<LidarPoseFactor>(*lidar);
   states_.push_back(std::move(s));
   return Status::Ok();
@@ -175,20 +193,47 @@ void SlidingWindow::SlideOut() {
   ++num_marginalized_;
 }
 
-std::vector<MarginalizationTerm> SlidingWindow::TermsOfOldest() const {
+// With estimate_gravity the window treats gravity as constant over its span and as a random walk between the
+// marginalised past and the window: the factors being folded (prior, oldest IMU interval) are re-pointed at a
+// copy gravity_past_, tied to the window's gravity by (g - g_past) / (q |g| sqrt(dt)) over the oldest interval,
+// and gravity_past_ is marginalised with the oldest state. The prior thus carries gravity (and its correlation
+// with the kept state), and information older by T is diluted by q^2 T, so gravity can follow the map's tilt.
+std::vector<MarginalizationTerm> SlidingWindow::TermsOfOldest() {
+  const bool g_block = config_.estimate_gravity;
+  const BlockRef past{gravity_past_, BlockKind::kVector, kGravityBlockSize};
+  auto to_past = [&](std::vector<BlockRef> blocks) {
+    for (BlockRef& b : blocks)
+      if (b.values == gravity_) b = past;
+    return blocks;
+  };
   std::vector<MarginalizationTerm> terms;
   State& oldest = *states_[0];
-  if (prior_) terms.push_back({prior_.get(), nullptr, prior_->blocks()});
+  if (prior_) terms.push_back({prior_.get(), nullptr, to_past(prior_->blocks())});
   if (oldest.lidar) terms.push_back({oldest.lidar.get(), lidar_loss_.get(), {oldest.PoseRef()}});
   State& next = *states_[1];
-  terms.push_back({next.imu_factor.get(), nullptr,
-                   {oldest.PoseRef(), oldest.SpeedBiasRef(), next.PoseRef(), next.SpeedBiasRef()}});
+  std::vector<BlockRef> imu_blocks = {oldest.PoseRef(), oldest.SpeedBiasRef(), next.PoseRef(), next.SpeedBiasRef()};
+  if (g_block) imu_blocks.push_back(GravityRef());
+  terms.push_back({next.imu_factor.get(), nullptr, to_past(std::move(imu_blocks))});
+  if (g_block) {
+    std::copy(gravity_, gravity_ + kGravityBlockSize, gravity_past_);
+    const Eigen::VectorXd g = Eigen::Map<const Eigen::VectorXd>(gravity_, kGravityBlockSize);
+    const double sigma_mps2 = config_.gravity_random_walk_rad_per_sqrt_s * g.norm() * std::sqrt(next.t_s - oldest.t_s);
+    Eigen::MatrixXd J(3, 6);
+    J << -Eigen::Matrix3d::Identity() / sigma_mps2, Eigen::Matrix3d::Identity() / sigma_mps2;
+    gravity_walk_ = std::make_unique<LinearizedPriorFactor>(std::vector<BlockRef>{past, GravityRef()},
+                                                            std::vector<Eigen::VectorXd>{g, g}, std::move(J),
+                                                            Eigen::VectorXd::Zero(3));
+    terms.push_back({gravity_walk_.get(), nullptr, {past, GravityRef()}});
+  }
   return terms;
 }
 
 Status SlidingWindow::MarginalizeOldest() {
   State& oldest = *states_[0];
-  MarginalizationResult m = Marginalize(TermsOfOldest(), {oldest.pose, oldest.speed_bias});
+  std::vector<const double*> dropped = {oldest.pose, oldest.speed_bias};
+  if (config_.estimate_gravity) dropped.push_back(gravity_past_);
+  MarginalizationResult m = Marginalize(TermsOfOldest(), dropped);
+  gravity_walk_.reset();
   if (!m.success) return Status::Error("SlidingWindow: marginalisation failed: " + m.message);
   prior_ = std::move(m.prior);
   return Status::Ok();
@@ -210,13 +255,16 @@ WindowResult SlidingWindow::Optimize() {
     problem.AddParameterBlock(s->pose, kImuPoseBlockSize, pose_manifold_.get());
     problem.AddParameterBlock(s->speed_bias, kImuSpeedBiasBlockSize);
   }
+  if (config_.estimate_gravity) problem.AddParameterBlock(gravity_, kGravityBlockSize, gravity_manifold_.get());
   if (prior_) problem.AddResidualBlock(prior_.get(), nullptr, prior_->block_values());
   for (size_t k = 0; k < states_.size(); ++k) {
     State& s = *states_[k];
     if (s.lidar) problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose);
     if (k == 0) continue;
     State& prev = *states_[k - 1];
-    problem.AddResidualBlock(s.imu_factor.get(), nullptr, prev.pose, prev.speed_bias, s.pose, s.speed_bias);
+    std::vector<double*> blocks = {prev.pose, prev.speed_bias, s.pose, s.speed_bias};
+    if (config_.estimate_gravity) blocks.push_back(gravity_);
+    problem.AddResidualBlock(s.imu_factor.get(), nullptr, blocks);
   }
   ceres::Solver::Summary summary;
   ceres::Solve(config_.SolverOptions(), &problem, &summary);
@@ -240,7 +288,7 @@ int SlidingWindow::RepropagateMovedIntervals() {
       continue;
     }
     s.imu->Repropagate(prev.bias_gyro_radps, prev.bias_accel_mps2);
-    s.imu_factor = std::make_unique<ImuFactor>(*s.imu, config_.gravity_world_mps2);
+    s.imu_factor = MakeImuFactor(*s.imu);
     ++count;
   }
   return count;
@@ -265,7 +313,7 @@ std::vector<WindowStateEstimate> SlidingWindow::states() const {
 }
 
 NavState SlidingWindow::PredictFromLatest(const PreintegratedImu& imu_since_latest) const {
-  return imu_since_latest.Predict(latest_state(), config_.gravity_world_mps2);
+  return imu_since_latest.Predict(latest_state(), gravity_world_mps2());
 }
 
 }  // namespace rotolidar

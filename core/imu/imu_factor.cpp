@@ -1,6 +1,7 @@
 #include "core/imu/imu_factor.hpp"
 
 #include <ceres/product_manifold.h>
+#include <ceres/sphere_manifold.h>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
@@ -135,16 +136,19 @@ ImuFactor::Vector15d ImuFactor::UnwhitenedResidual(const double* pose_i, const d
   return ComputeTerms(ReadBlocks(parameters), preintegration_, gravity_world_mps2_).r;
 }
 
+namespace {
+
 // Jacobians of the unwhitened residual w.r.t. world-frame (left) rotation perturbations R <- Exp(theta) R,
 // translations, velocities and biases (docs/imu_preintegration.md, "Jacobians"), then whitened by S and
-// mapped to the blocks' ambient coordinates.
-bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+// mapped to the blocks' ambient coordinates. g: gravity in world [m/s^2]; parameters / jacobians: the 4 state
+// blocks (a fifth, gravity, block is the caller's).
+void EvaluateImu(const PreintegratedImu& pre, const ImuFactor::Matrix15d& S, const Vector3d& g,
+                 double const* const* parameters, double* residuals, double** jacobians) {
   const Blocks b = ReadBlocks(parameters);
-  const Terms t = ComputeTerms(b, preintegration_, gravity_world_mps2_);
-  Eigen::Map<Vector15d>{residuals} = sqrt_information_ * t.r;
-  if (jacobians == nullptr) return true;
+  const Terms t = ComputeTerms(b, pre, g);
+  Eigen::Map<ImuFactor::Vector15d>{residuals} = S * t.r;
+  if (jacobians == nullptr) return;
 
-  const PreintegratedImu& pre = preintegration_;
   const double T = pre.dt_s();
   const Matrix3d Jr_inv = so3::RightJacobianInverse(t.r.head<3>());
   const Matrix3d RiT = b.Ri.transpose();
@@ -157,8 +161,8 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, dou
     J.block<3, 3>(6, 0) = -RiT;
     J.block<3, 3>(6, 3) = RiT * so3::Hat(t.x_p);
     Eigen::Map<PoseJacobian> out(jacobians[0]);
-    out.leftCols<3>() = sqrt_information_ * J.leftCols<3>();
-    out.rightCols<4>() = QuaternionJacobian(sqrt_information_ * J.rightCols<3>(), b.qi);
+    out.leftCols<3>() = S * J.leftCols<3>();
+    out.rightCols<4>() = QuaternionJacobian(S * J.rightCols<3>(), b.qi);
   }
   if (jacobians[1] != nullptr) {  // speed_bias_i
     SpeedBiasJacobian J = SpeedBiasJacobian::Zero();
@@ -172,23 +176,60 @@ bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, dou
     J.block<3, 3>(6, 6) = -pre.dp_dba();
     J.block<3, 3>(9, 3) = -I3;
     J.block<3, 3>(12, 6) = -I3;
-    Eigen::Map<SpeedBiasJacobian>{jacobians[1]} = sqrt_information_ * J;
+    Eigen::Map<SpeedBiasJacobian>{jacobians[1]} = S * J;
   }
   if (jacobians[2] != nullptr) {  // pose_j
     LocalPoseJacobian J = LocalPoseJacobian::Zero();
     J.block<3, 3>(0, 3) = Jr_inv * b.Rj.transpose();
     J.block<3, 3>(6, 0) = RiT;
     Eigen::Map<PoseJacobian> out(jacobians[2]);
-    out.leftCols<3>() = sqrt_information_ * J.leftCols<3>();
-    out.rightCols<4>() = QuaternionJacobian(sqrt_information_ * J.rightCols<3>(), b.qj);
+    out.leftCols<3>() = S * J.leftCols<3>();
+    out.rightCols<4>() = QuaternionJacobian(S * J.rightCols<3>(), b.qj);
   }
   if (jacobians[3] != nullptr) {  // speed_bias_j
     SpeedBiasJacobian J = SpeedBiasJacobian::Zero();
     J.block<3, 3>(3, 0) = RiT;
     J.block<3, 3>(9, 3) = I3;
     J.block<3, 3>(12, 6) = I3;
-    Eigen::Map<SpeedBiasJacobian>{jacobians[3]} = sqrt_information_ * J;
+    Eigen::Map<SpeedBiasJacobian>{jacobians[3]} = S * J;
   }
+}
+
+}  // namespace
+
+bool ImuFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  EvaluateImu(preintegration_, sqrt_information_, gravity_world_mps2_, parameters, residuals, jacobians);
+  return true;
+}
+
+std::unique_ptr<ceres::Manifold> MakeGravityManifold() { return std::make_unique<ceres::SphereManifold<3>>(); }
+
+ImuGravityFactor::ImuGravityFactor(const PreintegratedImu& preintegration)
+    : core_(preintegration, Vector3d::Zero()) {}
+
+ImuFactor::Vector15d ImuGravityFactor::UnwhitenedResidual(const double* pose_i, const double* speed_bias_i,
+                                                          const double* pose_j, const double* speed_bias_j,
+                                                          const double* gravity3) const {
+  const double* parameters[4] = {pose_i, speed_bias_i, pose_j, speed_bias_j};
+  return ComputeTerms(ReadBlocks(parameters), core_.preintegration(), Eigen::Map<const Vector3d>(gravity3)).r;
+}
+
+// g enters r_v = R_i^T (... - g dt) and r_p = R_i^T (... - g dt^2 / 2) linearly, so the gravity Jacobian is exact
+// in the ambient coordinates; Ceres maps it to the sphere's 2-dof tangent. The pose_i Jacobian already uses the
+// block's g through x_v and x_p.
+bool ImuGravityFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  const Vector3d g = Eigen::Map<const Vector3d>(parameters[4]);
+  EvaluateImu(core_.preintegration(), core_.sqrt_information(), g, parameters, residuals, jacobians);
+  if (jacobians == nullptr || jacobians[4] == nullptr) return true;
+  const double T = core_.preintegration().dt_s();
+  const Matrix3d RiT = Eigen::Map<const Eigen::Quaterniond>(parameters[0] + 3).normalized().toRotationMatrix()
+                           .transpose();
+  Eigen::Matrix<double, kImuResidualSize, kGravityBlockSize> J;
+  J.setZero();
+  J.block<3, 3>(3, 0) = -RiT * T;
+  J.block<3, 3>(6, 0) = -RiT * (0.5 * T * T);
+  Eigen::Map<Eigen::Matrix<double, kImuResidualSize, kGravityBlockSize, Eigen::RowMajor>>{jacobians[4]} =
+      core_.sqrt_information() * J;
   return true;
 }
 

@@ -39,10 +39,15 @@ namespace rotolidar {
 inline constexpr int kImuPoseBlockSize = 7;        ///< [tx ty tz qx qy qz qw]
 inline constexpr int kImuSpeedBiasBlockSize = 9;   ///< [v(3) bg(3) ba(3)]
 inline constexpr int kImuResidualSize = 15;        ///< [r_R r_v r_p r_bg r_ba]
+inline constexpr int kGravityBlockSize = 3;        ///< [gx gy gz] gravity in world [m/s^2]
 
 /// The manifold of a pose block: ProductManifold<EuclideanManifold<3>, EigenQuaternionManifold>.
 /// ceres::Problem takes ownership by default: problem.SetManifold(pose, MakeImuPoseManifold().release()).
 std::unique_ptr<ceres::Manifold> MakeImuPoseManifold();
+
+/// The manifold of an estimated gravity block: ceres::SphereManifold<3> (|g| stays at its initial value; the
+/// 2-dof tangent is its direction).
+std::unique_ptr<ceres::Manifold> MakeGravityManifold();
 
 /// Pose block <-> T_world_imu / NavState (the quaternion is normalised when read).
 void PackImuPose(const Pose3& T_world_imu, double* pose7);
@@ -80,6 +85,31 @@ class ImuFactor final : public ceres::SizedCostFunction<kImuResidualSize, kImuPo
   Eigen::Vector3d gravity_world_mps2_;
   Matrix15d covariance_;
   Matrix15d sqrt_information_;
+};
+
+/// The ImuFactor with gravity as a fifth parameter block instead of a constant, for a window that estimates
+/// gravity's direction (core/backend/sliding_window.hpp):
+///   gravity  [gx gy gz]  (3)  g in world [m/s^2]. Manifold: MakeGravityManifold() (sphere, |g| fixed).
+/// Same residual, covariance and state Jacobians; in ambient coordinates dr_v/dg = -R_i^T dt,
+/// dr_p/dg = -R_i^T dt^2 / 2 (exact: g enters linearly), mapped by Ceres to the sphere's tangent.
+class ImuGravityFactor final : public ceres::SizedCostFunction<kImuResidualSize, kImuPoseBlockSize,
+                                                               kImuSpeedBiasBlockSize, kImuPoseBlockSize,
+                                                               kImuSpeedBiasBlockSize, kGravityBlockSize> {
+ public:
+  /// Copies `preintegration` (dt_s() must be > 0).
+  explicit ImuGravityFactor(const PreintegratedImu& preintegration);
+
+  /// parameters: {pose_i, speed_bias_i, pose_j, speed_bias_j, gravity}. Always returns true.
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+  ImuFactor::Vector15d UnwhitenedResidual(const double* pose_i, const double* speed_bias_i, const double* pose_j,
+                                          const double* speed_bias_j, const double* gravity3) const;
+
+  const ImuFactor::Matrix15d& sqrt_information() const { return core_.sqrt_information(); }
+  const PreintegratedImu& preintegration() const { return core_.preintegration(); }
+
+ private:
+  ImuFactor core_;  ///< covariance and preintegration; its constant gravity is unused
 };
 
 }  // namespace rotolidar

@@ -76,7 +76,7 @@ Estimator::Prediction Estimator::PredictFromWindow(Seconds t0_s, Seconds t1_s) c
   out.T_world_base = PoseOf(state) * calib_.T_base_imu.inverse();
   ImuMotionModel model;
   model.v_imu_mps = state.R_world_imu.transpose() * state.v_world_mps;
-  model.gravity_imu_mps2 = state.R_world_imu.transpose() * window_->config().gravity_world_mps2;
+  model.gravity_imu_mps2 = state.R_world_imu.transpose() * window_->gravity_world_mps2();
   model.bias_gyro_radps = state.bias_gyro_radps;
   model.bias_accel_mps2 = state.bias_accel_mps2;
   out.imu_motion = bool(ImuMotionTable(imu_, t0_s, t1_s, model, calib_.T_base_imu, &out.motion));

@@ -138,6 +138,8 @@ TEST(EstimatorConfig, YamlRoundTripAndStrictKeys) {
   c.features.sectors = 8;
   c.registration.loss = RobustLoss::kCauchy;
   c.window.marginalization = MarginalizationScheme::kDropOldest;
+  c.window.estimate_gravity = false;
+  c.window.gravity_random_walk_rad_per_sqrt_s = 2e-3;
   c.keep_deskewed = true;
   YAML::Emitter out;
   EmitEstimatorConfig(out, c);
@@ -147,6 +149,8 @@ TEST(EstimatorConfig, YamlRoundTripAndStrictKeys) {
   EXPECT_EQ(back.features.sectors, 8);
   EXPECT_EQ(back.registration.loss, RobustLoss::kCauchy);
   EXPECT_EQ(back.window.marginalization, MarginalizationScheme::kDropOldest);
+  EXPECT_FALSE(back.window.estimate_gravity);
+  EXPECT_EQ(back.window.gravity_random_walk_rad_per_sqrt_s, 2e-3);
   EXPECT_TRUE(back.keep_deskewed);
   YAML::Emitter again;
   EmitEstimatorConfig(again, back);

@@ -36,6 +36,17 @@ PreintegratedImu RandomPreintegration(RandomStream& rng, int steps) {
   return pre;
 }
 
+/// A random state i near the preintegration's linearisation biases (the draws in this order: R, p, v, bg, ba).
+NavState RandomStateI(RandomStream& rng, const PreintegratedImu& pre) {
+  NavState i;
+  i.R_world_imu = RandomRotation(rng);
+  i.p_world_m = RandomVector(rng, 2.0);
+  i.v_world_mps = RandomVector(rng, 1.0);
+  i.bias_gyro_radps = pre.bias_gyro_radps() + RandomVector(rng, 0.01);
+  i.bias_accel_mps2 = pre.bias_accel_mps2() + RandomVector(rng, 0.05);
+  return i;
+}
+
 /// Max over entries of |a - n| / (1 + |n|).
 double MaxMixedError(const Eigen::MatrixXd& a, const Eigen::MatrixXd& n) {
   return ((a - n).array().abs() / (1.0 + n.array().abs())).maxCoeff();
@@ -49,12 +60,7 @@ TEST(ImuFactor, AnalyticJacobiansMatchNumericWithManifold) {
   double worst_local = 0.0, worst_ambient = 0.0;
   for (int trial = 0; trial < 10; ++trial) {
     const PreintegratedImu pre = RandomPreintegration(rng, 20 + 10 * trial);
-    NavState i;
-    i.R_world_imu = RandomRotation(rng);
-    i.p_world_m = RandomVector(rng, 2.0);
-    i.v_world_mps = RandomVector(rng, 1.0);
-    i.bias_gyro_radps = pre.bias_gyro_radps() + RandomVector(rng, 0.01);
-    i.bias_accel_mps2 = pre.bias_accel_mps2() + RandomVector(rng, 0.05);
+    const NavState i = RandomStateI(rng, pre);
     NavState j = pre.Predict(i, kGravity);  // then perturb j so that every residual is non-zero
     j.R_world_imu = ExpSO3(RandomVector(rng, 0.05)) * j.R_world_imu;
     j.p_world_m += RandomVector(rng, 0.1);
@@ -102,12 +108,7 @@ TEST(ImuGravityFactor, MatchesImuFactorAndJacobiansMatchNumeric) {
     const PreintegratedImu pre = RandomPreintegration(rng, 20 + 10 * trial);
     // A gravity tilted by up to ~0.1 rad from kGravity, |g| = 9.81.
     const Eigen::Vector3d g = ExpSO3(RandomVector(rng, 0.05)) * kGravity;
-    NavState i;
-    i.R_world_imu = RandomRotation(rng);
-    i.p_world_m = RandomVector(rng, 2.0);
-    i.v_world_mps = RandomVector(rng, 1.0);
-    i.bias_gyro_radps = pre.bias_gyro_radps() + RandomVector(rng, 0.01);
-    i.bias_accel_mps2 = pre.bias_accel_mps2() + RandomVector(rng, 0.05);
+    const NavState i = RandomStateI(rng, pre);
     NavState j = pre.Predict(i, kGravity);  // predicted with the nominal gravity: r_v, r_p see the tilt
     j.R_world_imu = ExpSO3(RandomVector(rng, 0.05)) * j.R_world_imu;
     j.p_world_m += RandomVector(rng, 0.1);

@@ -5,25 +5,45 @@
 
 namespace rotolidar {
 
-Pose3 MotionTable::At(Seconds t, bool* outside) const {
-  ROTOLIDAR_CHECK(!t_s.empty() && t_s.size() == T_start_t.size(), "MotionTable: empty or mismatched sizes");
-  if (outside) *outside = false;
-  if (t <= t_s.front() || t_s.size() == 1) {
-    if (outside && t < t_s.front()) *outside = true;
-    return T_start_t.front();
+namespace {
+
+/// Where t falls in ts (sorted): 0 at or before the first time (and for a single time), ts.size() at or after
+/// the last, otherwise k with ts[k-1] <= t < ts[k]. *outside: t lies before the first or after the last time.
+/// The interval `hint` is tried before a search (points come in firing order).
+size_t Interval(const std::vector<Seconds>& ts, Seconds t, size_t hint, bool* outside) {
+  *outside = false;
+  if (t <= ts.front() || ts.size() == 1) {
+    *outside = t < ts.front();
+    return 0;
   }
-  if (t >= t_s.back()) {
-    if (outside && t > t_s.back()) *outside = true;
-    return T_start_t.back();
+  if (t >= ts.back()) {
+    *outside = t > ts.back();
+    return ts.size();
   }
-  const size_t k = size_t(std::upper_bound(t_s.begin(), t_s.end(), t) - t_s.begin());  // t_s[k-1] <= t < t_s[k]
-  const Pose3& a = T_start_t[k - 1];
-  const Pose3& b = T_start_t[k];
-  const double s = (t - t_s[k - 1]) / (t_s[k] - t_s[k - 1]);
+  if (hint >= 1 && hint < ts.size() && ts[hint - 1] <= t && t < ts[hint]) return hint;
+  return size_t(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin());
+}
+
+/// Rotation along the geodesic a -> b (log_ab = Log(R_a^T R_b)) and translation linearly, at fraction s.
+Pose3 Blend(const Pose3& a, const Pose3& b, double s, const Eigen::Vector3d& log_ab) {
   Pose3 out = Pose3::Identity();
-  out.linear() = a.linear() * ExpSO3(s * LogSO3(a.linear().transpose() * b.linear()));
+  out.linear() = a.linear() * ExpSO3(s * log_ab);
   out.translation() = (1.0 - s) * a.translation() + s * b.translation();
   return out;
+}
+
+}  // namespace
+
+Pose3 MotionTable::At(Seconds t, bool* outside) const {
+  ROTOLIDAR_CHECK(!t_s.empty() && t_s.size() == T_start_t.size(), "MotionTable: empty or mismatched sizes");
+  bool out_of_span = false;
+  const size_t k = Interval(t_s, t, 0, &out_of_span);
+  if (outside) *outside = out_of_span;
+  if (k == 0) return T_start_t.front();
+  if (k == t_s.size()) return T_start_t.back();
+  const Pose3& a = T_start_t[k - 1];
+  const Pose3& b = T_start_t[k];
+  return Blend(a, b, (t - t_s[k - 1]) / (t_s[k] - t_s[k - 1]), LogSO3(a.linear().transpose() * b.linear()));
 }
 
 // Strapdown integration in the imu frame at t0: R, p, v of the imu frame at t relative to t0, gravity and the
@@ -100,7 +120,7 @@ MotionTable IdentityTable(Seconds t0_s, Seconds t1_s) {
 namespace {
 
 /// MotionTable::At for a stream of times, with the same values: each interval's relative rotation is logged once
-/// (not per point), and the interval of the previous time is tried before a search (points come in firing order).
+/// (not per point), and the previous time's interval is tried first.
 class TableInterpolator {
  public:
   explicit TableInterpolator(const MotionTable& table) : table_(table) {
@@ -112,24 +132,11 @@ class TableInterpolator {
 
   Pose3 At(Seconds t, bool* outside) {
     const std::vector<Seconds>& ts = table_.t_s;
-    *outside = false;
-    if (t <= ts.front() || ts.size() == 1) {
-      *outside = t < ts.front();
-      return table_.T_start_t.front();
-    }
-    if (t >= ts.back()) {
-      *outside = t > ts.back();
-      return table_.T_start_t.back();
-    }
-    if (!(ts[k_ - 1] <= t && t < ts[k_]))  // t_s[k-1] <= t < t_s[k], as At's upper_bound finds it
-      k_ = size_t(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin());
-    const Pose3& a = table_.T_start_t[k_ - 1];
-    const Pose3& b = table_.T_start_t[k_];
-    const double s = (t - ts[k_ - 1]) / (ts[k_] - ts[k_ - 1]);
-    Pose3 out = Pose3::Identity();
-    out.linear() = a.linear() * ExpSO3(s * log_[k_ - 1]);
-    out.translation() = (1.0 - s) * a.translation() + s * b.translation();
-    return out;
+    const size_t k = Interval(ts, t, k_, outside);
+    if (k == 0) return table_.T_start_t.front();
+    if (k == ts.size()) return table_.T_start_t.back();
+    k_ = k;
+    return Blend(table_.T_start_t[k - 1], table_.T_start_t[k], (t - ts[k - 1]) / (ts[k] - ts[k - 1]), log_[k - 1]);
   }
 
  private:

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/util/log.hpp"
+#include "core/util/voxel_hash.hpp"
 
 namespace rotolidar {
 
@@ -20,9 +21,7 @@ VoxelMap::Key VoxelMap::KeyOf(const Eigen::Vector3d& p) const {
 }
 
 size_t VoxelMap::HomeSlot(const Key& key) const {
-  const uint64_t h = uint64_t(uint32_t(key.x)) * 0x9E3779B97F4A7C15ull ^
-                     uint64_t(uint32_t(key.y)) * 0xC2B2AE3D27D4EB4Full ^ uint64_t(uint32_t(key.z)) * 0x165667B19E3779F9ull;
-  return size_t(h ^ (h >> 29)) & (table_.size() - 1);
+  return size_t(VoxelHash(key.x, key.y, key.z)) & (table_.size() - 1);
 }
 
 size_t VoxelMap::SlotOf(const Key& key) const {

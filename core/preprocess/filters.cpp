@@ -12,6 +12,7 @@
 #include <pcl/point_types.h>
 
 #include "core/util/log.hpp"
+#include "core/util/voxel_hash.hpp"
 
 namespace rotolidar {
 namespace {
@@ -332,9 +333,7 @@ std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>
     if (!p.allFinite()) continue;
     const Key key{static_cast<int64_t>(std::floor(p.x() * inv)), static_cast<int64_t>(std::floor(p.y() * inv)),
                   static_cast<int64_t>(std::floor(p.z() * inv))};
-    uint64_t h = static_cast<uint64_t>(key[0]) * 0x9E3779B97F4A7C15ull ^
-                 static_cast<uint64_t>(key[1]) * 0xC2B2AE3D27D4EB4Full ^ static_cast<uint64_t>(key[2]) * 0x165667B19E3779F9ull;
-    std::size_t slot = (h ^ (h >> 29)) & (capacity - 1);
+    std::size_t slot = VoxelHash(key[0], key[1], key[2]) & (capacity - 1);
     while (table[slot] >= 0 && voxels[table[slot]].key != key) slot = (slot + 1) & (capacity - 1);
     if (table[slot] < 0) table[slot] = static_cast<int64_t>(voxels.size()), voxels.push_back(Voxel{key});
     Voxel& v = voxels[table[slot]];

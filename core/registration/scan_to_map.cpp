@@ -45,7 +45,6 @@ struct NeighbourSet {
   bool searched = false;
   Eigen::Vector3d q_map = Eigen::Vector3d::Zero();  ///< where the set was searched (map frame)
   double reuse_radius_m = -1.0;                     ///< the set is exact within this distance of q_map (< 0: never)
-  float kth_sq_m2 = 0.f;                            ///< squared distance of the k-th neighbour from q_map
   std::vector<Eigen::Vector3d> points;              ///< the k nearest, nearest first (fewer: a sparse map)
   Fit fit = Fit::kUnknown;
   Eigen::Vector3d a_or_n = Eigen::Vector3d::Zero();  ///< line point (edge) or plane normal (planar)
@@ -81,8 +80,7 @@ double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Ve
     set->reuse_radius_m = 0.5 * gap_m - kReuseMarginM;
   }
   if (found > k) set->points.resize(size_t(k));
-  set->kth_sq_m2 = found >= k ? sq[size_t(k - 1)] : 0.f;
-  return set->kth_sq_m2;
+  return found >= k ? sq[size_t(k - 1)] : 0.0;
 }
 
 /// Correspondences of every scan edge and planar point at the pose T_map_scan (neighbour sets from *cache where
@@ -256,8 +254,9 @@ bool FitPlane(const std::vector<Eigen::Vector3d>& points, double max_ratio, doub
 
 namespace {
 
-/// One outer loop from `guess` (neighbour sets kept in *cache). With num_degenerate > 0, every update is remapped: its components along the
-/// num_degenerate weakest eigen-directions of the current linearisation are removed.
+/// One outer loop from `guess` (neighbour sets kept in *cache). With num_degenerate > 0, every update is
+/// remapped: its components along the num_degenerate weakest eigen-directions of the current linearisation are
+/// removed.
 ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& guess, const ScanToMapConfig& config,
                       int num_degenerate, MatchCache* cache) {
   ScanToMapResult result;

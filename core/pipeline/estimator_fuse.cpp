@@ -89,24 +89,18 @@ Estimator::Prediction Estimator::PredictFromWindow(Seconds t0_s, Seconds t1_s) c
 Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const {
   Prediction out;
   out.motion = IdentityTable(t0_s, t1_s);
-  if (trajectory_.empty()) {
-    // The first scan: no velocity yet, but the gyro still removes the carrier's rotation during the scan.
-    ImuMotionModel gyro_only;
-    gyro_only.use_accel = false;
-    MotionTable scan;
-    if (!imu_.empty() && ImuMotionTable(imu_, t0_s, t1_s, gyro_only, calib_.T_base_imu, &scan)) {
-      out.motion = std::move(scan);
+  // Motion over one second in the last pose's frame (constant twist); none before two poses (the first scans:
+  // zero velocity, yet the gyro below still removes the carrier's rotation during the scan).
+  Pose3 delta_per_s = Pose3::Identity();
+  if (!trajectory_.empty()) {
+    const StampedPose& b = trajectory_.back();
+    if (trajectory_.size() >= 2) {
+      const StampedPose& a = trajectory_[trajectory_.size() - 2];
+      if (b.t_s > a.t_s) delta_per_s = ScaleMotion(a.T_ref_body.inverse() * b.T_ref_body, 1.0 / (b.t_s - a.t_s));
     }
-    return out;
+    out.T_world_base = b.T_ref_body * ScaleMotion(delta_per_s, t0_s - b.t_s);
+    if (t1_s > t0_s) out.motion = ConstantTwistTable(ScaleMotion(delta_per_s, t1_s - t0_s), t0_s, t1_s);
   }
-  const StampedPose& b = trajectory_.back();
-  Pose3 delta_per_s = Pose3::Identity();  // motion over one second, in b's frame (constant twist)
-  if (trajectory_.size() >= 2) {
-    const StampedPose& a = trajectory_[trajectory_.size() - 2];
-    if (b.t_s > a.t_s) delta_per_s = ScaleMotion(a.T_ref_body.inverse() * b.T_ref_body, 1.0 / (b.t_s - a.t_s));
-  }
-  out.T_world_base = b.T_ref_body * ScaleMotion(delta_per_s, t0_s - b.t_s);
-  if (t1_s > t0_s) out.motion = ConstantTwistTable(ScaleMotion(delta_per_s, t1_s - t0_s), t0_s, t1_s);
   if (imu_.empty()) return out;
   // Velocity of the imu origin in the imu frame, from the base's constant twist.
   const Pose3& T_bi = calib_.T_base_imu;
@@ -115,8 +109,9 @@ Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t
   model.use_accel = false;
   model.v_imu_mps = delta_imu.translation() / 1e-3;
   MotionTable to_start;
-  if (t0_s > b.t_s && ImuMotionTable(imu_, b.t_s, t0_s, model, T_bi, &to_start))
-    out.T_world_base = b.T_ref_body * to_start.T_start_t.back();
+  if (!trajectory_.empty() && t0_s > trajectory_.back().t_s &&
+      ImuMotionTable(imu_, trajectory_.back().t_s, t0_s, model, T_bi, &to_start))
+    out.T_world_base = trajectory_.back().T_ref_body * to_start.T_start_t.back();
   MotionTable scan;
   if (ImuMotionTable(imu_, t0_s, t1_s, model, T_bi, &scan)) out.motion = std::move(scan);
   return out;

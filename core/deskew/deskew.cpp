@@ -9,7 +9,7 @@ namespace {
 
 /// Where t falls in ts (sorted): 0 at or before the first time (and for a single time), ts.size() at or after
 /// the last, otherwise k with ts[k-1] <= t < ts[k]. *outside: t lies before the first or after the last time.
-/// The interval `hint` is tried before a search (points come in firing order).
+/// The interval `hint` and the one after it are tried before a search (points come in firing order).
 size_t Interval(const std::vector<Seconds>& ts, Seconds t, size_t hint, bool* outside) {
   *outside = false;
   if (t <= ts.front() || ts.size() == 1) {
@@ -21,6 +21,7 @@ size_t Interval(const std::vector<Seconds>& ts, Seconds t, size_t hint, bool* ou
     return ts.size();
   }
   if (hint >= 1 && hint < ts.size() && ts[hint - 1] <= t && t < ts[hint]) return hint;
+  if (hint >= 1 && hint + 1 < ts.size() && ts[hint] <= t && t < ts[hint + 1]) return hint + 1;  // the next one
   return size_t(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin());
 }
 
@@ -119,43 +120,57 @@ MotionTable IdentityTable(Seconds t0_s, Seconds t1_s) {
 
 namespace {
 
-/// MotionTable::At for a stream of times, with the same values: each interval's relative rotation is logged once
-/// (not per point), and the previous time's interval is tried first.
-class TableInterpolator {
- public:
-  explicit TableInterpolator(const MotionTable& table) : table_(table) {
-    ROTOLIDAR_CHECK(!table.t_s.empty() && table.t_s.size() == table.T_start_t.size(),
-                    "MotionTable: empty or mismatched sizes");
-    for (size_t k = 1; k < table.t_s.size(); ++k)
-      log_.push_back(LogSO3(table.T_start_t[k - 1].linear().transpose() * table.T_start_t[k].linear()));
+/// Exp(phi) * p by Rodrigues' formula on the vector: p + A phi x p + B phi x (phi x p), A = sin(x)/x,
+/// B = (1 - cos x)/x^2, x = |phi|; Taylor series (truncation < 1e-17) for x < 0.1.
+Eigen::Vector3d RotateByVector(const Eigen::Vector3d& phi, const Eigen::Vector3d& p) {
+  const double x2 = phi.squaredNorm();
+  double a, b;
+  if (x2 < 1e-2) {  // multiplications by the reciprocals (a division per term would dominate the cost)
+    a = 1.0 - x2 * (1.0 / 6) * (1.0 - x2 * (1.0 / 20) * (1.0 - x2 * (1.0 / 42) * (1.0 - x2 * (1.0 / 72))));
+    b = 0.5 * (1.0 - x2 * (1.0 / 12) * (1.0 - x2 * (1.0 / 30) * (1.0 - x2 * (1.0 / 56) * (1.0 - x2 * (1.0 / 90)))));
+  } else {
+    const double x = std::sqrt(x2);
+    a = std::sin(x) / x;
+    b = (1.0 - std::cos(x)) / x2;
   }
-
-  Pose3 At(Seconds t, bool* outside) {
-    const std::vector<Seconds>& ts = table_.t_s;
-    const size_t k = Interval(ts, t, k_, outside);
-    if (k == 0) return table_.T_start_t.front();
-    if (k == ts.size()) return table_.T_start_t.back();
-    k_ = k;
-    return Blend(table_.T_start_t[k - 1], table_.T_start_t[k], (t - ts[k - 1]) / (ts[k] - ts[k - 1]), log_[k - 1]);
-  }
-
- private:
-  const MotionTable& table_;
-  std::vector<Eigen::Vector3d> log_;  ///< log_[k - 1] = Log(R_{k-1}^T R_k)
-  size_t k_ = 1;                      ///< interval of the previous time
-};
+  const Eigen::Vector3d wxp = phi.cross(p);
+  return p + a * wxp + b * phi.cross(wxp);
+}
 
 }  // namespace
+
+MotionInterpolator::MotionInterpolator(const MotionTable& table) : table_(table) {
+  ROTOLIDAR_CHECK(!table.t_s.empty() && table.t_s.size() == table.T_start_t.size(),
+                  "MotionTable: empty or mismatched sizes");
+  seg_.reserve(table.t_s.size());
+  for (size_t k = 1; k < table.t_s.size(); ++k) {
+    const Pose3& a = table.T_start_t[k - 1];
+    const Pose3& b = table.T_start_t[k];
+    seg_.push_back({a.linear(), LogSO3(a.linear().transpose() * b.linear()), a.translation(), b.translation(),
+                    1.0 / (table.t_s[k] - table.t_s[k - 1])});
+  }
+}
+
+Eigen::Vector3d MotionInterpolator::Apply(Seconds t, const Eigen::Vector3d& p_base, bool* outside) {
+  const std::vector<Seconds>& ts = table_.t_s;
+  const size_t k = Interval(ts, t, k_, outside);
+  if (k == 0) return table_.T_start_t.front() * p_base;
+  if (k == ts.size()) return table_.T_start_t.back() * p_base;
+  k_ = k;
+  const Segment& g = seg_[k - 1];
+  const double s = (t - ts[k - 1]) * g.inv_dt;
+  return g.R_a * RotateByVector(s * g.w, p_base) + ((1.0 - s) * g.t_a + s * g.t_b);
+}
 
 size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
                     const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start) {
   ROTOLIDAR_CHECK(t_s.size() == p_base.size(), "DeskewPoints: times and points differ in size");
   p_start->resize(p_base.size());
-  TableInterpolator interpolate(table);
+  MotionInterpolator interpolate(table);
   size_t outside_count = 0;
   for (size_t i = 0; i < p_base.size(); ++i) {
     bool outside = false;
-    (*p_start)[i] = interpolate.At(t_s[i], &outside) * p_base[i];
+    (*p_start)[i] = interpolate.Apply(t_s[i], p_base[i], &outside);
     outside_count += outside ? 1 : 0;
   }
   return outside_count;

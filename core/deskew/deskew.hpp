@@ -59,9 +59,32 @@ MotionTable ConstantTwistTable(const Pose3& T_start_end, Seconds t0_s, Seconds t
 /// The identity over [t0_s, t1_s] (no motion known).
 MotionTable IdentityTable(Seconds t0_s, Seconds t1_s);
 
-/// Deskews points: (*p_start)[i] = table.At(t_s[i]) * p_base[i] (sizes must match: ROTOLIDAR_CHECK).
-/// Returns how many points lay outside the table's span (they used its nearest end). Non-finite inputs give
-/// non-finite outputs.
+/// MotionTable::At(t) * p for a stream of points, with the same values up to double rounding and no trigonometry
+/// per point: each interval's relative rotation log w is taken once, and Exp(s w) p is applied with Rodrigues'
+/// formula on the vector (Taylor series of sin(x)/x and (1 - cos x)/x^2 below 0.1 rad). The previous point's
+/// interval is tried first (points come in firing order; any order is correct). Holds a reference to `table`,
+/// which must outlive it. Non-finite inputs give non-finite outputs.
+class MotionInterpolator {
+ public:
+  explicit MotionInterpolator(const MotionTable& table);  ///< ROTOLIDAR_CHECKs a non-empty, consistent table
+  /// T_base(t0)_base(t) * p_base [m]; *outside = t lies outside the table's span (its nearest end was used).
+  Eigen::Vector3d Apply(Seconds t, const Eigen::Vector3d& p_base, bool* outside);
+
+ private:
+  struct Segment {
+    Eigen::Matrix3d R_a;        ///< rotation at the interval's start
+    Eigen::Vector3d w;          ///< Log(R_a^T R_b) [rad]
+    Eigen::Vector3d t_a, t_b;   ///< translations at both ends [m]
+    double inv_dt;              ///< 1 / the interval's length [1/s]
+  };
+  const MotionTable& table_;
+  std::vector<Segment> seg_;  ///< seg_[k - 1]: the interval t_s[k - 1] .. t_s[k]
+  size_t k_ = 1;              ///< interval of the previous time
+};
+
+/// Deskews points: (*p_start)[i] = table.At(t_s[i]) * p_base[i] (sizes must match: ROTOLIDAR_CHECK), computed
+/// with MotionInterpolator. Returns how many points lay outside the table's span (they used its nearest end).
+/// Non-finite inputs give non-finite outputs.
 size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
                     const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start);
 

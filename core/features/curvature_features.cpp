@@ -27,10 +27,12 @@ float StepDeg(float from_deg, float to_deg) {
 /// writes `picked` and the labels only at the positions of its own sector, so no two tasks share a written byte.
 struct Ring {
   std::vector<int> index;        ///< input indices, by firing time
+  std::vector<float> x, y, z, range, az;  ///< per position: p_base [m], range_m [m], azimuth_deg (contiguous copies)
   std::vector<uint8_t> step_ok;  ///< step_ok[j]: positions j and j+1 are neighbours
   std::vector<float> c;          ///< Eq. 3 per position, NaN without a window
   std::vector<int> sector;       ///< sector per position
-  std::vector<std::vector<int>> by_sector;  ///< positions of each sector, in firing order
+  std::vector<int> sector_begin; ///< positions of sector s: by_sector[sector_begin[s] .. sector_begin[s + 1])
+  std::vector<int> by_sector;    ///< positions grouped by sector, in firing order inside each
   std::vector<uint8_t> sharp;    ///< c above the edge threshold at the point's range (EdgeThresholdAt)
   std::vector<uint8_t> picked;   ///< LOAM's "neighbour picked": not selectable any more
 };
@@ -41,6 +43,7 @@ struct Context {
   std::vector<Ring> rings;
   std::vector<FeatureLabel> labels;  ///< per input point
   double tan_max_incidence = 0.0;    ///< tan(config.beam_parallel_max_incidence_deg)
+  double sigma_c_numerator = 0.0;    ///< range_sigma_m * sqrt(4N^2 + 2N) (EdgeThresholdAt)
 };
 
 struct SectorOutput {
@@ -79,27 +82,31 @@ bool IsDepthJump(const FeatureConfig& cfg, float r_a, float r_b) {
   return jump > std::max(cfg.occlusion_min_jump_m, cfg.occlusion_jump_ratio * std::min(r_a, r_b));
 }
 
-/// Eq. 3 over positions of `index` (firing order); step_ok as in Ring.
-std::vector<float> CurvatureOf(const std::vector<ScanPoint>& points, const std::vector<int>& index,
-                               const std::vector<uint8_t>& step_ok, int n_side) {
-  const int n = static_cast<int>(index.size());
+/// Eq. 3 over one ring's positions (firing order); step_ok as in Ring. The window sum is
+/// sum_j (X_i - X_j) = (2N + 1) X_i - sum_j X_j with the X_j summed by prefix sums in double (exact for float
+/// inputs of a scan's magnitudes), so each point costs O(1) whatever N.
+std::vector<float> CurvatureOf(const std::vector<float>& x, const std::vector<float>& y, const std::vector<float>& z,
+                               const std::vector<float>& range, const std::vector<uint8_t>& step_ok, int n_side) {
+  const int n = static_cast<int>(x.size());
   std::vector<int> bad_before(n + 1, 0);  // bad_before[j]: number of bad steps among steps 0..j-1
   for (int j = 0; j + 1 < n; ++j) bad_before[j + 1] = bad_before[j] + (step_ok[j] ? 0 : 1);
+  std::vector<double> px(n + 1, 0.0), py(n + 1, 0.0), pz(n + 1, 0.0);  // prefix sums: p[j] = sum of 0..j-1
+  for (int j = 0; j < n; ++j) px[j + 1] = px[j] + x[j], py[j + 1] = py[j] + y[j], pz[j + 1] = pz[j] + z[j];
   std::vector<float> c(n, kNaN);
+  const double width = 2.0 * n_side + 1.0;
   for (int i = n_side; i + n_side < n; ++i) {
     if (bad_before[i + n_side] != bad_before[i - n_side]) continue;  // the window crosses a gap
-    const Eigen::Vector3f& x_i = points[index[i]].p_base;
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int j = i - n_side; j <= i + n_side; ++j) sum += (x_i - points[index[j]].p_base).cast<double>();
-    c[i] = static_cast<float>(sum.norm() / (2.0 * n_side * points[index[i]].range_m));
+    const int lo = i - n_side, hi = i + n_side + 1;
+    const double sx = width * x[i] - (px[hi] - px[lo]), sy = width * y[i] - (py[hi] - py[lo]);
+    const double sz = width * z[i] - (pz[hi] - pz[lo]);
+    c[i] = static_cast<float>(std::sqrt(sx * sx + sy * sy + sz * sz) / (2.0 * n_side * range[i]));
   }
   return c;
 }
 
-std::vector<uint8_t> StepsOk(const std::vector<ScanPoint>& points, const std::vector<int>& index, double max_deg) {
-  std::vector<uint8_t> ok(index.empty() ? 0 : index.size() - 1);
-  for (std::size_t j = 0; j < ok.size(); ++j)
-    ok[j] = StepDeg(points[index[j]].azimuth_deg, points[index[j + 1]].azimuth_deg) <= max_deg;
+std::vector<uint8_t> StepsOk(const std::vector<float>& az, double max_deg) {
+  std::vector<uint8_t> ok(az.empty() ? 0 : az.size() - 1);
+  for (std::size_t j = 0; j < ok.size(); ++j) ok[j] = StepDeg(az[j], az[j + 1]) <= max_deg;
   return ok;
 }
 
@@ -108,7 +115,7 @@ void MarkOccluded(const Context& ctx, const Ring& ring, std::vector<uint8_t>* oc
   const int n = static_cast<int>(ring.index.size()), n_side = ctx.config.neighbours;
   for (int j = 0; j + 1 < n; ++j) {
     if (!ring.step_ok[j]) continue;
-    const float r_a = ctx.points[ring.index[j]].range_m, r_b = ctx.points[ring.index[j + 1]].range_m;
+    const float r_a = ring.range[j], r_b = ring.range[j + 1];
     if (!IsDepthJump(ctx.config, r_a, r_b)) continue;
     const int first = r_a > r_b ? j - n_side : j + 1, last = r_a > r_b ? j : j + 1 + n_side;
     for (int q = std::max(0, first); q <= std::min(n - 1, last); ++q) (*occluded)[q] = 1;
@@ -119,21 +126,48 @@ void MarkOccluded(const Context& ctx, const Ring& ring, std::vector<uint8_t>* oc
 bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
   const int n_side = ctx.config.neighbours;
   const double tan_max = ctx.tan_max_incidence;
-  const ScanPoint& p = ctx.points[ring.index[i]];
+  const float r_i = ring.range[i], az_i = ring.az[i];
   for (const int q : {i - n_side, i + n_side}) {
-    const ScanPoint& o = ctx.points[ring.index[q]];
-    const double gamma_rad = (q < i ? StepDeg(o.azimuth_deg, p.azimuth_deg) : StepDeg(p.azimuth_deg, o.azimuth_deg)) *
+    const double gamma_rad = (q < i ? StepDeg(ring.az[q], az_i) : StepDeg(az_i, ring.az[q])) *
                              kDegToRad;  // angle between the rays (ignores cos(elevation) <= 3.5 %)
-    if (std::abs(double(o.range_m) - double(p.range_m)) <= tan_max * p.range_m * gamma_rad) return false;
+    if (std::abs(double(ring.range[q]) - double(r_i)) <= tan_max * r_i * gamma_rad) return false;
   }
   return true;
 }
 
 /// The edge threshold at range r [m]: the fixed Eq. 3 threshold or the noise gate, whichever is higher.
-double EdgeThresholdAt(const FeatureConfig& cfg, float range_m) {
-  const double n = cfg.neighbours;
-  const double sigma_c = cfg.range_sigma_m * std::sqrt(4.0 * n * n + 2.0 * n) / (2.0 * n * range_m);
+double EdgeThresholdAt(const Context& ctx, float range_m) {
+  const FeatureConfig& cfg = ctx.config;
+  const double sigma_c = ctx.sigma_c_numerator / (2.0 * cfg.neighbours * range_m);
   return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
+}
+
+/// Contiguous copies of the ring's point attributes, in its (firing) order.
+void GatherRing(const std::vector<ScanPoint>& pts, Ring* ring) {
+  const std::size_t n = ring->index.size();
+  ring->x.resize(n), ring->y.resize(n), ring->z.resize(n), ring->range.resize(n), ring->az.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const ScanPoint& p = pts[ring->index[j]];
+    ring->x[j] = p.p_base.x(), ring->y[j] = p.p_base.y(), ring->z[j] = p.p_base.z();
+    ring->range[j] = p.range_m, ring->az[j] = p.azimuth_deg;
+  }
+}
+
+/// Sector of every position and the positions grouped by sector (a counting sort: firing order inside each).
+void SortIntoSectors(int sectors, Ring* ring) {
+  const int n = static_cast<int>(ring->index.size());
+  const double sector_deg = 360.0 / sectors;
+  ring->sector.resize(n);
+  ring->sector_begin.assign(sectors + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    const double q = ring->az[i] / sector_deg;  // floor(q) clamped to the sectors (truncation: no libm call)
+    ring->sector[i] = q < 1.0 ? 0 : std::min(static_cast<int>(std::min(q, double(sectors))), sectors - 1);
+    ++ring->sector_begin[ring->sector[i] + 1];
+  }
+  for (int s = 0; s < sectors; ++s) ring->sector_begin[s + 1] += ring->sector_begin[s];
+  std::vector<int> fill(ring->sector_begin.begin(), ring->sector_begin.end() - 1);
+  ring->by_sector.resize(n);
+  for (int i = 0; i < n; ++i) ring->by_sector[fill[ring->sector[i]]++] = i;
 }
 
 // Stage 1, one ring: firing order, steps, curvature, sectors and the rejection labels.
@@ -144,20 +178,16 @@ void AnalyseRing(Context* ctx, Ring* ring) {
   if (!std::is_sorted(ring->index.begin(), ring->index.end(), earlier))  // decoded scans come in firing order
     std::sort(ring->index.begin(), ring->index.end(), earlier);
   const int n = static_cast<int>(ring->index.size());
-  ring->step_ok = StepsOk(pts, ring->index, cfg.max_neighbour_step_deg);
-  ring->c = CurvatureOf(pts, ring->index, ring->step_ok, cfg.neighbours);
+  GatherRing(pts, ring);
+  ring->step_ok = StepsOk(ring->az, cfg.max_neighbour_step_deg);
+  ring->c = CurvatureOf(ring->x, ring->y, ring->z, ring->range, ring->step_ok, cfg.neighbours);
   ring->picked.assign(n, 0);
-  ring->sector.resize(n);
   ring->sharp.resize(n);
-  ring->by_sector.assign(cfg.sectors, {});
-  const double sector_deg = 360.0 / cfg.sectors;
+  SortIntoSectors(cfg.sectors, ring);
   std::vector<uint8_t> occluded(n, 0);
   if (cfg.reject_occluded) MarkOccluded(*ctx, *ring, &occluded);
   for (int i = 0; i < n; ++i) {
-    const int s = static_cast<int>(std::floor(pts[ring->index[i]].azimuth_deg / sector_deg));
-    ring->sector[i] = std::clamp(s, 0, cfg.sectors - 1);
-    ring->by_sector[ring->sector[i]].push_back(i);
-    ring->sharp[i] = ring->c[i] > EdgeThresholdAt(cfg, pts[ring->index[i]].range_m);  // false for NaN
+    ring->sharp[i] = ring->c[i] > EdgeThresholdAt(*ctx, ring->range[i]);  // false for NaN
     FeatureLabel& label = ctx->labels[ring->index[i]];
     if (std::isnan(ring->c[i])) label = FeatureLabel::kNoWindow;
     else if (occluded[i]) label = FeatureLabel::kOccluded;
@@ -173,7 +203,7 @@ void Suppress(const Context& ctx, int sector, int p, Ring* ring) {
     for (int s = 1; s <= ctx.config.neighbours; ++s) {
       const int q = p + dir * s, prev = q - dir;
       if (q < 0 || q >= n || ring->sector[q] != sector || !ring->step_ok[std::min(q, prev)]) break;
-      if (IsDepthJump(ctx.config, ctx.points[ring->index[q]].range_m, ctx.points[ring->index[prev]].range_m)) break;
+      if (IsDepthJump(ctx.config, ring->range[q], ring->range[prev])) break;
       ring->picked[q] = 1;
     }
   }
@@ -186,19 +216,30 @@ pcl::PointXYZI ToPcl(const ScanPoint& p, float c) {
   return out;
 }
 
+/// Candidate buffers reused across the cells of one sector task.
+struct CellScratch {
+  std::vector<int> sharp, flat;
+};
+
 // Stage 2, one (ring, sector) cell: LOAM's selection, sharpest first, then flattest, then the less-flat set.
 // The sharp candidates are sorted by c descending (ties: firing order); the flat ones are popped from a heap in
 // the reverse order (c ascending, ties: later firing first), so only the few points picked are ever ordered.
-void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
+// Both are heaps (make_heap is linear; only the popped few are ordered): a point that can never become an edge
+// (not sharp: c below the gate at its range) is no sharp candidate, which the full sort used to skip at its turn.
+void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out, CellScratch* scratch) {
   const FeatureConfig& cfg = ctx->config;
   const std::vector<float>& c = ring->c;
-  std::vector<int> sharp_cand, flat_cand;  // selectable positions of this cell
-  for (const int i : ring->by_sector[sector]) {
+  std::vector<int>& sharp_cand = scratch->sharp;  // selectable positions of this cell
+  std::vector<int>& flat_cand = scratch->flat;
+  sharp_cand.clear(), flat_cand.clear();
+  for (int k = ring->sector_begin[sector]; k < ring->sector_begin[sector + 1]; ++k) {
+    const int i = ring->by_sector[k];
     if (ctx->labels[ring->index[i]] != FeatureLabel::kUnused) continue;
-    if (c[i] > cfg.edge_threshold) sharp_cand.push_back(i);
+    if (ring->sharp[i]) sharp_cand.push_back(i);  // sharp implies c > edge_threshold
     if (c[i] < cfg.planar_threshold) flat_cand.push_back(i);
   }
-  std::sort(sharp_cand.begin(), sharp_cand.end(), [&](int a, int b) { return c[a] > c[b] || (c[a] == c[b] && a < b); });
+  const auto sharper = [&](int a, int b) { return c[a] < c[b] || (c[a] == c[b] && a > b); };  // top: sharpest
+  std::make_heap(sharp_cand.begin(), sharp_cand.end(), sharper);
   int n_edge = 0, n_sharp = 0, n_planar = 0;
   auto take = [&](int p, FeatureLabel label, pcl::PointCloud<pcl::PointXYZI>* cloud) {
     ctx->labels[ring->index[p]] = label;
@@ -206,9 +247,10 @@ void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
     ring->picked[p] = 1;
     Suppress(*ctx, sector, p, ring);
   };
-  for (const int p : sharp_cand) {  // c falls along the list, the gate's threshold does not: test each
-    if (n_sharp >= cfg.less_sharp_per_sector) break;
-    if (ring->picked[p] || !ring->sharp[p]) continue;
+  for (auto end = sharp_cand.end(); end != sharp_cand.begin() && n_sharp < cfg.less_sharp_per_sector; --end) {
+    std::pop_heap(sharp_cand.begin(), end, sharper);  // c descending, ties: firing order
+    const int p = *(end - 1);
+    if (ring->picked[p]) continue;
     const bool edge = n_edge < cfg.edges_per_sector;
     take(p, edge ? FeatureLabel::kEdge : FeatureLabel::kLessSharp, &out->less_sharp);
     if (edge) {
@@ -226,7 +268,8 @@ void SelectCell(Context* ctx, int sector, Ring* ring, SectorOutput* out) {
     take(p, FeatureLabel::kPlanar, &out->planar);
     ++n_planar;
   }
-  for (const int p : ring->by_sector[sector]) {  // firing order; kUnused / kPlanar = selectable at the start
+  for (int k = ring->sector_begin[sector]; k < ring->sector_begin[sector + 1]; ++k) {  // firing order
+    const int p = ring->by_sector[k];  // kUnused / kPlanar = selectable at the start
     FeatureLabel& label = ctx->labels[ring->index[p]];
     if ((label != FeatureLabel::kUnused && label != FeatureLabel::kPlanar) || ring->sharp[p]) continue;
     if (label == FeatureLabel::kUnused) label = FeatureLabel::kLessFlat;
@@ -302,31 +345,41 @@ bool FeatureConfig::Validate(std::string* error) const {
 
 std::vector<float> RingCurvature(const std::vector<ScanPoint>& ring, int neighbours, double max_step_deg) {
   ROTOLIDAR_CHECK(neighbours >= 1, "neighbours = " << neighbours);
-  std::vector<int> index(ring.size());
-  for (std::size_t i = 0; i < ring.size(); ++i) index[i] = static_cast<int>(i);
-  return CurvatureOf(ring, index, StepsOk(ring, index, max_step_deg), neighbours);
+  Ring r;
+  for (std::size_t i = 0; i < ring.size(); ++i) r.index.push_back(static_cast<int>(i));
+  GatherRing(ring, &r);
+  return CurvatureOf(r.x, r.y, r.z, r.range, StepsOk(r.az, max_step_deg), neighbours);
 }
 
 FeatureResult ExtractFeatures(const std::vector<ScanPoint>& points, Seconds t_scan_start_s,
                               const FeatureConfig& config) {
   std::string why;
   ROTOLIDAR_CHECK(config.Validate(&why), why);
+  const double n_side = config.neighbours;
   Context ctx{points, config, {}, std::vector<FeatureLabel>(points.size(), FeatureLabel::kInvalid),
-              std::tan(config.beam_parallel_max_incidence_deg * kDegToRad)};
+              std::tan(config.beam_parallel_max_incidence_deg * kDegToRad),
+              config.range_sigma_m * std::sqrt(4.0 * n_side * n_side + 2.0 * n_side)};
+  std::vector<uint8_t> valid(points.size(), 0);
+  std::vector<int> per_ring;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const ScanPoint& p = points[i];
-    if (!p.p_base.allFinite() || !(p.range_m > 0.f) || !std::isfinite(p.range_m) || !std::isfinite(p.azimuth_deg))
-      continue;
-    if (p.ring >= ctx.rings.size()) ctx.rings.resize(p.ring + 1u);
-    ctx.rings[p.ring].index.push_back(static_cast<int>(i));
+    valid[i] = p.p_base.allFinite() && p.range_m > 0.f && std::isfinite(p.range_m) && std::isfinite(p.azimuth_deg);
+    if (!valid[i]) continue;
+    if (p.ring >= per_ring.size()) per_ring.resize(p.ring + 1u, 0);
+    ++per_ring[p.ring];
   }
+  ctx.rings.resize(per_ring.size());
+  for (std::size_t r = 0; r < per_ring.size(); ++r) ctx.rings[r].index.reserve(per_ring[r]);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (valid[i]) ctx.rings[points[i].ring].index.push_back(static_cast<int>(i));
   const int threads =
       config.threads > 0 ? config.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int n_rings = static_cast<int>(ctx.rings.size());
   ParallelFor(n_rings, threads, [&](int r) { AnalyseRing(&ctx, &ctx.rings[r]); });
   std::vector<SectorOutput> sectors(config.sectors);
   ParallelFor(config.sectors, threads, [&](int s) {
-    for (int r = 0; r < n_rings; ++r) SelectCell(&ctx, s, &ctx.rings[r], &sectors[s]);
+    CellScratch scratch;
+    for (int r = 0; r < n_rings; ++r) SelectCell(&ctx, s, &ctx.rings[r], &sectors[s], &scratch);
   });
 
   FeatureResult result;

@@ -120,24 +120,32 @@ void Estimator::ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const P
   DropOldData(t_s);
 }
 
-// Rotary transform (encoder angle at each point's time), then the carrier's motion from the prediction's table.
+// Rotary transform (encoder angle at each point's time), then the carrier's motion from the prediction's table:
+// LidarToBase, DeskewPoints and MakeScanPoints fused into one pass over the points (same values).
 std::vector<ScanPoint> Estimator::Deskew(const LidarScan& scan, const Prediction& prediction, ScanReport* report) {
   const Stopwatch watch;
-  std::vector<Eigen::Vector3d> p_base;  // each point in the base frame at its own time
-  report->num_rotor_fallback = LidarToBase(calib_, rotor_, scan, &p_base);
-  std::vector<Seconds> t_s(scan.points.size());
-  for (size_t i = 0; i < scan.points.size(); ++i) t_s[i] = scan.points[i].t_s;
-  std::vector<Eigen::Vector3d> p_start;
-  report->num_motion_extrapolated = DeskewPoints(prediction.motion, t_s, p_base, &p_start);
+  RotaryTransform rotary(calib_, rotor_);
+  MotionInterpolator motion(prediction.motion);
+  std::vector<ScanPoint> points(scan.points.size());
+  size_t fallback = 0, extrapolated = 0;
+  for (size_t i = 0; i < scan.points.size(); ++i) {
+    const LidarPoint& lp = scan.points[i];
+    bool fell_back = false, outside = false;
+    const Eigen::Vector3d p_base = rotary.Apply(lp, &fell_back);  // in the base frame at its own time
+    points[i] = ToScanPoint(lp, motion.Apply(lp.t_s, p_base, &outside));
+    fallback += fell_back ? 1 : 0;
+    extrapolated += outside ? 1 : 0;
+  }
+  report->num_rotor_fallback = fallback;
+  report->num_motion_extrapolated = extrapolated;
   report->imu_deskew = prediction.imu_motion;
   if (config_.keep_deskewed) {
     report->deskew_source = scan.points;
-    report->deskewed_base.resize(p_start.size());
+    report->deskewed_base.resize(points.size());
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (size_t i = 0; i < p_start.size(); ++i)
-      report->deskewed_base[i] = p_start[i].allFinite() ? p_start[i].cast<float>() : Eigen::Vector3f(nan, nan, nan);
+    for (size_t i = 0; i < points.size(); ++i)
+      report->deskewed_base[i] = points[i].p_base.allFinite() ? points[i].p_base : Eigen::Vector3f(nan, nan, nan);
   }
-  std::vector<ScanPoint> points = MakeScanPoints(scan, p_start);
   report->timings.deskew_ms = watch.ms();
   return points;
 }
@@ -145,7 +153,7 @@ std::vector<ScanPoint> Estimator::Deskew(const LidarScan& scan, const Prediction
 // Preprocess (range gate, SOR) and the curvature features; the preprocessed points are kept for the dense map.
 FeatureSet Estimator::ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report) {
   Stopwatch watch;
-  PreprocessResult pre = Preprocess(points, config_.preprocess);
+  PreprocessResult pre = Preprocess(std::move(points), config_.preprocess);
   preprocessed_ = std::move(pre.points);
   report->num_registered = preprocessed_.size();
   report->timings.preprocess_ms = watch.ms();

@@ -46,21 +46,77 @@ void RotorAngleInterpolator::DropBefore(Seconds t_s) {
   theta_rad_.erase(theta_rad_.begin(), theta_rad_.begin() + (n - 1));
 }
 
+namespace {
+
+/// cos and sin of a small angle a (|a| < 0.1 rad: Taylor series, truncation < 1e-17).
+void SmallSinCos(double a, double* c, double* s) {
+  const double a2 = a * a;
+  *c = 1.0 - a2 * 0.5 * (1.0 - a2 * (1.0 / 12) * (1.0 - a2 * (1.0 / 30) * (1.0 - a2 * (1.0 / 56) * (1.0 - a2 * (1.0 / 90)))));
+  *s = a * (1.0 - a2 * (1.0 / 6) * (1.0 - a2 * (1.0 / 20) * (1.0 - a2 * (1.0 / 42) * (1.0 - a2 * (1.0 / 72)))));
+}
+
+}  // namespace
+
+RotaryTransform::RotaryTransform(const RigCalib& calib, const RotorAngleInterpolator& rotor)
+    : rotor_(rotor),
+      R_rotor_lidar_(calib.T_rotor_lidar.linear()),
+      R_base_motor_(calib.T_base_motor.linear()),
+      t_rotor_lidar_(calib.T_rotor_lidar.translation()),
+      t_base_motor_(calib.T_base_motor.translation()) {}
+
+void RotaryTransform::Seek(Seconds t_s) {
+  const std::vector<Seconds>& ts = rotor_.sample_times();
+  const std::vector<double>& th = rotor_.sample_angles();
+  // AngleAt's bracketing: hi = first sample after t_s (clamped to the last), lo = hi - 1.
+  size_t hi = have_ && lo_ + 2 < ts.size() && ts[lo_ + 1] <= t_s && t_s < ts[lo_ + 2]
+                  ? lo_ + 2
+                  : size_t(std::upper_bound(ts.begin(), ts.end(), t_s) - ts.begin());
+  hi = std::min(hi, ts.size() - 1);
+  lo_ = hi == 0 ? 0 : hi - 1;
+  have_ = true;
+  t_lo_ = ts[lo_], t_hi_ = ts[hi];
+  single_ = hi == lo_;
+  rate_ = single_ ? 0.0 : (th[hi] - th[lo_]) / (ts[hi] - ts[lo_]);
+  theta_lo_ = th[lo_];
+  cos_lo_ = std::cos(theta_lo_), sin_lo_ = std::sin(theta_lo_);
+}
+
+Eigen::Vector3d RotaryTransform::Apply(const LidarPoint& p, bool* fallback) {
+  const std::vector<Seconds>& ts = rotor_.sample_times();
+  double c, s;
+  *fallback = ts.empty() || p.t_s < ts.front() || p.t_s > ts.back();
+  if (*fallback) {
+    const double theta = rotor_.AngleAt(p.t_s);
+    c = std::cos(theta), s = std::sin(theta);
+  } else {
+    // The interval [t_lo, t_hi) holds t (or t == t_hi == the last sample, where AngleAt also uses it).
+    if (!have_ || p.t_s < t_lo_ || (p.t_s >= t_hi_ && !(p.t_s == t_hi_ && lo_ + 2 >= ts.size()))) Seek(p.t_s);
+    const double a = (p.t_s - t_lo_) * rate_;
+    if (std::abs(a) < 0.1) {
+      double ca, sa;
+      SmallSinCos(a, &ca, &sa);
+      c = cos_lo_ * ca - sin_lo_ * sa, s = sin_lo_ * ca + cos_lo_ * sa;
+    } else {
+      const double theta = theta_lo_ + a;
+      c = std::cos(theta), s = std::sin(theta);
+    }
+  }
+  const Eigen::Vector3d p_rotor = R_rotor_lidar_ * Eigen::Vector3d(p.x_m, p.y_m, p.z_m) + t_rotor_lidar_;
+  const Eigen::Vector3d p_turned(c * p_rotor.x() - s * p_rotor.y(), s * p_rotor.x() + c * p_rotor.y(), p_rotor.z());
+  return R_base_motor_ * p_turned + t_base_motor_;
+}
+
 // T_base_lidar(theta) * p applied as T_base_motor * (RotZ(theta) * (T_rotor_lidar * p)): the fixed transforms
 // stay fixed and the rotor turn is a 2D rotation, instead of composing two 4x4 poses per point.
 size_t LidarToBase(const RigCalib& calib, const RotorAngleInterpolator& rotor, const LidarScan& scan,
                    std::vector<Eigen::Vector3d>* p_base) {
-  p_base->clear();
-  p_base->reserve(scan.points.size());
+  p_base->resize(scan.points.size());
+  RotaryTransform rotary(calib, rotor);
   size_t fallback = 0;
-  for (const LidarPoint& p : scan.points) {
-    RotorAngleSource source;
-    const double theta = rotor.AngleAt(p.t_s, &source);
-    if (source == RotorAngleSource::kUniformFallback) ++fallback;
-    const Eigen::Vector3d p_rotor = calib.T_rotor_lidar * Eigen::Vector3d(p.x_m, p.y_m, p.z_m);
-    const double c = std::cos(theta), s = std::sin(theta);
-    const Eigen::Vector3d p_turned(c * p_rotor.x() - s * p_rotor.y(), s * p_rotor.x() + c * p_rotor.y(), p_rotor.z());
-    p_base->push_back(calib.T_base_motor * p_turned);
+  for (size_t i = 0; i < scan.points.size(); ++i) {
+    bool fell_back = false;
+    (*p_base)[i] = rotary.Apply(scan.points[i], &fell_back);
+    fallback += fell_back ? 1 : 0;
   }
   return fallback;
 }

@@ -30,6 +30,9 @@ class RotorAngleInterpolator {
   bool empty() const { return t_s_.empty(); }
   /// Time of the newest sample (-inf when empty).
   Seconds last_time_s() const { return t_s_.empty() ? -1e300 : t_s_.back(); }
+  /// The buffered samples: times [s] and unwrapped angles [rad], index-aligned.
+  const std::vector<Seconds>& sample_times() const { return t_s_; }
+  const std::vector<double>& sample_angles() const { return theta_rad_; }
 
  private:
   const RigCalib& calib_;
@@ -37,8 +40,32 @@ class RotorAngleInterpolator {
   std::vector<double> theta_rad_;  // unwrapped
 };
 
+/// T_base_lidar(theta(t)) * p_lidar for a stream of points, theta(t) as RotorAngleInterpolator::AngleAt, with the
+/// same values up to double rounding and no trigonometry per point on the encoder path: each encoder interval's
+/// start angle has its cos / sin taken once, and the interpolated remainder (< 0.1 rad) uses Taylor series.
+/// The previous point's interval is tried first (firing order; any order is correct). Holds references to
+/// `calib` and `rotor`, which must outlive it and not change while it is used.
+class RotaryTransform {
+ public:
+  RotaryTransform(const RigCalib& calib, const RotorAngleInterpolator& rotor);
+  /// p in the base frame at its firing time [m]; *fallback = the uniform-rotation model was used.
+  Eigen::Vector3d Apply(const LidarPoint& p, bool* fallback);
+
+ private:
+  void Seek(Seconds t_s);  ///< makes [lo_, lo_ + 1] the encoder interval holding t_s (t_s inside the span)
+  const RotorAngleInterpolator& rotor_;
+  Eigen::Matrix3d R_rotor_lidar_, R_base_motor_;
+  Eigen::Vector3d t_rotor_lidar_, t_base_motor_;
+  size_t lo_ = 0;                              ///< current interval start (valid when have_ is true)
+  bool have_ = false;
+  bool single_ = false;                        ///< one sample only: the angle is constant
+  double t_lo_ = 0, t_hi_ = 0;                 ///< the interval's times [s]
+  double theta_lo_ = 0, rate_ = 0;             ///< angle at t_lo [rad] and its rate over the interval [rad/s]
+  double cos_lo_ = 1, sin_lo_ = 0;
+};
+
 /// Transforms one revolution's points from the lidar frame into the base frame, each at its own time.
-/// Output order matches input; returns how many points used the uniform-rotation fallback.
+/// Output order matches input; returns how many points used the uniform-rotation fallback. Uses RotaryTransform.
 size_t LidarToBase(const RigCalib& calib, const RotorAngleInterpolator& rotor, const LidarScan& scan,
                    std::vector<Eigen::Vector3d>* p_base);
 

@@ -1,10 +1,12 @@
 #include "core/preprocess/filters.hpp"
+#include "core/preprocess/ring_sor.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
+
 
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/search/kdtree.h>
@@ -17,6 +19,8 @@
 namespace rotolidar {
 namespace {
 
+using namespace ring_sor;
+
 /// Keeps the points whose `keep` flag is set, in order; returns how many went.
 std::size_t Compact(const std::vector<uint8_t>& keep, std::vector<ScanPoint>* points) {
   std::size_t out = 0;
@@ -26,6 +30,12 @@ std::size_t Compact(const std::vector<uint8_t>& keep, std::vector<ScanPoint>* po
   const std::size_t removed = points->size() - out;
   points->resize(out);
   return removed;
+}
+
+/// floor(v) as an integer, for finite |v| < 2^62 (std::floor is a library call without SSE4.1).
+inline int64_t FloorToInt(double v) {
+  const int64_t i = static_cast<int64_t>(v);  // truncates toward zero
+  return i - (static_cast<double>(i) > v ? 1 : 0);
 }
 
 bool IsFinite(const ScanPoint& p) { return p.p_base.allFinite() && std::isfinite(p.range_m); }
@@ -69,119 +79,6 @@ std::vector<uint8_t> RangeNormalizedSorKeep(const pcl::PointCloud<pcl::PointXYZ>
   return keep;
 }
 
-/// One ring in firing order (ties: input order), positions as contiguous arrays for the distance loops.
-struct RingCloud {
-  std::vector<uint32_t> index;  ///< input indices
-  std::vector<float> x, y, z;
-  std::vector<double> t_s;
-};
-
-/// The scan's rings. Decoded scans arrive in firing order, so the sort is usually skipped.
-std::vector<RingCloud> SplitRings(const std::vector<ScanPoint>& points) {
-  std::vector<RingCloud> rings;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (points[i].ring >= rings.size()) rings.resize(points[i].ring + 1u);
-    rings[points[i].ring].index.push_back(static_cast<uint32_t>(i));
-  }
-  const auto earlier = [&](uint32_t a, uint32_t b) { return points[a].t_s < points[b].t_s; };
-  for (RingCloud& ring : rings) {
-    if (!std::is_sorted(ring.index.begin(), ring.index.end(), earlier))
-      std::stable_sort(ring.index.begin(), ring.index.end(), earlier);
-    for (const uint32_t i : ring.index) {
-      ring.x.push_back(points[i].p_base.x()), ring.y.push_back(points[i].p_base.y());
-      ring.z.push_back(points[i].p_base.z()), ring.t_s.push_back(points[i].t_s);
-    }
-  }
-  return rings;
-}
-
-/// First of 2 * half + 1 positions centred on `centre` where possible, shifted inside [0, n).
-int WindowStart(int centre, int half, int n) { return std::max(0, std::min(centre - half, n - 1 - 2 * half)); }
-
-/// For each position of `from`, the position of `to` fired closest in time (both in time order: one merge pass).
-std::vector<int> ClosestInTime(const RingCloud& from, const RingCloud& to) {
-  std::vector<int> closest(from.t_s.size());
-  std::size_t c = 0;
-  for (std::size_t j = 0; j < from.t_s.size(); ++j) {
-    while (c + 1 < to.t_s.size() && std::abs(to.t_s[c + 1] - from.t_s[j]) <= std::abs(to.t_s[c] - from.t_s[j])) ++c;
-    closest[j] = static_cast<int>(c);
-  }
-  return closest;
-}
-
-/// The K smallest of a stream of values, kept sorted: on each new value v, slot i (slot 0 = -inf, unused slots
-/// +inf) becomes min(slot i, max(slot i - 1, v)), a branch-free update over a fixed width (near-range neighbour
-/// distances are dominated by range noise, so their order is random and a branching insertion mispredicts; this
-/// costs half of nth_element per point). Holds K <= kSlots.
-template <int kSlots>
-class KSmallest {
- public:
-  explicit KSmallest(int k) : k_(k) { ROTOLIDAR_CHECK(k >= 1 && k <= kSlots, "k = " << k); }
-  void Clear() {
-    buf_.fill(std::numeric_limits<float>::infinity());
-    buf_[0] = -std::numeric_limits<float>::infinity();
-    n_ = 0;
-  }
-  void Add(float v) {
-    ++n_;
-    if (!(v < buf_[k_])) return;  // not among the K smallest so far (most far candidates)
-    std::array<float, kSlots> next;
-    const float* prev = buf_.data();  // prev[i] = slot i, cur[i] = slot i + 1
-    const float* cur = buf_.data() + 1;
-    for (int i = 0; i < kSlots; ++i) next[i] = std::min(cur[i], std::max(prev[i], v));
-    std::copy(next.begin(), next.end(), buf_.begin() + 1);
-  }
-  /// Mean of the square roots of the K smallest (of all values when fewer came; NaN when none).
-  float MeanSqrt() const {
-    const int use = std::min(n_, k_);
-    float sum = 0.f;
-    for (int i = 1; i <= use; ++i) sum += std::sqrt(buf_[i]);
-    return use ? sum / static_cast<float>(use) : std::numeric_limits<float>::quiet_NaN();
-  }
-
- private:
-  int k_;
-  int n_ = 0;
-  std::array<float, kSlots + 1> buf_{};  ///< slot 0 = -inf, then the kept values ascending, +inf where unused
-};
-
-/// d_i of the ring neighbourhood (SorNeighbourhood) for every point: the mean distance to its K nearest
-/// candidates, NaN when it has none. Indexed like `points`. kSlots >= k.
-template <int kSlots>
-std::vector<float> RingNeighbourDistances(const std::vector<ScanPoint>& points, int k, const SorNeighbourhood& hood) {
-  const std::vector<RingCloud> rings = SplitRings(points);
-  const int n_rings = static_cast<int>(rings.size());
-  std::vector<float> mean_dist(points.size(), std::numeric_limits<float>::quiet_NaN());
-  KSmallest<kSlots> best(k);
-  for (int r = 0; r < n_rings; ++r) {
-    const RingCloud& ring = rings[r];
-    const int n = static_cast<int>(ring.index.size());
-    std::vector<std::pair<const RingCloud*, std::vector<int>>> others;  // adjacent rings and their closest columns
-    for (int rr = std::max(0, r - hood.adjacent_rings); rr <= std::min(n_rings - 1, r + hood.adjacent_rings); ++rr)
-      if (rr != r && !rings[rr].index.empty()) others.emplace_back(&rings[rr], ClosestInTime(ring, rings[rr]));
-    for (int j = 0; j < n; ++j) {
-      const float px = ring.x[j], py = ring.y[j], pz = ring.z[j];
-      const auto sq = [&](const RingCloud& o, int q) {
-        const float dx = o.x[q] - px, dy = o.y[q] - py, dz = o.z[q] - pz;
-        return dx * dx + dy * dy + dz * dz;
-      };
-      best.Clear();
-      const int first = WindowStart(j, hood.ring_window, n), last = std::min(n - 1, first + 2 * hood.ring_window);
-      for (int s = 1; j - s >= first || j + s <= last; ++s) {  // nearest firings first
-        if (j - s >= first) best.Add(sq(ring, j - s));
-        if (j + s <= last) best.Add(sq(ring, j + s));
-      }
-      for (const auto& [other, closest] : others) {
-        const int m = static_cast<int>(other->index.size()), c = closest[j];
-        const int lo = WindowStart(c, hood.adjacent_window, m), hi = std::min(m - 1, lo + 2 * hood.adjacent_window);
-        for (int q = lo; q <= hi; ++q) best.Add(sq(*other, q));
-      }
-      mean_dist[ring.index[j]] = best.MeanSqrt();
-    }
-  }
-  return mean_dist;
-}
-
 /// PCL's rule on per-point statistics (NaN = none: kept, outside mu and sigma): removes stat > mu + std_mul * sigma
 /// (sample sigma). Fewer than 2 statistics: no spread, everything kept.
 std::vector<uint8_t> KeepBelowThreshold(const std::vector<double>& stat, double std_mul) {
@@ -201,16 +98,7 @@ std::vector<ScanPoint> MakeScanPoints(const LidarScan& scan, const std::vector<E
   ROTOLIDAR_CHECK(scan.points.size() == p_base_start.size(),
                   "scan has " << scan.points.size() << " points, positions " << p_base_start.size());
   std::vector<ScanPoint> out(scan.points.size());
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const LidarPoint& lp = scan.points[i];
-    ScanPoint& sp = out[i];
-    sp.p_base = p_base_start[i].cast<float>();
-    sp.range_m = Eigen::Vector3f(lp.x_m, lp.y_m, lp.z_m).norm();
-    sp.azimuth_deg = lp.azimuth_deg;
-    sp.intensity = lp.intensity;
-    sp.ring = lp.ring;
-    sp.t_s = lp.t_s;
-  }
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = ToScanPoint(scan.points[i], p_base_start[i]);
   return out;
 }
 
@@ -241,20 +129,36 @@ bool PreprocessConfig::Validate(std::string* error) const {
 }
 
 PreprocessResult Preprocess(const std::vector<ScanPoint>& points, const PreprocessConfig& config) {
+  return Preprocess(std::vector<ScanPoint>(points), config);
+}
+
+// The non-finite and range stages in one compaction pass (a point counts for the first stage that removes it).
+PreprocessResult Preprocess(std::vector<ScanPoint>&& points, const PreprocessConfig& config) {
   std::string why;
   ROTOLIDAR_CHECK(config.Validate(&why), why);
   PreprocessResult result;
   result.num_input = points.size();
-  result.points = points;
-  result.removed_nonfinite = RemoveNonFinite(&result.points);
-  if (config.enable_range) result.removed_range = RangeFilter(config.min_range_m, config.max_range_m, &result.points);
+  result.points = std::move(points);
+  std::vector<ScanPoint>& pts = result.points;
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const ScanPoint& p = pts[i];
+    if (!IsFinite(p)) {
+      ++result.removed_nonfinite;
+    } else if (config.enable_range && !(p.range_m >= config.min_range_m && p.range_m <= config.max_range_m)) {
+      ++result.removed_range;
+    } else {
+      if (out != i) pts[out] = p;
+      ++out;
+    }
+  }
+  pts.resize(out);
   if (config.enable_sor && config.sor_ring_neighbours)
     result.removed_sor = RingStatisticalOutlierFilter(config.sor_k, config.sor_std_mul, config.sor_range_normalized,
-                                                      config.sor_neighbourhood, &result.points);
+                                                      config.sor_neighbourhood, &pts);
   else if (config.enable_sor)
-    result.removed_sor =
-        StatisticalOutlierFilter(config.sor_k, config.sor_std_mul, config.sor_range_normalized, &result.points);
-  if (config.enable_voxel) result.removed_voxel = VoxelFilter(config.voxel_m, &result.points);
+    result.removed_sor = StatisticalOutlierFilter(config.sor_k, config.sor_std_mul, config.sor_range_normalized, &pts);
+  if (config.enable_voxel) result.removed_voxel = VoxelFilter(config.voxel_m, &pts);
   return result;
 }
 
@@ -285,27 +189,28 @@ std::size_t StatisticalOutlierFilter(int k, double std_mul, bool range_normalize
   return Compact(keep, points);
 }
 
-std::vector<float> RingNeighbourMeanDistances(const std::vector<ScanPoint>& points, int k, const SorNeighbourhood& hood) {
+std::vector<float> RingNeighbourMeanDistances(const std::vector<ScanPoint>& points, int k, const SorNeighbourhood& hood,
+                                              bool vectorised) {
   ROTOLIDAR_CHECK(k >= 1 && k <= kMaxRingSorK, "k = " << k);
   ROTOLIDAR_CHECK(hood.ring_window >= 0 && hood.adjacent_rings >= 0 && hood.adjacent_window >= 0,
                   "negative SOR neighbourhood");
-  return k <= 8    ? RingNeighbourDistances<8>(points, k, hood)
-         : k <= 16 ? RingNeighbourDistances<16>(points, k, hood)
-                   : RingNeighbourDistances<kMaxRingSorK>(points, k, hood);
+  return k <= 8    ? RingNeighbourDistances<8>(points, k, hood, vectorised)
+         : k <= 16 ? RingNeighbourDistances<16>(points, k, hood, vectorised)
+                   : RingNeighbourDistances<kMaxRingSorK>(points, k, hood, vectorised);
 }
 
 std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_normalized, const SorNeighbourhood& hood,
                                          std::vector<ScanPoint>* points) {
   const std::vector<float> mean_dist = RingNeighbourMeanDistances(*points, k, hood);
-  std::vector<double> stat(points->size());
-  std::vector<uint8_t> bad_range(points->size(), 0);
+  std::vector<double> stat(points->size());  // NaN: no statistic (kept) or a bad range (removed below)
   for (std::size_t i = 0; i < points->size(); ++i) {
     const float r = (*points)[i].range_m;
-    bad_range[i] = range_normalized && !(r > 0.f);
-    stat[i] = bad_range[i] ? std::nan("") : double(mean_dist[i]) / (range_normalized ? double(r) : 1.0);
+    stat[i] = range_normalized && !(r > 0.f) ? std::nan("")
+                                            : double(mean_dist[i]) / (range_normalized ? double(r) : 1.0);
   }
   std::vector<uint8_t> keep = KeepBelowThreshold(stat, std_mul);
-  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = keep[i] && !bad_range[i];
+  if (range_normalized)
+    for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = keep[i] && (*points)[i].range_m > 0.f;
   return Compact(keep, points);
 }
 
@@ -331,10 +236,10 @@ std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>
   for (std::size_t i = 0; i < positions.size(); ++i) {
     const Eigen::Vector3f& p = positions[i];
     if (!p.allFinite()) continue;
-    const Key key{static_cast<int64_t>(std::floor(p.x() * inv)), static_cast<int64_t>(std::floor(p.y() * inv)),
-                  static_cast<int64_t>(std::floor(p.z() * inv))};
+    const Key key{FloorToInt(p.x() * inv), FloorToInt(p.y() * inv), FloorToInt(p.z() * inv)};
+    const auto same = [&](const Key& o) { return o[0] == key[0] && o[1] == key[1] && o[2] == key[2]; };
     std::size_t slot = VoxelHash(key[0], key[1], key[2]) & (capacity - 1);
-    while (table[slot] >= 0 && voxels[table[slot]].key != key) slot = (slot + 1) & (capacity - 1);
+    while (table[slot] >= 0 && !same(voxels[table[slot]].key)) slot = (slot + 1) & (capacity - 1);
     if (table[slot] < 0) table[slot] = static_cast<int64_t>(voxels.size()), voxels.push_back(Voxel{key});
     Voxel& v = voxels[table[slot]];
     v.sum += p.cast<double>(), ++v.count;

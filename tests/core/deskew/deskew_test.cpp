@@ -169,5 +169,40 @@ TEST(Deskew, ImuTableFailsWithoutCoverage) {
   EXPECT_EQ(table.t_s.size(), 2u);  // untouched
 }
 
+// DeskewPoints (MotionInterpolator: Rodrigues on the vector, no trigonometry per point) equals the
+// straightforward table.At(t) * p, for small and large per-interval rotations, points in any order, on the
+// entries' times and outside the span.
+TEST(DeskewPoints, EqualsTableAtTimesPoint) {
+  MotionTable table;
+  RandomStream rng(5, "deskew_test.table");
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (int k = 0; k <= 30; ++k) {
+    Pose3 T = Pose3::Identity();
+    T.linear() = R;
+    T.translation() = Eigen::Vector3d(0.01 * k, -0.02 * k, 0.003 * k * k);
+    table.t_s.push_back(2.0 + 0.004 * k);
+    table.T_start_t.push_back(T);
+    const double step = k % 10 == 9 ? 0.5 : 0.004;  // mostly IMU-sized steps, some far above the series' range
+    R = R * ExpSO3(step * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()).normalized());
+  }
+  std::vector<Seconds> t;
+  std::vector<Eigen::Vector3d> p;
+  for (int i = 0; i < 2000; ++i) {
+    t.push_back(i % 40 == 0 ? table.t_s[i % table.t_s.size()] : 1.99 + 0.14 * rng.Uniform());
+    p.emplace_back(10 * rng.Normal(), 10 * rng.Normal(), rng.Normal());
+  }
+  std::vector<Eigen::Vector3d> out;
+  size_t expected_outside = 0;
+  const size_t outside = DeskewPoints(table, t, p, &out);
+  for (size_t i = 0; i < t.size(); ++i) {
+    bool o = false;
+    const Eigen::Vector3d direct = table.At(t[i], &o) * p[i];
+    expected_outside += o;
+    ASSERT_LT((out[i] - direct).norm(), 1e-12) << i << " t " << t[i];
+  }
+  EXPECT_GT(expected_outside, 0u);
+  EXPECT_EQ(outside, expected_outside);
+}
+
 }  // namespace
 }  // namespace rotolidar

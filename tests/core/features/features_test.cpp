@@ -144,6 +144,41 @@ TEST(RingCurvature, MatchesEq3OnLineAndRightAngleCorner) {
   EXPECT_FALSE(std::isnan(gapped[6]));  // window 1..11 has no gap
 }
 
+// RingCurvature (prefix sums: O(1) per point) equals Eq. 3 summed term by term, to float rounding, on a noisy
+// 2000-point ring with far coordinates (large prefix sums), depth jumps and azimuth gaps.
+TEST(RingCurvature, PrefixSumsEqualTheDirectSum) {
+  RandomStream rng(9, "features_test.curvature");
+  std::vector<ScanPoint> ring;
+  for (int i = 0; i < 2000; ++i) {
+    const float az = 0.2f * i + (i % 301 == 300 ? 2.f : 0.f), a = az * 3.14159265f / 180.f;
+    const float r = (i / 150 % 2 ? 4.f : 25.f) + 0.03f * float(rng.Normal());
+    ScanPoint p;
+    p.p_base = Eigen::Vector3f(40.f + r * std::cos(a), -30.f + r * std::sin(a), 1.5f);
+    p.range_m = r;
+    p.azimuth_deg = std::fmod(az, 360.f);
+    ring.push_back(p);
+  }
+  for (const int n_side : {1, 5, 8}) {
+    const std::vector<float> c = RingCurvature(ring, n_side, 1.0);
+    int checked = 0;
+    for (int i = 0; i < int(ring.size()); ++i) {
+      bool window = i >= n_side && i + n_side < int(ring.size());
+      for (int j = i - n_side; window && j < i + n_side; ++j)
+        window = std::fmod(ring[j + 1].azimuth_deg - ring[j].azimuth_deg + 360.f, 360.f) <= 1.f;
+      if (!window) {
+        EXPECT_TRUE(std::isnan(c[i])) << i;
+        continue;
+      }
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int j = i - n_side; j <= i + n_side; ++j) sum += (ring[i].p_base - ring[j].p_base).cast<double>();
+      const double direct = sum.norm() / (2.0 * n_side * ring[i].range_m);
+      ASSERT_NEAR(c[i], direct, 1e-5 * direct + 1e-7) << "N " << n_side << " point " << i;
+      ++checked;
+    }
+    EXPECT_GT(checked, 1900 - 30 * n_side);
+  }
+}
+
 TEST(ExtractFeatures, EdgesAtRoomCornersPlanarOnWalls) {
   const Scene scene = TallRoom();
   const std::vector<ScanPoint> pts = CastScan(scene);

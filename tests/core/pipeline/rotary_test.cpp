@@ -70,5 +70,46 @@ TEST(LidarToBase, ZeroAngleAppliesTheFixedExtrinsics) {
   EXPECT_TRUE(p_base[0].isApprox(Eigen::Vector3d(0.1 + 0.08, 0, -1.0), 1e-9)) << p_base[0].transpose();
 }
 
+// RotaryTransform (no trigonometry per point) equals the straightforward T_base_lidar(AngleAt(t)) * p: on an
+// irregular encoder stream (jittered times, a fast stretch with > 0.1 rad per interval), points in and out of
+// time order, on sample times exactly, and outside the buffered span (the uniform fallback).
+TEST(RotaryTransform, EqualsDirectTransformWithAngleAt) {
+  RigCalib calib = CalibWithEncoder(16384);
+  calib.T_base_motor = MakePose({0.1, -0.02, 0.3}, Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized())));
+  calib.T_rotor_lidar = MakePose({0.01, 0.02, 0.08}, Eigen::Quaterniond(Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitX())));
+  RotorAngleInterpolator rotor(calib);
+  std::vector<double> times;
+  double t = 10.0, theta = 0.0;
+  for (int i = 0; i < 400; ++i) {
+    const double dt = 1e-3 * (0.5 + 0.01 * (i * 37 % 100));  // 0.5 .. 1.5 ms
+    theta += (i > 200 && i < 220 ? 150.0 : 3.0) * dt;        // 150 rad/s: up to 0.22 rad per interval
+    t += dt;
+    rotor.Add({t, CountOf(theta, 16384)});
+    times.push_back(t);
+  }
+  LidarScan scan;
+  for (int i = 0; i < 3000; ++i) {
+    LidarPoint p;
+    p.x_m = 3.f + 0.001f * i, p.y_m = -1.f + 0.0005f * i, p.z_m = 0.5f;
+    p.t_s = i % 50 == 0 ? times[i % times.size()] : times.front() - 0.01 + (times.back() - times.front() + 0.02) *
+                                                                               ((i * 7919) % 3000) / 3000.0;
+    scan.points.push_back(p);
+  }
+  std::vector<Eigen::Vector3d> p_base;
+  size_t expected_fallback = 0;
+  LidarToBase(calib, rotor, scan, &p_base);
+  for (size_t i = 0; i < scan.points.size(); ++i) {
+    const LidarPoint& p = scan.points[i];
+    RotorAngleSource source;
+    const double angle = rotor.AngleAt(p.t_s, &source);
+    expected_fallback += source == RotorAngleSource::kUniformFallback;
+    const Eigen::Vector3d direct =
+        calib.T_base_motor * RotZ(angle) * calib.T_rotor_lidar * Eigen::Vector3d(p.x_m, p.y_m, p.z_m);
+    ASSERT_LT((p_base[i] - direct).norm(), 1e-12) << i << " t " << p.t_s;
+  }
+  EXPECT_GT(expected_fallback, 0u);
+  EXPECT_EQ(LidarToBase(calib, rotor, scan, &p_base), expected_fallback);
+}
+
 }  // namespace
 }  // namespace rotolidar

@@ -25,6 +25,12 @@ ScanToMapConfig EstimatorRegistrationDefaults() {
   return c;
 }
 
+SlidingWindowConfig EstimatorWindowDefaults() {
+  SlidingWindowConfig c;
+  c.max_iterations = 3;
+  return c;
+}
+
 bool EstimatorConfig::Validate(std::string* error) const {
   auto fail = [&](const std::string& m) {
     if (error) *error = m;

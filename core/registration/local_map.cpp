@@ -5,8 +5,9 @@
 
 #include <pcl/common/transforms.h>
 #include <pcl/filters/voxel_grid.h>
-#include <pcl/kdtree/kdtree_flann.h>
 
+#include "core/registration/kd_tree.hpp"
+#include "core/registration/voxel_centroids.hpp"
 #include "core/util/log.hpp"
 
 namespace rotolidar {
@@ -35,13 +36,23 @@ struct Keyframe {
   Cloud planar_map;  ///< downsampled, map frame
 };
 
-/// One searchable cloud: points plus a kd-tree (absent while the cloud is empty).
+/// One searchable cloud: the table's centroids plus a kd-tree over them.
 struct Searchable {
+  explicit Searchable(double voxel_m) : table(voxel_m) {}
+  VoxelCentroidTable table;  ///< running per-voxel sums of the live keyframes' points
   Cloud::Ptr cloud{new Cloud};
-  pcl::KdTreeFLANN<pcl::PointXYZI> tree;
-  void Reset(Cloud&& points) {
-    cloud.reset(new Cloud(std::move(points)));
-    if (!cloud->empty()) tree.setInputCloud(cloud);
+  KdTree3f tree;
+  std::vector<float> xyz;  ///< Rebuild's scratch, capacity kept across scans
+
+  void Rebuild() {
+    table.Centroids(cloud.get());
+    xyz.resize(3 * cloud->size());
+    for (size_t i = 0; i < cloud->size(); ++i) {
+      xyz[3 * i] = (*cloud)[i].x;
+      xyz[3 * i + 1] = (*cloud)[i].y;
+      xyz[3 * i + 2] = (*cloud)[i].z;
+    }
+    tree.Build(xyz);
   }
 };
 
@@ -62,45 +73,36 @@ bool LocalMapConfig::Validate(std::string* error) const {
 }
 
 struct LocalMap::Impl {
+  explicit Impl(const LocalMapConfig& c) : config(c), edge(c.edge_voxel_m), planar(c.planar_voxel_m) {}
   LocalMapConfig config;
   std::deque<Keyframe> keyframes;
   Searchable edge, planar;
-  Cloud::Ptr edge_union{new Cloud}, planar_union{new Cloud};  ///< Rebuild's scratch, capacity kept across scans
 
   const Searchable& Get(FeatureKind kind) const { return kind == FeatureKind::kEdge ? edge : planar; }
 
-  void Trim() {
-    while (int(keyframes.size()) > config.max_keyframes) keyframes.pop_front();
-    const Eigen::Vector3d newest = keyframes.back().T_map_scan.translation();
-    while ((keyframes.front().T_map_scan.translation() - newest).norm() > config.max_distance_m)
-      keyframes.pop_front();  // the newest keyframe is at distance 0, so the loop ends
+  void PopFront() {
+    edge.table.Remove(keyframes.front().edge_map);
+    planar.table.Remove(keyframes.front().planar_map);
+    keyframes.pop_front();
   }
 
-  /// The keyframes' `member` clouds concatenated into *out (oldest first), reusing its memory.
-  void Union(Cloud Keyframe::*member, Cloud* out) const {
-    size_t total = 0;
-    for (const Keyframe& kf : keyframes) total += (kf.*member).size();
-    out->clear();
-    out->reserve(total);
-    out->is_dense = true;
-    for (const Keyframe& kf : keyframes) {
-      out->insert(out->end(), (kf.*member).begin(), (kf.*member).end());
-      out->is_dense = out->is_dense && (kf.*member).is_dense;  // as PointCloud::operator+= (VoxelGrid's NaN check)
-    }
+  void Trim() {
+    while (int(keyframes.size()) > config.max_keyframes) PopFront();
+    const Eigen::Vector3d newest = keyframes.back().T_map_scan.translation();
+    while ((keyframes.front().T_map_scan.translation() - newest).norm() > config.max_distance_m)
+      PopFront();  // the newest keyframe is at distance 0, so the loop ends
   }
 
   void Rebuild() {
-    Union(&Keyframe::edge_map, edge_union.get());
-    Union(&Keyframe::planar_map, planar_union.get());
-    edge.Reset(Downsample(edge_union, config.edge_voxel_m));
-    planar.Reset(Downsample(planar_union, config.planar_voxel_m));
+    edge.Rebuild();
+    planar.Rebuild();
   }
 };
 
-LocalMap::LocalMap(const LocalMapConfig& config) : impl_(std::make_unique<Impl>()) {
+LocalMap::LocalMap(const LocalMapConfig& config) {
   std::string error;
   ROTOLIDAR_CHECK(config.Validate(&error), error);
-  impl_->config = config;
+  impl_ = std::make_unique<Impl>(config);
 }
 LocalMap::~LocalMap() = default;
 LocalMap::LocalMap(LocalMap&&) noexcept = default;
@@ -122,6 +124,8 @@ void LocalMap::AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan) 
   kf.edge_map = Downsample(transformed, impl_->config.edge_voxel_m);
   pcl::transformPointCloud(features.less_flat, *transformed, M);
   kf.planar_map = Downsample(transformed, impl_->config.planar_voxel_m);
+  impl_->edge.table.Add(kf.edge_map);
+  impl_->planar.table.Add(kf.planar_map);
   impl_->keyframes.push_back(std::move(kf));
   impl_->Trim();
   impl_->Rebuild();
@@ -129,26 +133,24 @@ void LocalMap::AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan) 
 
 void LocalMap::Clear() {
   impl_->keyframes.clear();
+  impl_->edge.table.Clear();
+  impl_->planar.table.Clear();
   impl_->Rebuild();
 }
 
 int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std::vector<Eigen::Vector3d>* points,
-                      std::vector<float>* sq_dist_m2) const {
-  ROTOLIDAR_CHECK(k >= 1 && points != nullptr && sq_dist_m2 != nullptr, "k = " << k);
-  points->clear();
-  sq_dist_m2->clear();
+                      std::vector<float>* sq_dist_m2, float max_sq_dist_m2) const {
+  ROTOLIDAR_CHECK(k >= 1 && k <= kMaxNearest && points != nullptr && sq_dist_m2 != nullptr, "k = " << k);
   const Searchable& s = impl_->Get(kind);
-  if (s.cloud->empty()) return 0;
-  pcl::PointXYZI query;
-  query.x = float(p_map.x());
-  query.y = float(p_map.y());
-  query.z = float(p_map.z());
-  thread_local std::vector<int> indices;
-  const int found = s.tree.nearestKSearch(query, k, indices, *sq_dist_m2);
-  points->reserve(size_t(found));
+  const float query[3] = {float(p_map.x()), float(p_map.y()), float(p_map.z())};
+  int indices[kMaxNearest];
+  sq_dist_m2->resize(size_t(k));
+  const int found = s.tree.Nearest(query, k, indices, sq_dist_m2->data(), max_sq_dist_m2);
+  sq_dist_m2->resize(size_t(found));
+  points->resize(size_t(found));
   for (int i = 0; i < found; ++i) {
-    const pcl::PointXYZI& p = (*s.cloud)[size_t(indices[size_t(i)])];
-    points->emplace_back(p.x, p.y, p.z);
+    const pcl::PointXYZI& p = (*s.cloud)[size_t(indices[i])];
+    (*points)[size_t(i)] = Eigen::Vector3d(p.x, p.y, p.z);
   }
   return found;
 }

@@ -1,14 +1,22 @@
 #pragma once
 // The local feature map that scan-to-map registration matches against: the map-side features (FeatureSet
 // less_sharp -> edge cloud, less_flat -> planar cloud) of the most recent keyframes, transformed into the map
-// (world) frame, voxel-downsampled, with one kd-tree per cloud (PCL KdTreeFLANN, kept inside the .cpp).
+// (world) frame, voxel-downsampled, with one kd-tree per cloud (KdTree3f, core/registration/kd_tree.hpp).
+//
+// Downsampling: each keyframe's clouds are voxel-downsampled on their own (PCL VoxelGrid), and the map cloud is
+// the VoxelGrid of the union of the live keyframes' downsampled clouds (per voxel: centroid of the keyframe
+// points in it, intensity averaged). That union grid is maintained incrementally (VoxelCentroidTable,
+// voxel_centroids.hpp): a new keyframe adds its points' sums, a dropped one subtracts exactly its own, so
+// AddKeyframe costs ~ the keyframe's size plus one kd-tree build over the map cloud, not a re-merge of the
+// window. Cloud order: voxel creation order (deterministic for a given keyframe sequence).
 //
 // Policy: a scan becomes a keyframe when the map is empty or its pose is at least keyframe_distance_m or
 // keyframe_angle_rad away from the newest keyframe (NeedsKeyframe; the caller decides and calls AddKeyframe).
 // The map is bounded: keyframes beyond max_keyframes (oldest first) or farther than max_distance_m from the newest
-// keyframe are dropped. Each AddKeyframe rebuilds the downsampled clouds and kd-trees (cost ~ map size).
+// keyframe are dropped. Each AddKeyframe updates the downsampled clouds and rebuilds the kd-trees.
 //
 // Ownership: owns copies of its clouds. Thread-safety: none (one thread at a time, also for const searches).
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +43,7 @@ enum class FeatureKind { kEdge, kPlanar };
 
 class LocalMap {
  public:
+  static constexpr int kMaxNearest = 32;  ///< the largest k of Nearest
   /// `config` must Validate (a programmer error otherwise: ROTOLIDAR_CHECK throws InternalError).
   explicit LocalMap(const LocalMapConfig& config = LocalMapConfig());
   ~LocalMap();
@@ -51,9 +60,12 @@ class LocalMap {
   void Clear();
 
   /// Up to k nearest map points of `kind` to p_map (map frame), nearest first, into *points (map frame [m]) and
-  /// *sq_dist_m2 (squared distances [m^2]). Returns how many were found (0 for an empty cloud); k >= 1.
+  /// *sq_dist_m2 (squared distances [m^2], float as the tree computes them). Returns how many were found
+  /// (0 for an empty cloud); 1 <= k <= kMaxNearest (checked). Both vectors are resized, never shrunk in capacity.
+  /// Only points with squared distance < max_sq_dist_m2 count (default: all): fewer than k may come back.
   int Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std::vector<Eigen::Vector3d>* points,
-              std::vector<float>* sq_dist_m2) const;
+              std::vector<float>* sq_dist_m2,
+              float max_sq_dist_m2 = std::numeric_limits<float>::infinity()) const;
 
   /// The downsampled cloud of `kind` in the map frame (intensity: averaged curvature of the merged points).
   const pcl::PointCloud<pcl::PointXYZI>& cloud(FeatureKind kind) const;

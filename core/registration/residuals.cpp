@@ -21,6 +21,18 @@ Eigen::Vector3d TransformPoint(const double* pose, const Eigen::Vector3d& p, Eig
   return q * p + t;  // Eigen's q * v normalises nothing: the manifold keeps q unit
 }
 
+/// a^T RotatedPointQuaternionJacobian(q, p) (1x4), with vector algebra only (the same extension off the sphere).
+Eigen::Matrix<double, 1, 4> ProjectedQuaternionJacobian(const Eigen::Vector3d& a, const Eigen::Quaterniond& q,
+                                                        const Eigen::Vector3d& p) {
+  const Eigen::Vector3d v = q.vec();
+  const double w = q.w();
+  // a^T (-2 w [p]x) = -2 w (a x p)^T;  a^T 2((v.p) I + v p^T - 2 p v^T) = 2 ((v.p) a + (a.v) p - 2 (a.p) v)^T
+  const Eigen::Vector3d dv = -2.0 * w * a.cross(p) + 2.0 * (v.dot(p) * a + a.dot(v) * p - 2.0 * a.dot(p) * v);
+  Eigen::Matrix<double, 1, 4> J;
+  J << dv.transpose(), 2.0 * a.dot(v.cross(p));
+  return J;
+}
+
 }  // namespace
 
 PoseParameters PoseToParameters(const Pose3& T) {
@@ -70,7 +82,7 @@ bool PointToPlaneResidual::Evaluate(double const* const* parameters, double* res
   if (jacobians != nullptr && jacobians[0] != nullptr) {
     Eigen::Map<Eigen::Matrix<double, 1, 7, Eigen::RowMajor>> J(jacobians[0]);
     J.leftCols<3>() = n_map_.transpose();
-    J.rightCols<4>() = n_map_.transpose() * RotatedPointQuaternionJacobian(q, p_scan_);
+    J.rightCols<4>() = ProjectedQuaternionJacobian(n_map_, q, p_scan_);
   }
   return true;
 }
@@ -102,7 +114,8 @@ bool PointToLineResidual::Evaluate(double const* const* parameters, double* resi
   if (jacobians != nullptr && jacobians[0] != nullptr) {
     Eigen::Map<Eigen::Matrix<double, 2, 7, Eigen::RowMajor>> J(jacobians[0]);
     J.leftCols<3>() = Bt_;
-    J.rightCols<4>() = Bt_ * RotatedPointQuaternionJacobian(q, p_scan_);
+    J.block<1, 4>(0, 3) = ProjectedQuaternionJacobian(Bt_.row(0).transpose(), q, p_scan_);
+    J.block<1, 4>(1, 3) = ProjectedQuaternionJacobian(Bt_.row(1).transpose(), q, p_scan_);
   }
   return true;
 }

@@ -2,7 +2,9 @@
 // Feature-based scan-to-map registration (seed Sec. 3 / LOAM mapping): scan edge points are matched to lines and
 // scan planar points to planes fitted to their k nearest map features, and T_map_scan is solved with Ceres
 // (analytic point-to-line / point-to-plane Jacobians, core/registration/residuals.hpp) under a robust loss.
-// Outer loop: find correspondences at the current pose -> Ceres solve -> repeat until the update is small.
+// Outer loop: find correspondences at the current pose -> Ceres solve -> repeat until the update is small (or the
+// loop has closed into a 2-cycle of two correspondence sets, which no further rebuild leaves: then it stops with
+// the state max_correspondence_rebuilds would have left, converged = false; docs/registration.md).
 // Degeneracy (core/registration/degeneracy.hpp): the converged full solve's Hessian is analysed; if a direction
 // is degenerate and remapping is enabled, the outer loop runs again from the guess with every update projected
 // onto the well-observed subspace (solution remapping), so degenerate directions keep the guess's value.

@@ -1,0 +1,139 @@
+#include "core/registration/kd_tree.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "core/util/log.hpp"
+
+namespace rotolidar {
+namespace {
+
+constexpr int kLeafSize = 8;  ///< points per leaf at most (measured: 6..12 are within noise)
+
+}  // namespace
+
+/// The k best so far, sorted ascending by distance.
+struct KdTree3f::Result {
+  int k = 0, count = 0;
+  float bound = std::numeric_limits<float>::infinity();  ///< only distances below this count
+  int index[kMaxK];
+  float dist[kMaxK];
+  float worst() const { return count < k ? bound : dist[k - 1]; }
+  void Offer(int i, float d) {
+    if (d >= worst()) return;
+    int j = count < k ? count++ : k - 1;  // the slot freed at the end
+    for (; j > 0 && dist[j - 1] > d; --j) {
+      dist[j] = dist[j - 1];
+      index[j] = index[j - 1];
+    }
+    dist[j] = d;
+    index[j] = i;
+  }
+};
+
+void KdTree3f::Build(const std::vector<float>& xyz) {
+  ROTOLIDAR_CHECK(xyz.size() % 3 == 0, "xyz size " << xyz.size() << " is not a multiple of 3");
+  const int n = int(xyz.size() / 3);
+  std::vector<Item>& items = scratch_;
+  items.resize(size_t(n));
+  for (int i = 0; i < n; ++i) items[size_t(i)] = {{xyz[size_t(3 * i)], xyz[size_t(3 * i + 1)], xyz[size_t(3 * i + 2)]}, i};
+  nodes_.clear();
+  nodes_.reserve(size_t(2 * (n / kLeafSize + 1)));
+  if (n > 0) BuildRange(0, n);
+  points_.resize(xyz.size());
+  original_.resize(size_t(n));
+  for (int i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) points_[size_t(3 * i + d)] = items[size_t(i)].p[d];
+    original_[size_t(i)] = items[size_t(i)].index;
+  }
+}
+
+int KdTree3f::BuildRange(int begin, int end) {
+  const int self = int(nodes_.size());
+  nodes_.emplace_back();
+  if (end - begin <= kLeafSize) {
+    nodes_[size_t(self)].a = begin;
+    nodes_[size_t(self)].b = end;
+    return self;
+  }
+  Item* first = scratch_.data() + begin;
+  Item* last = scratch_.data() + end;
+  float lo[3] = {first->p[0], first->p[1], first->p[2]};
+  float hi[3] = {lo[0], lo[1], lo[2]};
+  for (const Item* it = first + 1; it != last; ++it)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], it->p[d]);
+      hi[d] = std::max(hi[d], it->p[d]);
+    }
+  int axis = 0;
+  for (int d = 1; d < 3; ++d)
+    if (hi[d] - lo[d] > hi[axis] - lo[axis]) axis = d;
+  if (!(hi[axis] > lo[axis])) {  // all points coincide: one (oversized) leaf
+    nodes_[size_t(self)].a = begin;
+    nodes_[size_t(self)].b = end;
+    return self;
+  }
+  // Midpoint split of the cell's widest side (one partition pass; the children's extents along `axis` are
+  // tracked on the way), then both children are non-empty: lo and hi are attained on either side of the midpoint.
+  const float mid_value = 0.5f * (lo[axis] + hi[axis]);
+  Item* split = std::partition(first, last, [&](const Item& it) { return it.p[axis] < mid_value; });
+  if (split == first) ++split;  // float midpoint rounded onto lo: keep lo's points left
+  float left_max = -std::numeric_limits<float>::infinity(), right_min = std::numeric_limits<float>::infinity();
+  for (const Item* it = first; it != split; ++it) left_max = std::max(left_max, it->p[axis]);
+  for (const Item* it = split; it != last; ++it) right_min = std::min(right_min, it->p[axis]);
+  const int mid = int(split - scratch_.data());
+  const int left = BuildRange(begin, mid);
+  const int right = BuildRange(mid, end);
+  Node& node = nodes_[size_t(self)];
+  node.axis = axis;
+  node.left_max = left_max;
+  node.right_min = right_min;
+  node.a = left;
+  node.b = right;
+  return self;
+}
+
+void KdTree3f::Search(int node_index, const float q[3], float min_sq, float* axis_sq, Result* r) const {
+  const Node& node = nodes_[size_t(node_index)];
+  if (node.axis < 0) {
+    for (int i = node.a; i < node.b; ++i) {
+      const float* p = &points_[size_t(3 * i)];
+      const float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+      r->Offer(i, dx * dx + dy * dy + dz * dz);
+    }
+    return;
+  }
+  // Incremental cell distance (Arya & Mount, as nanoflann): min_sq is the squared distance from q to the node's
+  // cell, axis_sq[d] its per-axis terms; the far child's cell differs only along this node's axis.
+  const float to_left = q[node.axis] - node.left_max;    // > 0: q is right of every left point
+  const float to_right = q[node.axis] - node.right_min;  // < 0: q is left of every right point
+  const bool go_left = to_left + to_right < 0.0f;
+  const int near = go_left ? node.a : node.b;
+  const int far = go_left ? node.b : node.a;
+  const float cut = go_left ? to_right * to_right : to_left * to_left;
+  Search(near, q, min_sq, axis_sq, r);
+  const float saved = axis_sq[node.axis];
+  const float far_sq = min_sq - saved + cut;
+  if (far_sq < r->worst()) {
+    axis_sq[node.axis] = cut;
+    Search(far, q, far_sq, axis_sq, r);
+    axis_sq[node.axis] = saved;
+  }
+}
+
+int KdTree3f::Nearest(const float q[3], int k, int* indices, float* sq_dist, float max_sq_dist) const {
+  ROTOLIDAR_CHECK(k >= 1 && k <= kMaxK, "k = " << k);
+  if (nodes_.empty()) return 0;
+  Result r;
+  r.k = k;
+  r.bound = max_sq_dist;
+  float axis_sq[3] = {0.0f, 0.0f, 0.0f};
+  Search(0, q, 0.0f, axis_sq, &r);
+  for (int i = 0; i < r.count; ++i) {
+    indices[i] = original_[size_t(r.index[i])];
+    sq_dist[i] = r.dist[i];
+  }
+  return r.count;
+}
+
+}  // namespace rotolidar

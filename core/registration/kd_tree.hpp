@@ -1,0 +1,52 @@
+#pragma once
+// A static 3-D kd-tree over float points for the local map's exact k-nearest-neighbour queries (replaces PCL's
+// KdTreeFLANN there: no per-query heap allocation, no OpenMP region per query, no index remapping).
+//
+// Contract: Build copies the points (any frame, metres); Nearest returns the exact k nearest points to the query
+// in squared float distance (dx*dx + dy*dy + dz*dz, as FLANN's L2_Simple computes it), nearest first. Among
+// equal distances the order is unspecified. Non-finite points must not be passed to Build (the caller filters).
+// Thread-safety: Build is not; const queries are re-entrant.
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace rotolidar {
+
+class KdTree3f {
+ public:
+  static constexpr int kMaxK = 32;  ///< the largest k Nearest accepts
+
+  /// (Re)builds over `xyz` (3 floats per point, n = xyz.size() / 3). O(n log n).
+  void Build(const std::vector<float>& xyz);
+  size_t size() const { return points_.size() / 3; }
+
+  /// The min(k, size()) nearest points to q: their indices (into the Build input) in *indices and squared
+  /// distances [unit^2] in *sq_dist, both arrays of at least k entries, nearest first. 1 <= k <= kMaxK.
+  /// Returns how many were written. Only points with squared distance < max_sq_dist count (default: all), so
+  /// fewer than k come back when fewer lie that close.
+  int Nearest(const float q[3], int k, int* indices, float* sq_dist,
+              float max_sq_dist = std::numeric_limits<float>::infinity()) const;
+
+ private:
+  struct Node {
+    float left_max = 0.0f;   ///< inner: the largest `axis` coordinate in the left child
+    float right_min = 0.0f;  ///< inner: the smallest in the right child (>= left_max)
+    int32_t axis = -1;    ///< inner: 0..2; leaf: -1
+    int32_t a = 0, b = 0; ///< inner: children; leaf: [a, b) range in points_
+  };
+  struct Item {
+    float p[3];
+    int index;
+  };
+  struct Result;
+  int BuildRange(int begin, int end);  ///< over scratch_[begin, end); returns the node
+  void Search(int node, const float q[3], float min_sq, float* axis_sq, Result* r) const;
+
+  std::vector<float> points_;    ///< reordered so that every leaf's points are contiguous
+  std::vector<int> original_;    ///< original index of points_[i]
+  std::vector<Node> nodes_;
+  std::vector<Item> scratch_;    ///< Build's working copy, capacity kept across builds
+};
+
+}  // namespace rotolidar

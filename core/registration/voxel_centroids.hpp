@@ -1,0 +1,57 @@
+#pragma once
+// An incremental voxel-centroid table: the same output as a PCL VoxelGrid over the union of every point set added
+// and not yet removed (per voxel: the centroid of its points, intensity averaged), maintained by adding and
+// subtracting running sums instead of re-merging the union.
+//
+// Voxels: PCL's indexing, floor(coord * (1 / leaf)) in float, on a grid anchored at the origin of the points'
+// frame (metres). Sums are doubles of the float inputs, so Remove subtracts exactly what Add added (a voxel whose
+// count returns to 0 is dropped and its sums reset). Non-finite points are ignored (as VoxelGrid does).
+// Order: Centroids() lists the live voxels in the order they were first created (compaction keeps that order),
+// so the output depends only on the sequence of Add/Remove calls, never on hash or pointer values.
+// Contract: Remove must be given a point set previously Added and not yet removed (checked: a voxel's count
+// never goes negative). Thread-safety: none.
+#include <cstdint>
+#include <vector>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+namespace rotolidar {
+
+class VoxelCentroidTable {
+ public:
+  explicit VoxelCentroidTable(double voxel_m);  ///< voxel_m > 0 (checked)
+
+  void Add(const pcl::PointCloud<pcl::PointXYZI>& points);
+  void Remove(const pcl::PointCloud<pcl::PointXYZI>& points);
+  void Clear();
+
+  /// The live voxels' centroids (x, y, z, intensity as float), creation order, into *out (replaced).
+  void Centroids(pcl::PointCloud<pcl::PointXYZI>* out) const;
+  size_t num_voxels() const { return live_; }
+
+  /// The voxel key of a point under PCL VoxelGrid's indexing (21 bits per axis, two's complement).
+  uint64_t KeyOf(const pcl::PointXYZI& p) const;
+
+ private:
+  struct Voxel {
+    uint64_t key = 0;
+    int64_t count = 0;  ///< 0: dead (awaiting compaction)
+    double x = 0, y = 0, z = 0, intensity = 0;
+  };
+  static constexpr uint32_t kEmpty = 0xFFFFFFFFu;
+  void Accumulate(const pcl::PointXYZI& p, int sign);
+  size_t Home(uint64_t key) const;
+  size_t Find(uint64_t key) const;  ///< the index_ slot holding key, or the empty slot where it would go
+  void Erase(size_t slot);          ///< backward-shift deletion (no tombstones)
+  void Grow();
+  void Compact();
+
+  float inverse_leaf_;
+  std::vector<Voxel> voxels_;    ///< creation order; dead entries until Compact
+  std::vector<uint32_t> index_;  ///< open addressing, linear probing: voxels_ position or kEmpty; power of 2
+  size_t live_ = 0;
+  size_t dead_ = 0;
+};
+
+}  // namespace rotolidar

@@ -7,24 +7,6 @@ namespace rotolidar {
 
 namespace {
 
-/// Where t falls in ts (sorted): 0 at or before the first time (and for a single time), ts.size() at or after
-/// the last, otherwise k with ts[k-1] <= t < ts[k]. *outside: t lies before the first or after the last time.
-/// The interval `hint` and the one after it are tried before a search (points come in firing order).
-size_t Interval(const std::vector<Seconds>& ts, Seconds t, size_t hint, bool* outside) {
-  *outside = false;
-  if (t <= ts.front() || ts.size() == 1) {
-    *outside = t < ts.front();
-    return 0;
-  }
-  if (t >= ts.back()) {
-    *outside = t > ts.back();
-    return ts.size();
-  }
-  if (hint >= 1 && hint < ts.size() && ts[hint - 1] <= t && t < ts[hint]) return hint;
-  if (hint >= 1 && hint + 1 < ts.size() && ts[hint] <= t && t < ts[hint + 1]) return hint + 1;  // the next one
-  return size_t(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin());
-}
-
 /// Rotation along the geodesic a -> b (log_ab = Log(R_a^T R_b)) and translation linearly, at fraction s.
 Pose3 Blend(const Pose3& a, const Pose3& b, double s, const Eigen::Vector3d& log_ab) {
   Pose3 out = Pose3::Identity();
@@ -38,7 +20,7 @@ Pose3 Blend(const Pose3& a, const Pose3& b, double s, const Eigen::Vector3d& log
 Pose3 MotionTable::At(Seconds t, bool* outside) const {
   ROTOLIDAR_CHECK(!t_s.empty() && t_s.size() == T_start_t.size(), "MotionTable: empty or mismatched sizes");
   bool out_of_span = false;
-  const size_t k = Interval(t_s, t, 0, &out_of_span);
+  const size_t k = deskew_detail::Interval(t_s, t, 0, &out_of_span);
   if (outside) *outside = out_of_span;
   if (k == 0) return T_start_t.front();
   if (k == t_s.size()) return T_start_t.back();
@@ -118,27 +100,6 @@ MotionTable IdentityTable(Seconds t0_s, Seconds t1_s) {
   return table;
 }
 
-namespace {
-
-/// Exp(phi) * p by Rodrigues' formula on the vector: p + A phi x p + B phi x (phi x p), A = sin(x)/x,
-/// B = (1 - cos x)/x^2, x = |phi|; Taylor series (truncation < 1e-17) for x < 0.1.
-Eigen::Vector3d RotateByVector(const Eigen::Vector3d& phi, const Eigen::Vector3d& p) {
-  const double x2 = phi.squaredNorm();
-  double a, b;
-  if (x2 < 1e-2) {  // multiplications by the reciprocals (a division per term would dominate the cost)
-    a = 1.0 - x2 * (1.0 / 6) * (1.0 - x2 * (1.0 / 20) * (1.0 - x2 * (1.0 / 42) * (1.0 - x2 * (1.0 / 72))));
-    b = 0.5 * (1.0 - x2 * (1.0 / 12) * (1.0 - x2 * (1.0 / 30) * (1.0 - x2 * (1.0 / 56) * (1.0 - x2 * (1.0 / 90)))));
-  } else {
-    const double x = std::sqrt(x2);
-    a = std::sin(x) / x;
-    b = (1.0 - std::cos(x)) / x2;
-  }
-  const Eigen::Vector3d wxp = phi.cross(p);
-  return p + a * wxp + b * phi.cross(wxp);
-}
-
-}  // namespace
-
 MotionInterpolator::MotionInterpolator(const MotionTable& table) : table_(table) {
   ROTOLIDAR_CHECK(!table.t_s.empty() && table.t_s.size() == table.T_start_t.size(),
                   "MotionTable: empty or mismatched sizes");
@@ -149,17 +110,6 @@ MotionInterpolator::MotionInterpolator(const MotionTable& table) : table_(table)
     seg_.push_back({a.linear(), LogSO3(a.linear().transpose() * b.linear()), a.translation(), b.translation(),
                     1.0 / (table.t_s[k] - table.t_s[k - 1])});
   }
-}
-
-Eigen::Vector3d MotionInterpolator::Apply(Seconds t, const Eigen::Vector3d& p_base, bool* outside) {
-  const std::vector<Seconds>& ts = table_.t_s;
-  const size_t k = Interval(ts, t, k_, outside);
-  if (k == 0) return table_.T_start_t.front() * p_base;
-  if (k == ts.size()) return table_.T_start_t.back() * p_base;
-  k_ = k;
-  const Segment& g = seg_[k - 1];
-  const double s = (t - ts[k - 1]) * g.inv_dt;
-  return g.R_a * RotateByVector(s * g.w, p_base) + ((1.0 - s) * g.t_a + s * g.t_b);
 }
 
 size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,

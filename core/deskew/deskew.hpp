@@ -12,6 +12,8 @@
 //     ignored (gyro rotation + constant velocity: before the IMU is initialised);
 //   - ConstantTwistTable: a constant twist (no IMU: the last two poses' relative motion).
 // Pure functions on their arguments; thread-safe. Units SI, times on the rig clock.
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <Eigen/Core>
@@ -87,5 +89,57 @@ class MotionInterpolator {
 /// Non-finite inputs give non-finite outputs.
 size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
                     const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start);
+
+// ---- inline so that per-point loops (Estimator::Deskew, DeskewPoints) inline the interpolation ----
+
+namespace deskew_detail {
+
+/// Where t falls in ts (sorted): 0 at or before the first time (and for a single time), ts.size() at or after
+/// the last, otherwise k with ts[k-1] <= t < ts[k]. *outside: t lies before the first or after the last time.
+/// The interval `hint` and the one after it are tried before a search (points come in firing order).
+inline size_t Interval(const std::vector<Seconds>& ts, Seconds t, size_t hint, bool* outside) {
+  *outside = false;
+  if (t <= ts.front() || ts.size() == 1) {
+    *outside = t < ts.front();
+    return 0;
+  }
+  if (t >= ts.back()) {
+    *outside = t > ts.back();
+    return ts.size();
+  }
+  if (hint >= 1 && hint < ts.size() && ts[hint - 1] <= t && t < ts[hint]) return hint;
+  if (hint >= 1 && hint + 1 < ts.size() && ts[hint] <= t && t < ts[hint + 1]) return hint + 1;  // the next one
+  return size_t(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin());
+}
+
+/// Exp(phi) * p by Rodrigues' formula on the vector: p + A phi x p + B phi x (phi x p), A = sin(x)/x,
+/// B = (1 - cos x)/x^2, x = |phi|; Taylor series (truncation < 1e-17) for x < 0.1.
+inline Eigen::Vector3d RotateByVector(const Eigen::Vector3d& phi, const Eigen::Vector3d& p) {
+  const double x2 = phi.squaredNorm();
+  double a, b;
+  if (x2 < 1e-2) {  // multiplications by the reciprocals (a division per term would dominate the cost)
+    a = 1.0 - x2 * (1.0 / 6) * (1.0 - x2 * (1.0 / 20) * (1.0 - x2 * (1.0 / 42) * (1.0 - x2 * (1.0 / 72))));
+    b = 0.5 * (1.0 - x2 * (1.0 / 12) * (1.0 - x2 * (1.0 / 30) * (1.0 - x2 * (1.0 / 56) * (1.0 - x2 * (1.0 / 90)))));
+  } else {
+    const double x = std::sqrt(x2);
+    a = std::sin(x) / x;
+    b = (1.0 - std::cos(x)) / x2;
+  }
+  const Eigen::Vector3d wxp = phi.cross(p);
+  return p + a * wxp + b * phi.cross(wxp);
+}
+
+}  // namespace deskew_detail
+
+inline Eigen::Vector3d MotionInterpolator::Apply(Seconds t, const Eigen::Vector3d& p_base, bool* outside) {
+  const std::vector<Seconds>& ts = table_.t_s;
+  const size_t k = deskew_detail::Interval(ts, t, k_, outside);
+  if (k == 0) return table_.T_start_t.front() * p_base;
+  if (k == ts.size()) return table_.T_start_t.back() * p_base;
+  k_ = k;
+  const Segment& g = seg_[k - 1];
+  const double s = (t - ts[k - 1]) * g.inv_dt;
+  return g.R_a * deskew_detail::RotateByVector(s * g.w, p_base) + ((1.0 - s) * g.t_a + s * g.t_b);
+}
 
 }  // namespace rotolidar

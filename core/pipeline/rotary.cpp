@@ -46,17 +46,6 @@ void RotorAngleInterpolator::DropBefore(Seconds t_s) {
   theta_rad_.erase(theta_rad_.begin(), theta_rad_.begin() + (n - 1));
 }
 
-namespace {
-
-/// cos and sin of a small angle a (|a| < 0.1 rad: Taylor series, truncation < 1e-17).
-void SmallSinCos(double a, double* c, double* s) {
-  const double a2 = a * a;
-  *c = 1.0 - a2 * 0.5 * (1.0 - a2 * (1.0 / 12) * (1.0 - a2 * (1.0 / 30) * (1.0 - a2 * (1.0 / 56) * (1.0 - a2 * (1.0 / 90)))));
-  *s = a * (1.0 - a2 * (1.0 / 6) * (1.0 - a2 * (1.0 / 20) * (1.0 - a2 * (1.0 / 42) * (1.0 - a2 * (1.0 / 72)))));
-}
-
-}  // namespace
-
 RotaryTransform::RotaryTransform(const RigCalib& calib, const RotorAngleInterpolator& rotor)
     : rotor_(rotor),
       R_rotor_lidar_(calib.T_rotor_lidar.linear()),
@@ -79,31 +68,6 @@ void RotaryTransform::Seek(Seconds t_s) {
   rate_ = single_ ? 0.0 : (th[hi] - th[lo_]) / (ts[hi] - ts[lo_]);
   theta_lo_ = th[lo_];
   cos_lo_ = std::cos(theta_lo_), sin_lo_ = std::sin(theta_lo_);
-}
-
-Eigen::Vector3d RotaryTransform::Apply(const LidarPoint& p, bool* fallback) {
-  const std::vector<Seconds>& ts = rotor_.sample_times();
-  double c, s;
-  *fallback = ts.empty() || p.t_s < ts.front() || p.t_s > ts.back();
-  if (*fallback) {
-    const double theta = rotor_.AngleAt(p.t_s);
-    c = std::cos(theta), s = std::sin(theta);
-  } else {
-    // The interval [t_lo, t_hi) holds t (or t == t_hi == the last sample, where AngleAt also uses it).
-    if (!have_ || p.t_s < t_lo_ || (p.t_s >= t_hi_ && !(p.t_s == t_hi_ && lo_ + 2 >= ts.size()))) Seek(p.t_s);
-    const double a = (p.t_s - t_lo_) * rate_;
-    if (std::abs(a) < 0.1) {
-      double ca, sa;
-      SmallSinCos(a, &ca, &sa);
-      c = cos_lo_ * ca - sin_lo_ * sa, s = sin_lo_ * ca + cos_lo_ * sa;
-    } else {
-      const double theta = theta_lo_ + a;
-      c = std::cos(theta), s = std::sin(theta);
-    }
-  }
-  const Eigen::Vector3d p_rotor = R_rotor_lidar_ * Eigen::Vector3d(p.x_m, p.y_m, p.z_m) + t_rotor_lidar_;
-  const Eigen::Vector3d p_turned(c * p_rotor.x() - s * p_rotor.y(), s * p_rotor.x() + c * p_rotor.y(), p_rotor.z());
-  return R_base_motor_ * p_turned + t_base_motor_;
 }
 
 // T_base_lidar(theta) * p applied as T_base_motor * (RotZ(theta) * (T_rotor_lidar * p)): the fixed transforms

@@ -4,6 +4,7 @@
 // theta(t) is interpolated between encoder samples (the default; the seed names encoder feedback as its future
 // work); the seed's uniform-rotation model theta(t) = theta0 + w * (t - t0) is the fallback when no encoder
 // sample brackets t.
+#include <cmath>
 #include <vector>
 
 #include "core/types/calib.hpp"
@@ -68,5 +69,43 @@ class RotaryTransform {
 /// Output order matches input; returns how many points used the uniform-rotation fallback. Uses RotaryTransform.
 size_t LidarToBase(const RigCalib& calib, const RotorAngleInterpolator& rotor, const LidarScan& scan,
                    std::vector<Eigen::Vector3d>* p_base);
+
+// ---- inline so that per-point loops (Estimator::Deskew, LidarToBase) inline the transform ----
+
+namespace rotary_detail {
+
+/// cos and sin of a small angle a (|a| < 0.1 rad: Taylor series, truncation < 1e-17).
+inline void SmallSinCos(double a, double* c, double* s) {
+  const double a2 = a * a;
+  *c = 1.0 - a2 * 0.5 * (1.0 - a2 * (1.0 / 12) * (1.0 - a2 * (1.0 / 30) * (1.0 - a2 * (1.0 / 56) * (1.0 - a2 * (1.0 / 90)))));
+  *s = a * (1.0 - a2 * (1.0 / 6) * (1.0 - a2 * (1.0 / 20) * (1.0 - a2 * (1.0 / 42) * (1.0 - a2 * (1.0 / 72)))));
+}
+
+}  // namespace rotary_detail
+
+inline Eigen::Vector3d RotaryTransform::Apply(const LidarPoint& p, bool* fallback) {
+  const std::vector<Seconds>& ts = rotor_.sample_times();
+  double c, s;
+  *fallback = ts.empty() || p.t_s < ts.front() || p.t_s > ts.back();
+  if (*fallback) {
+    const double theta = rotor_.AngleAt(p.t_s);
+    c = std::cos(theta), s = std::sin(theta);
+  } else {
+    // The interval [t_lo, t_hi) holds t (or t == t_hi == the last sample, where AngleAt also uses it).
+    if (!have_ || p.t_s < t_lo_ || (p.t_s >= t_hi_ && !(p.t_s == t_hi_ && lo_ + 2 >= ts.size()))) Seek(p.t_s);
+    const double a = (p.t_s - t_lo_) * rate_;
+    if (std::abs(a) < 0.1) {
+      double ca, sa;
+      rotary_detail::SmallSinCos(a, &ca, &sa);
+      c = cos_lo_ * ca - sin_lo_ * sa, s = sin_lo_ * ca + cos_lo_ * sa;
+    } else {
+      const double theta = theta_lo_ + a;
+      c = std::cos(theta), s = std::sin(theta);
+    }
+  }
+  const Eigen::Vector3d p_rotor = R_rotor_lidar_ * Eigen::Vector3d(p.x_m, p.y_m, p.z_m) + t_rotor_lidar_;
+  const Eigen::Vector3d p_turned(c * p_rotor.x() - s * p_rotor.y(), s * p_rotor.x() + c * p_rotor.y(), p_rotor.z());
+  return R_base_motor_ * p_turned + t_base_motor_;
+}
 
 }  // namespace rotolidar

@@ -217,38 +217,58 @@ std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_norma
 // A hash table on 64-bit integer voxel coordinates instead of pcl::VoxelGrid: VoxelGrid numbers voxels with a
 // 32-bit index over the cloud's bounding box and, when that overflows (e.g. a rotating rig's 60 m-range scan, a
 // 120 m cube, at 0.05 m: 1.4e10 voxels), logs a warning and returns the input unfiltered; and it outputs centroids,
-// which carry no ring or firing time. Linear time (a sort of the keys cost 3x more per scan).
+// which carry no ring or firing time. Linear time (a sort of the keys cost 3x more per scan). The open-addressing
+// table holds 32-bit voxel numbers and grows with the voxel count (load <= 1/2), not with the point count; a point
+// in the previous point's voxel (ring order keeps neighbours together) skips the lookup. Centroid sums are in
+// double, in index order (VoxelFilter's reference test rebuilds them with a std::map).
 std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>& positions, double voxel_m) {
   ROTOLIDAR_CHECK(voxel_m > 0.0 && std::isfinite(voxel_m), "voxel_m = " << voxel_m);
-  using Key = std::array<int64_t, 3>;
+  ROTOLIDAR_CHECK(positions.size() < (std::size_t(1) << 31), "VoxelRepresentatives: too many points");
   struct Voxel {
-    Key key;
+    int64_t key[3];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();  ///< summed in index order
     std::size_t count = 0, best = 0;
     double best_sq = std::numeric_limits<double>::infinity();
   };
-  std::size_t capacity = 16;
-  while (capacity < 2 * positions.size()) capacity *= 2;
-  std::vector<int64_t> table(capacity, -1);  // open addressing: slot -> voxel number
   std::vector<Voxel> voxels;
-  std::vector<int64_t> voxel_of(positions.size(), -1);
+  std::vector<int32_t> table(64, -1);  // slot -> voxel number, -1 empty; size a power of two
+  const auto insert_slot = [&](const int64_t* key) {  // the key's slot: its voxel's, or the empty one ending the probe
+    std::size_t slot = VoxelHash(key[0], key[1], key[2]) & (table.size() - 1);
+    for (int32_t v; (v = table[slot]) >= 0; slot = (slot + 1) & (table.size() - 1)) {
+      const int64_t* o = voxels[v].key;
+      if (o[0] == key[0] && o[1] == key[1] && o[2] == key[2]) break;
+    }
+    return slot;
+  };
+  std::vector<int32_t> voxel_of(positions.size(), -1);
   const double inv = 1.0 / voxel_m;
+  int32_t last = -1;  // voxel of the previous finite point
   for (std::size_t i = 0; i < positions.size(); ++i) {
     const Eigen::Vector3f& p = positions[i];
     if (!p.allFinite()) continue;
-    const Key key{FloorToInt(p.x() * inv), FloorToInt(p.y() * inv), FloorToInt(p.z() * inv)};
-    const auto same = [&](const Key& o) { return o[0] == key[0] && o[1] == key[1] && o[2] == key[2]; };
-    std::size_t slot = VoxelHash(key[0], key[1], key[2]) & (capacity - 1);
-    while (table[slot] >= 0 && !same(voxels[table[slot]].key)) slot = (slot + 1) & (capacity - 1);
-    if (table[slot] < 0) table[slot] = static_cast<int64_t>(voxels.size()), voxels.push_back(Voxel{key});
-    Voxel& v = voxels[table[slot]];
-    v.sum += p.cast<double>(), ++v.count;
-    voxel_of[i] = table[slot];
+    const int64_t key[3] = {FloorToInt(p.x() * inv), FloorToInt(p.y() * inv), FloorToInt(p.z() * inv)};
+    if (last < 0 || key[0] != voxels[last].key[0] || key[1] != voxels[last].key[1] || key[2] != voxels[last].key[2]) {
+      std::size_t slot = insert_slot(key);
+      if (table[slot] < 0) {
+        if (2 * (voxels.size() + 1) > table.size()) {  // grow and rehash, then find the new key's slot again
+          table.assign(2 * table.size(), -1);
+          for (std::size_t v = 0; v < voxels.size(); ++v) table[insert_slot(voxels[v].key)] = static_cast<int32_t>(v);
+          slot = insert_slot(key);
+        }
+        table[slot] = static_cast<int32_t>(voxels.size());
+        voxels.push_back(Voxel{{key[0], key[1], key[2]}});
+      }
+      last = table[slot];
+    }
+    voxels[last].sum += p.cast<double>(), ++voxels[last].count;
+    voxel_of[i] = last;
   }
+  std::vector<Eigen::Vector3d> centroid(voxels.size());
+  for (std::size_t v = 0; v < voxels.size(); ++v) centroid[v] = voxels[v].sum / static_cast<double>(voxels[v].count);
   for (std::size_t i = 0; i < positions.size(); ++i) {  // nearest to the centroid, ties to the lower index
     if (voxel_of[i] < 0) continue;
     Voxel& v = voxels[voxel_of[i]];
-    const double sq = (positions[i].cast<double>() - v.sum / static_cast<double>(v.count)).squaredNorm();
+    const double sq = (positions[i].cast<double>() - centroid[voxel_of[i]]).squaredNorm();
     if (sq < v.best_sq) v.best_sq = sq, v.best = i;
   }
   std::vector<std::size_t> kept;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <tuple>
 
@@ -289,6 +290,57 @@ TEST(VoxelFilter, WideExtentAndFineVoxels) {
     voxels.insert({int(std::floor(positions[i].x() / 0.05f)), int(std::floor(positions[i].y() / 0.05f)),
                    int(std::floor(positions[i].z() / 0.05f))});
   EXPECT_EQ(voxels.size(), 4000u);
+}
+
+// The straightforward VoxelRepresentatives: a std::map from voxel key to its points (index order), the centroid
+// as the double sum / count, the nearest point by (p - centroid).squaredNorm(), ties to the lower index.
+std::vector<std::size_t> ReferenceVoxelRepresentatives(const std::vector<Eigen::Vector3f>& positions, double voxel_m) {
+  std::map<std::tuple<int64_t, int64_t, int64_t>, std::vector<std::size_t>> voxels;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const Eigen::Vector3f& p = positions[i];
+    if (!p.allFinite()) continue;
+    voxels[{int64_t(std::floor(p.x() / voxel_m)), int64_t(std::floor(p.y() / voxel_m)),
+            int64_t(std::floor(p.z() / voxel_m))}].push_back(i);
+  }
+  std::vector<std::size_t> kept;
+  for (const auto& [key, members] : voxels) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const std::size_t i : members) sum += positions[i].cast<double>();
+    const Eigen::Vector3d centroid = sum / static_cast<double>(members.size());
+    std::size_t best = members.front();
+    double best_sq = std::numeric_limits<double>::infinity();
+    for (const std::size_t i : members) {
+      const double sq = (positions[i].cast<double>() - centroid).squaredNorm();
+      if (sq < best_sq) best_sq = sq, best = i;
+    }
+    kept.push_back(best);
+  }
+  std::sort(kept.begin(), kept.end());
+  return kept;
+}
+
+// The hashed filter (growing table, previous-voxel shortcut) keeps exactly the reference's points: on ring-like
+// sweeps (runs of points in one voxel, revisited voxels), on shuffled points (no runs, many table growths), with
+// negative coordinates, duplicates and non-finite positions.
+TEST(VoxelFilter, HashedRepresentativesEqualTheMapReference) {
+  RandomStream rng(5, "filters_test.voxel_reference");
+  std::vector<Eigen::Vector3f> sweep;
+  for (int ring = 0; ring < 16; ++ring)
+    for (int j = 0; j < 1800; ++j) {
+      const double az = j * 0.2 * M_PI / 180.0, r = 4.0 + 6.0 * rng.Uniform();
+      sweep.push_back(Eigen::Vector3f(float(r * std::cos(az)), float(r * std::sin(az)), float(0.1 * ring - 0.8)));
+    }
+  sweep.push_back(sweep[100]);  // a duplicate: a tie, kept at the lower index
+  sweep.push_back({std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f});
+  sweep.push_back({0.f, std::numeric_limits<float>::infinity(), 0.f});
+  std::vector<Eigen::Vector3f> shuffled = sweep;
+  for (std::size_t i = shuffled.size() - 1; i > 0; --i)
+    std::swap(shuffled[i], shuffled[std::size_t(rng.Uniform() * double(i + 1)) % (i + 1)]);
+  for (const double voxel_m : {0.05, 0.2, 1.0, 7.0}) {
+    EXPECT_EQ(VoxelRepresentatives(sweep, voxel_m), ReferenceVoxelRepresentatives(sweep, voxel_m)) << voxel_m;
+    EXPECT_EQ(VoxelRepresentatives(shuffled, voxel_m), ReferenceVoxelRepresentatives(shuffled, voxel_m)) << voxel_m;
+  }
+  EXPECT_TRUE(VoxelRepresentatives({}, 0.2).empty());
 }
 
 TEST(Preprocess, StageCountsAddUp) {

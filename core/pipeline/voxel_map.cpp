@@ -36,19 +36,69 @@ void VoxelMap::Rehash(size_t num_slots) {
   for (size_t v = 0; v < keys_.size(); ++v) table_[SlotOf(keys_[v])] = Slot{keys_[v], uint32_t(v)};
 }
 
+VoxelMap::Key VoxelMap::BlockKeyOf(const Key& v) {
+  return {v.x >> kBlockBits, v.y >> kBlockBits, v.z >> kBlockBits};  // arithmetic shift: floor division
+}
+
+size_t VoxelMap::BitOf(const Key& v) {
+  const uint32_t m = kBlock - 1;
+  return size_t(uint32_t(v.x) & m) | size_t(uint32_t(v.y) & m) << kBlockBits |
+         size_t(uint32_t(v.z) & m) << (2 * kBlockBits);
+}
+
+VoxelMap::BlockBits* VoxelMap::FindBlock(const Key& block_key, bool create) {
+  if (last_block_ != nullptr && last_block_key_ == block_key) return last_block_;
+  if (block_table_.empty() || (create && 2 * (blocks_.size() + 1) > block_table_.size())) {
+    std::vector<BlockSlot> old = std::move(block_table_);
+    block_table_.assign(std::max<size_t>(256, 2 * old.size()), BlockSlot{{0, 0, 0}, kEmpty});
+    for (const BlockSlot& b : old)
+      if (b.block != kEmpty) {
+        size_t slot = size_t(VoxelHash(b.key.x, b.key.y, b.key.z)) & (block_table_.size() - 1);
+        while (block_table_[slot].block != kEmpty) slot = (slot + 1) & (block_table_.size() - 1);
+        block_table_[slot] = b;
+      }
+  }
+  const size_t mask = block_table_.size() - 1;
+  size_t slot = size_t(VoxelHash(block_key.x, block_key.y, block_key.z)) & mask;
+  while (block_table_[slot].block != kEmpty && !(block_table_[slot].key == block_key)) slot = (slot + 1) & mask;
+  if (block_table_[slot].block == kEmpty) {
+    if (!create) return nullptr;
+    block_table_[slot] = BlockSlot{block_key, uint32_t(blocks_.size())};
+    blocks_.push_back(std::make_unique<BlockBits>());
+    blocks_.back()->fill(0);
+  }
+  last_block_key_ = block_key;
+  last_block_ = blocks_[block_table_[slot].block].get();
+  return last_block_;
+}
+
+void VoxelMap::MarkFull(const Key& voxel) {
+  const size_t bit = BitOf(voxel);
+  (*FindBlock(BlockKeyOf(voxel), true))[bit >> 6] |= uint64_t(1) << (bit & 63);
+}
+
+void VoxelMap::RebuildFullBits() {
+  block_table_.clear();
+  blocks_.clear();
+  last_block_ = nullptr;
+  for (size_t v = 0; v < keys_.size(); ++v)
+    if (counts_[v] >= uint32_t(max_points_per_voxel_)) MarkFull(keys_[v]);
+}
+
 void VoxelMap::Add(const std::vector<Eigen::Vector3d>& p_world) {
-  // Room for every point to open a voxel, so the table stays put during the loop. It is far larger than the
-  // caches: each point's home slot is requested kLookahead points ahead, so the misses overlap.
-  constexpr size_t kLookahead = 8;
+  // Room for every point to open a voxel, so the table stays put during the loop.
   size_t num_slots = std::max<size_t>(table_.size(), 1024);
   while (2 * (keys_.size() + p_world.size()) > num_slots) num_slots *= 2;
   if (num_slots != table_.size()) Rehash(num_slots);
   const double min_sq = min_spacing_m_ * min_spacing_m_;
   const size_t per_voxel = size_t(max_points_per_voxel_);
   for (size_t i = 0; i < p_world.size(); ++i) {
-    if (i + kLookahead < p_world.size()) __builtin_prefetch(&table_[HomeSlot(KeyOf(p_world[i + kLookahead]))]);
     const Eigen::Vector3d& p = p_world[i];
     const Key key = KeyOf(p);
+    if (const BlockBits* bits = FindBlock(BlockKeyOf(key), false)) {
+      const size_t bit = BitOf(key);
+      if (((*bits)[bit >> 6] >> (bit & 63)) & 1) continue;  // the voxel is full
+    }
     const size_t slot = SlotOf(key);
     if (table_[slot].voxel == kEmpty) {  // a new voxel: its first point always fits
       table_[slot] = Slot{key, uint32_t(keys_.size())};
@@ -65,6 +115,7 @@ void VoxelMap::Add(const std::vector<Eigen::Vector3d>& p_world) {
     if (!far_enough) continue;
     pts[count++] = p;
     ++num_points_;
+    if (count >= per_voxel) MarkFull(key);
   }
 }
 
@@ -85,6 +136,7 @@ void VoxelMap::RemoveFar(const Eigen::Vector3d& center_world, double max_distanc
   counts_.resize(kept);
   points_.resize(kept * per_voxel);
   if (!table_.empty()) Rehash(table_.size());
+  RebuildFullBits();
 }
 
 std::vector<Eigen::Vector3d> VoxelMap::Points() const {

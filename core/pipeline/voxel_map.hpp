@@ -2,7 +2,9 @@
 // A sparse voxel map of world points (KISS-ICP's voxel hash map): at most `max_points_per_voxel` points per
 // voxel, so density stays bounded however long the rig dwells. Used as the local map (registration target)
 // and as the global map (the dense output).
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -40,6 +42,29 @@ class VoxelMap {
   size_t HomeSlot(const Key& key) const;  ///< where the key's probe starts (its hash)
   size_t SlotOf(const Key& key) const;    ///< the key's slot, or the empty slot where it would go
   void Rehash(size_t num_slots);         ///< rebuilds the table from keys_ (num_slots: a power of two)
+
+  // Full-voxel filter: one bit per voxel, set once the voxel holds max_points_per_voxel points, in blocks of
+  // kBlock^3 voxels found through a small table of block keys. A scan mostly revisits full voxels of surfaces seen
+  // before; their points are turned away by one bit test in a block that stays in cache along a ring, instead of
+  // a probe into the large voxel table (a cache miss per point). Exact: the bit is only a shortcut to the
+  // `count >= max_points_per_voxel` test.
+  static constexpr int kBlockBits = 5;  ///< 32 voxels per block edge
+  static constexpr int kBlock = 1 << kBlockBits;
+  using BlockBits = std::array<uint64_t, kBlock * kBlock * kBlock / 64>;
+  struct BlockSlot {
+    Key key;
+    uint32_t block;
+  };
+  static Key BlockKeyOf(const Key& voxel);
+  static size_t BitOf(const Key& voxel);
+  BlockBits* FindBlock(const Key& block_key, bool create);
+  void MarkFull(const Key& voxel);
+  void RebuildFullBits();
+
+  std::vector<BlockSlot> block_table_;              ///< linear probing, power-of-two size, at most half full
+  std::vector<std::unique_ptr<BlockBits>> blocks_;  ///< per block its bits (stable addresses)
+  Key last_block_key_{0, 0, 0};                     ///< FindBlock's one-entry cache
+  BlockBits* last_block_ = nullptr;
 
   double voxel_size_m_;
   int max_points_per_voxel_;

@@ -1,5 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <random>
+
 #include "core/pipeline/scan_matcher.hpp"
 #include "core/pipeline/voxel_map.hpp"
 
@@ -16,6 +22,59 @@ TEST(VoxelMap, CapsPointsPerVoxelAndRemovesFarVoxels) {
   EXPECT_EQ(map.NumPoints(), 5u);  // 4 in the crowded voxel, 1 far away
   map.RemoveFar(Eigen::Vector3d::Zero(), 10.0);
   EXPECT_EQ(map.NumPoints(), 4u);
+}
+
+// The reference: VoxelMap's rule (a point is kept when its voxel holds fewer than n points, all at least
+// voxel / sqrt(n) away) over a std::map, without the full-voxel bit filter.
+std::vector<Eigen::Vector3d> ReferenceVoxelMap(const std::vector<Eigen::Vector3d>& pts, double voxel, int n) {
+  std::map<std::array<int64_t, 3>, std::vector<Eigen::Vector3d>> voxels;
+  std::vector<Eigen::Vector3d> kept;
+  const double min_sq = voxel * voxel / n;
+  for (const auto& p : pts) {
+    auto& v = voxels[{int64_t(std::floor(p.x() / voxel)), int64_t(std::floor(p.y() / voxel)),
+                      int64_t(std::floor(p.z() / voxel))}];
+    if (int(v.size()) >= n) continue;
+    bool far = true;
+    for (const auto& q : v) far = far && (q - p).squaredNorm() >= min_sq;
+    if (!far) continue;
+    v.push_back(p);
+    kept.push_back(p);
+  }
+  return kept;
+}
+
+TEST(VoxelMap, FullVoxelFilterKeepsTheReferencePointsAcrossBlocksAndScans) {
+  // Points on both sides of zero and across many 32-voxel blocks, added in several batches (scans) that revisit
+  // the same voxels, for one and for several points per voxel.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  for (int n : {1, 3}) {
+    VoxelMap map(0.05, n);
+    std::vector<Eigen::Vector3d> all;
+    for (int scan = 0; scan < 5; ++scan) {
+      std::vector<Eigen::Vector3d> batch;
+      for (int i = 0; i < 20000; ++i) batch.emplace_back(u(rng), u(rng), 0.1 * u(rng));
+      map.Add(batch);
+      all.insert(all.end(), batch.begin(), batch.end());
+    }
+    const std::vector<Eigen::Vector3d> expected = ReferenceVoxelMap(all, 0.05, n);
+    ASSERT_EQ(map.NumPoints(), expected.size()) << "n = " << n;
+    auto key = [](const Eigen::Vector3d& p) { return std::array<double, 3>{p.x(), p.y(), p.z()}; };
+    std::vector<std::array<double, 3>> got, want;
+    for (const auto& p : map.Points()) got.push_back(key(p));
+    for (const auto& p : expected) want.push_back(key(p));
+    std::sort(got.begin(), got.end());
+    std::sort(want.begin(), want.end());
+    EXPECT_EQ(got, want) << "n = " << n;
+    // After RemoveFar the filter is rebuilt: re-adding everything adds nothing.
+    map.RemoveFar(Eigen::Vector3d::Zero(), 3.0);
+    const size_t after_remove = map.NumPoints();
+    std::vector<Eigen::Vector3d> near;
+    for (const auto& p : all)
+      if (p.norm() < 2.5) near.push_back(p);
+    map.Add(near);
+    EXPECT_EQ(map.NumPoints(), after_remove) << "n = " << n;
+  }
 }
 
 TEST(VoxelDownsample, KeepsOneCentroidPerVoxel) {

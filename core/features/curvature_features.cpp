@@ -1,15 +1,14 @@
 #include "core/features/curvature_features.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <functional>
 #include <limits>
 #include <sstream>
 #include <thread>
 
 #include "core/util/log.hpp"
+#include "core/util/thread_pool.hpp"
 
 namespace rotolidar {
 namespace {
@@ -51,29 +50,10 @@ struct SectorOutput {
   std::vector<int> less_flat;  ///< input indices: the map-side planar set before its voxel filter
 };
 
-/// Runs fn(0..n-1) on up to `threads` threads. Each call must write only its own outputs; the first exception
-/// thrown by any call is rethrown here after all threads joined.
+/// Runs fn(0..n-1) on the shared pool of `threads` threads (core/util/thread_pool.hpp; started once per process,
+/// not per scan). Each call must write only its own outputs.
 void ParallelFor(int n, int threads, const std::function<void(int)>& fn) {
-  const int workers = std::max(1, std::min(threads, n));
-  if (workers == 1) {
-    for (int i = 0; i < n; ++i) fn(i);
-    return;
-  }
-  std::atomic<int> next{0};
-  std::vector<std::exception_ptr> errors(workers);
-  auto work = [&](int w) {
-    try {
-      for (int i = next++; i < n; i = next++) fn(i);
-    } catch (...) {
-      errors[w] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
-  for (auto& e : errors)
-    if (e) std::rethrow_exception(e);
+  ThreadPool::Shared(std::max(1, std::min(threads, n))).ParallelFor(n, fn);
 }
 
 /// A depth jump between two neighbouring returns (occlusion boundary or a surface almost along the beam).

@@ -41,6 +41,7 @@ void VisitRegistration(V& v, ScanToMapConfig& c) {
   v("convergence_translation_m", &c.convergence_translation_m);
   v("convergence_rotation_rad", &c.convergence_rotation_rad);
   v("min_correspondences", &c.min_correspondences), v("num_threads", &c.num_threads);
+  v("visibility_check", &c.visibility_check);
   v("degeneracy_remap", &c.degeneracy.remap), v("degeneracy_min_eigenvalue", &c.degeneracy.min_eigenvalue);
 }
 

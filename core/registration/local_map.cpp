@@ -30,6 +30,10 @@ double RotationAngle(const Pose3& a, const Pose3& b) {
   return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
 }
 
+/// Where a keyframe's points were seen from: its base origin in the map frame (the LiDAR rides within ~0.2 m of
+/// it; views only decide which side of a surface was seen).
+Eigen::Vector3f SensorOf(const Pose3& T_map_scan) { return T_map_scan.translation().cast<float>(); }
+
 struct Keyframe {
   Pose3 T_map_scan;
   Cloud edge_map;    ///< downsampled, map frame
@@ -42,10 +46,12 @@ struct Searchable {
   VoxelCentroidTable table;  ///< running per-voxel sums of the live keyframes' points
   Cloud::Ptr cloud{new Cloud};
   KdTree3f tree;
+  std::vector<Eigen::Vector3f> views;  ///< per cloud point: mean unit view vector (map frame)
   std::vector<float> xyz;  ///< Rebuild's scratch, capacity kept across scans
 
   void Rebuild() {
     table.Centroids(cloud.get());
+    table.MeanViews(&views);
     xyz.resize(3 * cloud->size());
     for (size_t i = 0; i < cloud->size(); ++i) {
       xyz[3 * i] = (*cloud)[i].x;
@@ -81,8 +87,9 @@ struct LocalMap::Impl {
   const Searchable& Get(FeatureKind kind) const { return kind == FeatureKind::kEdge ? edge : planar; }
 
   void PopFront() {
-    edge.table.Remove(keyframes.front().edge_map);
-    planar.table.Remove(keyframes.front().planar_map);
+    const Eigen::Vector3f sensor = SensorOf(keyframes.front().T_map_scan);
+    edge.table.Remove(keyframes.front().edge_map, sensor);
+    planar.table.Remove(keyframes.front().planar_map, sensor);
     keyframes.pop_front();
   }
 
@@ -124,8 +131,8 @@ void LocalMap::AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan) 
   kf.edge_map = Downsample(transformed, impl_->config.edge_voxel_m);
   pcl::transformPointCloud(features.less_flat, *transformed, M);
   kf.planar_map = Downsample(transformed, impl_->config.planar_voxel_m);
-  impl_->edge.table.Add(kf.edge_map);
-  impl_->planar.table.Add(kf.planar_map);
+  impl_->edge.table.Add(kf.edge_map, SensorOf(T_map_scan));
+  impl_->planar.table.Add(kf.planar_map, SensorOf(T_map_scan));
   impl_->keyframes.push_back(std::move(kf));
   impl_->Trim();
   impl_->Rebuild();
@@ -139,7 +146,8 @@ void LocalMap::Clear() {
 }
 
 int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std::vector<Eigen::Vector3d>* points,
-                      std::vector<float>* sq_dist_m2, float max_sq_dist_m2) const {
+                      std::vector<float>* sq_dist_m2, float max_sq_dist_m2,
+                      std::vector<Eigen::Vector3f>* views) const {
   ROTOLIDAR_CHECK(k >= 1 && k <= kMaxNearest && points != nullptr && sq_dist_m2 != nullptr, "k = " << k);
   const Searchable& s = impl_->Get(kind);
   const float query[3] = {float(p_map.x()), float(p_map.y()), float(p_map.z())};
@@ -151,6 +159,10 @@ int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std
   for (int i = 0; i < found; ++i) {
     const pcl::PointXYZI& p = (*s.cloud)[size_t(indices[i])];
     (*points)[size_t(i)] = Eigen::Vector3d(p.x, p.y, p.z);
+  }
+  if (views != nullptr) {
+    views->resize(size_t(found));
+    for (int i = 0; i < found; ++i) (*views)[size_t(i)] = s.views[size_t(indices[i])];
   }
   return found;
 }

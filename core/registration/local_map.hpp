@@ -63,9 +63,11 @@ class LocalMap {
   /// *sq_dist_m2 (squared distances [m^2], float as the tree computes them). Returns how many were found
   /// (0 for an empty cloud); 1 <= k <= kMaxNearest (checked). Both vectors are resized, never shrunk in capacity.
   /// Only points with squared distance < max_sq_dist_m2 count (default: all): fewer than k may come back.
+  /// With `views`, also each point's mean unit view vector (map frame, point -> the keyframes' sensor positions
+  /// that saw it; length ~1 when seen from one side, ~0 when both sides of a thin wall share a voxel).
   int Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std::vector<Eigen::Vector3d>* points,
-              std::vector<float>* sq_dist_m2,
-              float max_sq_dist_m2 = std::numeric_limits<float>::infinity()) const;
+              std::vector<float>* sq_dist_m2, float max_sq_dist_m2 = std::numeric_limits<float>::infinity(),
+              std::vector<Eigen::Vector3f>* views = nullptr) const;
 
   /// The downsampled cloud of `kind` in the map frame (intensity: averaged curvature of the merged points).
   const pcl::PointCloud<pcl::PointXYZI>& cloud(FeatureKind kind) const;

@@ -70,9 +70,15 @@ Eigen::Matrix<double, 3, 4> RotatedPointQuaternionJacobian(const Eigen::Quaterni
   return J;
 }
 
-PointToPlaneResidual::PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m)
-    : p_scan_(p_scan), n_map_(n_map), d_m_(d_m) {
+PointToPlaneResidual::PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m) {
+  Reset(p_scan, n_map, d_m);
+}
+
+void PointToPlaneResidual::Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m) {
   ROTOLIDAR_CHECK(std::abs(n_map.norm() - 1.0) < 1e-6, "plane normal must be unit, |n| = " << n_map.norm());
+  p_scan_ = p_scan;
+  n_map_ = n_map;
+  d_m_ = d_m;
 }
 
 bool PointToPlaneResidual::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
@@ -94,8 +100,14 @@ double PointToPlaneResidual::EvaluateTangent(const Pose3& T, Eigen::Matrix<doubl
 }
 
 PointToLineResidual::PointToLineResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map,
-                                         const Eigen::Vector3d& u_map)
-    : p_scan_(p_scan), a_map_(a_map) {
+                                         const Eigen::Vector3d& u_map) {
+  Reset(p_scan, a_map, u_map);
+}
+
+void PointToLineResidual::Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map,
+                                const Eigen::Vector3d& u_map) {
+  p_scan_ = p_scan;
+  a_map_ = a_map;
   ROTOLIDAR_CHECK(std::abs(u_map.norm() - 1.0) < 1e-6, "line direction must be unit, |u| = " << u_map.norm());
   // b1: u crossed with the world axis least aligned with u (well conditioned); b2 = u x b1.
   Eigen::Index axis = 0;

@@ -13,7 +13,8 @@
 // a rotation by 2|d|; residuals_test pins this), which is why the Hessian is computed from EvaluateTangent below
 // and never taken from Ceres' tangent-space Jacobian.
 //
-// Thread-safety: cost functions are immutable after construction; Evaluate is const and re-entrant.
+// Thread-safety: Evaluate is const and re-entrant. Reset (re-targets a pooled cost function at another
+// correspondence) must not run while a Ceres solve that uses the function is in progress.
 #include <array>
 
 #include <ceres/manifold.h>
@@ -48,6 +49,8 @@ Eigen::Matrix<double, 3, 4> RotatedPointQuaternionJacobian(const Eigen::Quaterni
 class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
  public:
   PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
+  /// Becomes PointToPlaneResidual(p_scan, n_map, d_m) (same checks).
+  void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [n^T, -n^T [R p]x].
   double EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 1, 6>* J) const;
@@ -65,6 +68,8 @@ class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
 class PointToLineResidual final : public ceres::SizedCostFunction<2, 7> {
  public:
   PointToLineResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map);
+  /// Becomes PointToLineResidual(p_scan, a_map, u_map) (same checks, same basis B).
+  void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [B^T, -B^T [R p]x].
   Eigen::Vector2d EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 2, 6>* J) const;

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <memory>
 
 #include <ceres/ceres.h>
 #include <Eigen/Eigenvalues>
 
+#include "core/registration/match_problem.hpp"
 #include "core/registration/residuals.hpp"
 #include "core/util/log.hpp"
 
@@ -48,6 +48,7 @@ struct NeighbourSet {
   Eigen::Vector3d q_map = Eigen::Vector3d::Zero();  ///< where the set was searched (map frame)
   double reuse_radius_m = -1.0;                     ///< the set is exact within this distance of q_map (< 0: never)
   std::vector<Eigen::Vector3d> points;              ///< the k nearest, nearest first (fewer: a sparse map)
+  std::vector<Eigen::Vector3f> views;               ///< their mean unit view vectors (LocalMap::Nearest)
   Fit fit = Fit::kUnknown;
   Eigen::Vector3d a_or_n = Eigen::Vector3d::Zero();  ///< line point (edge) or plane normal (planar)
   Eigen::Vector3d u = Eigen::Vector3d::Zero();       ///< line direction (edge)
@@ -75,7 +76,7 @@ double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Ve
     return max_sq;
   }
   thread_local std::vector<float> sq;
-  const int found = map.Nearest(kind, q_map, k + 1, &set->points, &sq, bound_sq);
+  const int found = map.Nearest(kind, q_map, k + 1, &set->points, &sq, bound_sq, &set->views);
   set->searched = true;
   set->q_map = q_map;
   set->fit = NeighbourSet::Fit::kUnknown;
@@ -85,8 +86,35 @@ double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Ve
     const double gap_m = std::sqrt(next_sq) - std::sqrt(double(sq[size_t(k - 1)]));
     set->reuse_radius_m = 0.5 * gap_m - kReuseMarginM;
   }
-  if (found > k) set->points.resize(size_t(k));
+  if (found > k) {
+    set->points.resize(size_t(k));
+    set->views.resize(size_t(k));
+  }
   return found >= k ? sq[size_t(k - 1)] : 0.0;
+}
+
+/// |cos| below which a view counts as grazing: it does not tell which side of a plane it came from.
+constexpr double kGrazingCos = 0.05;
+
+/// The plane fit of a neighbour set, respecting which side of the surface the map saw it from: neighbours seen
+/// from the other side than the scan point sees it (n . view of opposite signs: a thin wall's back face, first
+/// seen through a door, next to the front face in the map) are dropped and the plane refit from the rest; fewer
+/// than half the set left rejects the match. view_scan: scan point -> sensor (map frame). The decision is made
+/// when the set is (re)searched and cached with its fit (the side of a non-grazing view does not flip within
+/// the reuse radius of a converging registration).
+bool FitVisiblePlane(const Eigen::Vector3d& view_scan, const ScanToMapConfig& c, NeighbourSet* s) {
+  if (!FitPlane(s->points, c.max_plane_eigen_ratio, c.max_plane_deviation_m, &s->a_or_n, &s->d_m)) return false;
+  const double side_scan = s->a_or_n.dot(view_scan.normalized());
+  if (!c.visibility_check || std::abs(side_scan) < kGrazingCos) return true;
+  thread_local std::vector<Eigen::Vector3d> same_side;
+  same_side.clear();
+  for (size_t i = 0; i < s->points.size(); ++i) {
+    const double side = s->a_or_n.dot(s->views[i].cast<double>());
+    if (side * side_scan >= 0 || std::abs(side) < kGrazingCos) same_side.push_back(s->points[i]);
+  }
+  if (same_side.size() == s->points.size()) return true;
+  if (2 * same_side.size() < s->points.size()) return false;
+  return FitPlane(same_side, c.max_plane_eigen_ratio, c.max_plane_deviation_m, &s->a_or_n, &s->d_m);
 }
 
 /// Correspondences of every scan edge and planar point at the pose T_map_scan (neighbour sets from *cache where
@@ -117,9 +145,7 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
     const double kth_sq = KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, bound_sq, &s);
     if (int(s.points.size()) < k || kth_sq > max_sq) continue;
     if (s.fit == Fit::kUnknown)
-      s.fit = FitPlane(s.points, c.max_plane_eigen_ratio, c.max_plane_deviation_m, &s.a_or_n, &s.d_m)
-                  ? Fit::kAccepted
-                  : Fit::kRejected;
+      s.fit = FitVisiblePlane(T_map_scan.translation() - s.q_map, c, &s) ? Fit::kAccepted : Fit::kRejected;
     if (s.fit == Fit::kAccepted) m.planes.push_back({p_scan, s.a_or_n, s.d_m});
   }
   return m;
@@ -134,48 +160,18 @@ Matrix6d MetricOf(const Matches& m, const Pose3& T) {
   return DisplacementMetric(levers);
 }
 
-std::unique_ptr<ceres::LossFunction> MakeLoss(const ScanToMapConfig& c) {
-  switch (c.loss) {
-    case RobustLoss::kHuber: return std::make_unique<ceres::HuberLoss>(c.loss_scale_m);
-    case RobustLoss::kCauchy: return std::make_unique<ceres::CauchyLoss>(c.loss_scale_m);
-    case RobustLoss::kNone: break;
+/// Loads m into *problem (one residual block per match) and solves it from *T (in place). Returns the summary.
+ceres::Solver::Summary SolveMatches(const Matches& m, MatchProblem* problem, Pose3* T) {
+  problem->Resize(m.edges.size(), m.planes.size());
+  for (size_t i = 0; i < m.edges.size(); ++i) {
+    const EdgeMatch& e = m.edges[i];
+    problem->SetLine(i, e.p_scan, e.a_map, e.u_map);
   }
-  return nullptr;
-}
-
-/// This thread's Ceres context, shared by its problems (a Problem otherwise creates and destroys its own).
-ceres::Context* ThreadContext() {
-  thread_local const std::unique_ptr<ceres::Context> context(ceres::Context::Create());
-  return context.get();
-}
-
-/// Solves one Ceres problem over the pose block `x` (in place) for a fixed correspondence set: a residual block
-/// per match under `loss` (may be null), x on the PoseManifold. Returns the Ceres summary.
-ceres::Solver::Summary SolveMatches(const Matches& m, const ScanToMapConfig& c, ceres::LossFunction* loss,
-                                    double* x) {
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  po.disable_all_safety_checks = true;  // built right here: one 7-double block, fixed-size residuals
-  po.context = ThreadContext();
-  PoseManifold manifold;
-  std::deque<PointToLineResidual> lines;    // the cost functions outlive `problem` (declared after them)
-  std::deque<PointToPlaneResidual> planes;
-  ceres::Problem problem(po);
-  problem.AddParameterBlock(x, 7, &manifold);
-  for (const auto& e : m.edges) problem.AddResidualBlock(&lines.emplace_back(e.p_scan, e.a_map, e.u_map), loss, x);
-  for (const auto& p : m.planes) problem.AddResidualBlock(&planes.emplace_back(p.p_scan, p.n_map, p.d_m), loss, x);
-  ceres::Solver::Options options;
-  // 6 tangent unknowns: the normal equations (6x6) are far cheaper than a QR of the ~2000 x 6 Jacobian and, with
-  // LM's diagonal damping, well conditioned.
-  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = c.max_solver_iterations;
-  options.num_threads = c.num_threads;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  return summary;
+  for (size_t i = 0; i < m.planes.size(); ++i) {
+    const PlaneMatch& p = m.planes[i];
+    problem->SetPlane(i, p.p_scan, p.n_map, p.d_m);
+  }
+  return problem->Solve(T);
 }
 
 struct Evaluation {
@@ -275,16 +271,15 @@ struct OuterStep {
 
 /// Solves step->matches from step->T_before into step->T_after; with num_degenerate > 0 the update is remapped
 /// (its components along the num_degenerate weakest eigen-directions at the solution removed). Returns the update.
-Vector6d SolveStep(const ScanToMapConfig& config, int num_degenerate, ceres::LossFunction* loss, OuterStep* step,
+Vector6d SolveStep(const ScanToMapConfig& config, int num_degenerate, MatchProblem* problem, OuterStep* step,
                    double* initial_cost) {
-  PoseParameters x = PoseToParameters(step->T_before);
-  const ceres::Solver::Summary summary = SolveMatches(step->matches, config, loss, x.data());
+  Pose3 solved = step->T_before;
+  const ceres::Solver::Summary summary = SolveMatches(step->matches, problem, &solved);
   *initial_cost = summary.initial_cost;
   step->solver_iterations = int(summary.iterations.size());
-  const Pose3 solved = ParametersToPose(x.data());
   Vector6d delta = PoseBoxMinus(solved, step->T_before);
   if (num_degenerate > 0) {  // re-linearised every iteration: the weak directions turn with the rotation
-    const Evaluation e = Evaluate(step->matches, solved, loss);
+    const Evaluation e = Evaluate(step->matches, solved, problem->loss());
     const DegeneracyInfo here =
         AnalyzeDegeneracy(e.hessian, MetricOf(step->matches, solved), int(step->matches.size()), config.degeneracy);
     delta = ProjectionWithout(here, num_degenerate) * delta;
@@ -308,10 +303,9 @@ bool IsCycle(const Pose3& a, const Pose3& b, const ScanToMapConfig& c) {
 /// each other) repeats until max_correspondence_rebuilds and never converges (both updates have the same size),
 /// so it is not iterated: the result is the state the last rebuild would leave, counts included.
 ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& guess, const ScanToMapConfig& config,
-                      int num_degenerate, MatchCache* cache) {
+                      int num_degenerate, MatchCache* cache, MatchProblem* problem) {
   ScanToMapResult result;
   result.T_map_scan = guess;
-  const std::unique_ptr<ceres::LossFunction> loss = MakeLoss(config);
   const int n = config.max_correspondence_rebuilds;
   OuterStep prev, cur;  // cur: the latest outer iteration
   for (int it = 0; it < n; ++it) {
@@ -325,7 +319,7 @@ ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& 
       return result;
     }
     double initial_cost = 0.0;
-    const Vector6d delta = SolveStep(config, num_degenerate, loss.get(), &cur, &initial_cost);
+    const Vector6d delta = SolveStep(config, num_degenerate, problem, &cur, &initial_cost);
     if (it == 0) result.initial_cost = initial_cost;
     result.solver_iterations += cur.solver_iterations;
     result.iterations = it + 1;
@@ -346,7 +340,7 @@ ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& 
   }
   // Report at the final pose with the last correspondence set.
   const Matches& matches = cur.matches;
-  const Evaluation final_eval = Evaluate(matches, result.T_map_scan, loss.get());
+  const Evaluation final_eval = Evaluate(matches, result.T_map_scan, problem->loss());
   result.final_cost = final_eval.cost;
   result.rmse_m = final_eval.rmse_m;
   result.hessian = final_eval.hessian;
@@ -369,12 +363,13 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   // that at the guess instead (as LOAM does at its first iteration) misjudges a far guess (KITTI 0->1 from
   // identity, 0.7 m off, looks degenerate there and would freeze the very direction it has to move along).
   MatchCache cache;
-  ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0, &cache);
+  MatchProblem problem(config);  // one Ceres problem for every correspondence set of both phases
+  ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0, &cache, &problem);
   if (!config.degeneracy.remap || !full.degeneracy.degenerate) return full;
   // Phase 2 (Zhang et al.'s solution remapping): solve again from the guess with every update projected onto
   // the well-observed subspace, so the degenerate directions keep the guess (the prior / IMU's value).
   ScanToMapResult remapped =
-      Solve(scan, map, T_map_scan_guess, config, int(full.degeneracy.degenerate_directions.size()), &cache);
+      Solve(scan, map, T_map_scan_guess, config, int(full.degeneracy.degenerate_directions.size()), &cache, &problem);
   remapped.remapped = true;
   remapped.iterations += full.iterations;
   remapped.solver_iterations += full.solver_iterations;

@@ -38,6 +38,9 @@ struct ScanToMapConfig {
   double loss_scale_m = 0.1;              ///< residual [m] where the robust loss departs from least squares
   double convergence_translation_m = 1e-3;  ///< converged when one outer update moves less than this ...
   double convergence_rotation_rad = 1e-4;   ///< ... and turns less than this
+  /// Plane matches respect the side of the surface the map saw (LocalMap views): neighbours seen from the other
+  /// side than the scan point are dropped (thin walls: the back face must not match the front face's plane).
+  bool visibility_check = true;
   int min_correspondences = 20;           ///< fewer edge + planar matches -> not converged
   int num_threads = 1;                    ///< Ceres evaluation threads
   DegeneracyConfig degeneracy;

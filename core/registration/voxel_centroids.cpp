@@ -65,7 +65,7 @@ void VoxelCentroidTable::Grow() {
     if (voxels_[i].count != 0) index_[Find(voxels_[i].key)] = uint32_t(i);
 }
 
-void VoxelCentroidTable::Accumulate(const pcl::PointXYZI& p, int sign) {
+void VoxelCentroidTable::Accumulate(const pcl::PointXYZI& p, const Eigen::Vector3f& sensor, int sign) {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
   if (2 * (live_ + 1) > index_.size()) Grow();  // load factor <= 1/2
   const uint64_t key = KeyOf(p);
@@ -73,13 +73,13 @@ void VoxelCentroidTable::Accumulate(const pcl::PointXYZI& p, int sign) {
   if (index_[slot] == kEmpty) {
     ROTOLIDAR_CHECK(sign > 0, "VoxelCentroidTable::Remove of a point that was never added");
     index_[slot] = uint32_t(voxels_.size());
-    voxels_.push_back(Voxel{key, 0, 0, 0, 0, 0});
+    voxels_.push_back(Voxel{key, 0, 0, 0, 0, 0, 0, 0, 0});
     ++live_;
   }
   Voxel& v = voxels_[index_[slot]];
   v.count += sign;
   if (v.count == 0) {  // exact reset: no rounding residue survives the voxel
-    v = Voxel{key, 0, 0, 0, 0, 0};
+    v = Voxel{key, 0, 0, 0, 0, 0, 0, 0, 0};
     Erase(slot);
     --live_;
     ++dead_;
@@ -89,14 +89,21 @@ void VoxelCentroidTable::Accumulate(const pcl::PointXYZI& p, int sign) {
   v.y += sign * double(p.y);
   v.z += sign * double(p.z);
   v.intensity += sign * double(p.intensity);
+  const Eigen::Vector3f view = sensor - Eigen::Vector3f(p.x, p.y, p.z);
+  const float norm = view.norm();
+  if (norm > 0) {  // the same float operations for Add and Remove: the subtraction is exact
+    v.vx += sign * double(view.x() / norm);
+    v.vy += sign * double(view.y() / norm);
+    v.vz += sign * double(view.z() / norm);
+  }
 }
 
-void VoxelCentroidTable::Add(const pcl::PointCloud<pcl::PointXYZI>& points) {
-  for (const auto& p : points) Accumulate(p, +1);
+void VoxelCentroidTable::Add(const pcl::PointCloud<pcl::PointXYZI>& points, const Eigen::Vector3f& sensor) {
+  for (const auto& p : points) Accumulate(p, sensor, +1);
 }
 
-void VoxelCentroidTable::Remove(const pcl::PointCloud<pcl::PointXYZI>& points) {
-  for (const auto& p : points) Accumulate(p, -1);
+void VoxelCentroidTable::Remove(const pcl::PointCloud<pcl::PointXYZI>& points, const Eigen::Vector3f& sensor) {
+  for (const auto& p : points) Accumulate(p, sensor, -1);
   if (dead_ > 1024 && dead_ > live_) Compact();
 }
 
@@ -130,6 +137,16 @@ void VoxelCentroidTable::Centroids(pcl::PointCloud<pcl::PointXYZI>* out) const {
     out->push_back(p);
   }
   out->is_dense = true;
+}
+
+void VoxelCentroidTable::MeanViews(std::vector<Eigen::Vector3f>* out) const {
+  out->clear();
+  out->reserve(live_);
+  for (const Voxel& v : voxels_) {
+    if (v.count == 0) continue;
+    const double inv = 1.0 / double(v.count);
+    out->emplace_back(float(v.vx * inv), float(v.vy * inv), float(v.vz * inv));
+  }
 }
 
 }  // namespace rotolidar

@@ -8,11 +8,15 @@
 // count returns to 0 is dropped and its sums reset). Non-finite points are ignored (as VoxelGrid does).
 // Order: Centroids() lists the live voxels in the order they were first created (compaction keeps that order),
 // so the output depends only on the sequence of Add/Remove calls, never on hash or pointer values.
-// Contract: Remove must be given a point set previously Added and not yet removed (checked: a voxel's count
-// never goes negative). Thread-safety: none.
+// Views: Add/Remove may name the sensor position the points were seen from (same frame); each point then adds
+// its unit view vector (point -> sensor) to its voxel, and MeanViews() gives each centroid the mean of those
+// vectors (which side of a surface the map saw it from; ~0 where both sides merged in one voxel).
+// Contract: Remove must be given a point set previously Added (with the same sensor position) and not yet
+// removed (checked: a voxel's count never goes negative). Thread-safety: none.
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Core>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -22,12 +26,15 @@ class VoxelCentroidTable {
  public:
   explicit VoxelCentroidTable(double voxel_m);  ///< voxel_m > 0 (checked)
 
-  void Add(const pcl::PointCloud<pcl::PointXYZI>& points);
-  void Remove(const pcl::PointCloud<pcl::PointXYZI>& points);
+  void Add(const pcl::PointCloud<pcl::PointXYZI>& points, const Eigen::Vector3f& sensor = Eigen::Vector3f::Zero());
+  void Remove(const pcl::PointCloud<pcl::PointXYZI>& points,
+              const Eigen::Vector3f& sensor = Eigen::Vector3f::Zero());
   void Clear();
 
   /// The live voxels' centroids (x, y, z, intensity as float), creation order, into *out (replaced).
   void Centroids(pcl::PointCloud<pcl::PointXYZI>* out) const;
+  /// Per centroid (same order as Centroids), the mean unit view vector of its points, into *out (replaced).
+  void MeanViews(std::vector<Eigen::Vector3f>* out) const;
   size_t num_voxels() const { return live_; }
 
   /// The voxel key of a point under PCL VoxelGrid's indexing (21 bits per axis, two's complement).
@@ -38,9 +45,10 @@ class VoxelCentroidTable {
     uint64_t key = 0;
     int64_t count = 0;  ///< 0: dead (awaiting compaction)
     double x = 0, y = 0, z = 0, intensity = 0;
+    double vx = 0, vy = 0, vz = 0;  ///< sum of unit view vectors
   };
   static constexpr uint32_t kEmpty = 0xFFFFFFFFu;
-  void Accumulate(const pcl::PointXYZI& p, int sign);
+  void Accumulate(const pcl::PointXYZI& p, const Eigen::Vector3f& sensor, int sign);
   size_t Home(uint64_t key) const;
   size_t Find(uint64_t key) const;  ///< the index_ slot holding key, or the empty slot where it would go
   void Erase(size_t slot);          ///< backward-shift deletion (no tombstones)

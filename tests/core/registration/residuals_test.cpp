@@ -179,6 +179,34 @@ TEST(Residuals, ValuesAreSignedPlaneDistanceAndLineDistance) {
   EXPECT_NEAR(std::hypot(r_line[0], r_line[1]), distance, 1e-12);
 }
 
+TEST(Residuals, ResetEqualsAFreshlyConstructedResidual) {
+  RandomStream rng(11);
+  PointToLineResidual line(RandomVector(rng, 3.0), RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized());
+  PointToPlaneResidual plane(RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized(), 0.3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Vector3d p = RandomVector(rng, 3.0), a = RandomVector(rng, 3.0);
+    const Eigen::Vector3d u = RandomVector(rng, 1.0).normalized();
+    const double d = rng.Normal(0.0, 2.0);
+    line.Reset(p, a, u);
+    plane.Reset(p, u, d);
+    const PointToLineResidual fresh_line(p, a, u);
+    const PointToPlaneResidual fresh_plane(p, u, d);
+    const PoseParameters x = PoseToParameters(RandomPose(rng));
+    const double* params[] = {x.data()};
+    double r[2], r_fresh[2], J[14], J_fresh[14];
+    double* jac[] = {J};
+    double* jac_fresh[] = {J_fresh};
+    line.Evaluate(params, r, jac);
+    fresh_line.Evaluate(params, r_fresh, jac_fresh);
+    for (int i = 0; i < 2; ++i) EXPECT_EQ(r[i], r_fresh[i]);
+    for (int i = 0; i < 14; ++i) EXPECT_EQ(J[i], J_fresh[i]);
+    plane.Evaluate(params, r, jac);
+    fresh_plane.Evaluate(params, r_fresh, jac_fresh);
+    EXPECT_EQ(r[0], r_fresh[0]);
+    for (int i = 0; i < 7; ++i) EXPECT_EQ(J[i], J_fresh[i]);
+  }
+}
+
 TEST(Degeneracy, DisplacementMetricIsTheMeanSquaredPointMotion) {
   RandomStream rng(7, "test.registration.metric");
   std::vector<Eigen::Vector3d> levers;

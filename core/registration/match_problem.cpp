@@ -1,0 +1,70 @@
+#include "core/registration/match_problem.hpp"
+
+namespace rotolidar {
+namespace {
+
+/// This thread's Ceres context, shared by its problems (a Problem otherwise creates and destroys its own).
+ceres::Context* ThreadContext() {
+  thread_local const std::unique_ptr<ceres::Context> context(ceres::Context::Create());
+  return context.get();
+}
+
+/// Grows (adding blocks for pooled, placeholder-initialised cost functions) or shrinks (removing the most
+/// recently added blocks) `ids` to n blocks of one residual type.
+template <typename Residual, typename MakePlaceholder>
+void ResizeBlocks(size_t n, ceres::Problem* problem, ceres::LossFunction* loss, double* x, std::deque<Residual>* pool,
+                  std::vector<ceres::ResidualBlockId>* ids, MakePlaceholder make) {
+  while (ids->size() > n) {
+    problem->RemoveResidualBlock(ids->back());
+    ids->pop_back();
+  }
+  while (pool->size() < n) make(pool);
+  while (ids->size() < n) ids->push_back(problem->AddResidualBlock(&(*pool)[ids->size()], loss, x));
+}
+
+}  // namespace
+
+std::unique_ptr<ceres::LossFunction> MakeLoss(const ScanToMapConfig& c) {
+  switch (c.loss) {
+    case RobustLoss::kHuber: return std::make_unique<ceres::HuberLoss>(c.loss_scale_m);
+    case RobustLoss::kCauchy: return std::make_unique<ceres::CauchyLoss>(c.loss_scale_m);
+    case RobustLoss::kNone: break;
+  }
+  return nullptr;
+}
+
+MatchProblem::MatchProblem(const ScanToMapConfig& config) : loss_(MakeLoss(config)) {
+  // 6 tangent unknowns: the normal equations (6x6) are far cheaper than a QR of the ~2000 x 6 Jacobian and, with
+  // LM's diagonal damping, well conditioned.
+  options_.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  options_.max_num_iterations = config.max_solver_iterations;
+  options_.num_threads = config.num_threads;
+  options_.logging_type = ceres::SILENT;
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.disable_all_safety_checks = true;  // built right here: one 7-double block, fixed-size residuals
+  po.enable_fast_removal = true;        // Resize removes blocks: O(1) each instead of a scan of all blocks
+  po.context = ThreadContext();
+  problem_ = std::make_unique<ceres::Problem>(po);
+  problem_->AddParameterBlock(x_.data(), 7, &manifold_);
+}
+
+void MatchProblem::Resize(size_t num_lines, size_t num_planes) {
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero(), unit = Eigen::Vector3d::UnitX();
+  ResizeBlocks(num_lines, problem_.get(), loss_.get(), x_.data(), &lines_, &line_ids_,
+               [&](std::deque<PointToLineResidual>* pool) { pool->emplace_back(zero, zero, unit); });
+  ResizeBlocks(num_planes, problem_.get(), loss_.get(), x_.data(), &planes_, &plane_ids_,
+               [&](std::deque<PointToPlaneResidual>* pool) { pool->emplace_back(zero, unit, 0.0); });
+}
+
+ceres::Solver::Summary MatchProblem::Solve(Pose3* T) {
+  x_ = PoseToParameters(*T);
+  ceres::Solver::Summary summary;
+  ceres::Solve(options_, problem_.get(), &summary);
+  *T = ParametersToPose(x_.data());
+  return summary;
+}
+
+}  // namespace rotolidar

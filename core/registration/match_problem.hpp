@@ -1,0 +1,65 @@
+#pragma once
+// The Ceres side of scan-to-map registration (core/registration/scan_to_map.hpp): ONE ceres::Problem over the
+// 7-double pose block (PoseManifold, residuals.hpp) that every correspondence set of a Register call is solved
+// in. Per set, the problem is resized to one residual block per match (a point-to-line or point-to-plane cost
+// function from a pool, re-targeted in place with Reset, each block under the configured per-point robust
+// loss); blocks are only added or removed when the counts grow or shrink, so a rebuild costs O(changed count)
+// problem edits instead of building and destroying ~2000 blocks. The optimum and the Ceres iterates are those of
+// a freshly built problem with the same blocks (only the residual order, i.e. float summation order, may differ).
+//
+// Thread-safety: one MatchProblem per thread (it is not re-entrant); distinct instances are independent (the
+// Ceres context is per thread).
+#include <cstddef>
+#include <deque>
+#include <memory>
+#include <vector>
+
+#include <ceres/ceres.h>
+#include <Eigen/Core>
+
+#include "core/registration/residuals.hpp"
+#include "core/registration/scan_to_map.hpp"
+#include "core/types/geometry.hpp"
+
+namespace rotolidar {
+
+/// The configured robust loss for one residual [m]: Huber / Cauchy with scale loss_scale_m, or nullptr (none).
+std::unique_ptr<ceres::LossFunction> MakeLoss(const ScanToMapConfig& c);
+
+class MatchProblem {
+ public:
+  /// Solver options (DENSE_NORMAL_CHOLESKY, max_solver_iterations, num_threads) and loss from `config`.
+  explicit MatchProblem(const ScanToMapConfig& config);
+  MatchProblem(const MatchProblem&) = delete;
+  MatchProblem& operator=(const MatchProblem&) = delete;
+
+  /// The loss every residual block is under (nullptr: least squares); lives as long as this object.
+  const ceres::LossFunction* loss() const { return loss_.get(); }
+
+  /// Makes the problem hold exactly num_lines point-to-line and num_planes point-to-plane blocks. Blocks kept
+  /// from the previous size keep their old correspondence until SetLine / SetPlane: set every index before Solve.
+  void Resize(size_t num_lines, size_t num_planes);
+  /// Re-targets line block i < num_lines (PointToLineResidual's contract: |u_map| = 1).
+  void SetLine(size_t i, const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map) {
+    lines_[i].Reset(p_scan, a_map, u_map);
+  }
+  /// Re-targets plane block i < num_planes (PointToPlaneResidual's contract: |n_map| = 1).
+  void SetPlane(size_t i, const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m) {
+    planes_[i].Reset(p_scan, n_map, d_m);
+  }
+
+  /// Runs Ceres Levenberg-Marquardt on the current blocks from *T; *T becomes the solution. Returns the summary.
+  ceres::Solver::Summary Solve(Pose3* T);
+
+ private:
+  std::unique_ptr<ceres::LossFunction> loss_;
+  ceres::Solver::Options options_;
+  PoseParameters x_{};
+  PoseManifold manifold_;
+  std::deque<PointToLineResidual> lines_;  ///< pool: the first line_ids_.size() are in the problem
+  std::deque<PointToPlaneResidual> planes_;
+  std::vector<ceres::ResidualBlockId> line_ids_, plane_ids_;
+  std::unique_ptr<ceres::Problem> problem_;  ///< declared last: destroyed before what it points to
+};
+
+}  // namespace rotolidar

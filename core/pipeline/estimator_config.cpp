@@ -19,12 +19,6 @@ LocalMapConfig EstimatorLocalMapDefaults() {
   return c;
 }
 
-ScanToMapConfig EstimatorRegistrationDefaults() {
-  ScanToMapConfig c;
-  c.num_neighbours = 10;
-  return c;
-}
-
 SlidingWindowConfig EstimatorWindowDefaults() {
   SlidingWindowConfig c;
   c.max_iterations = 3;

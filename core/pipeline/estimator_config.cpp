@@ -22,6 +22,7 @@ LocalMapConfig EstimatorLocalMapDefaults() {
 SlidingWindowConfig EstimatorWindowDefaults() {
   SlidingWindowConfig c;
   c.max_iterations = 3;
+  c.linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
   return c;
 }
 

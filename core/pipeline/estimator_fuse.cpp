@@ -210,11 +210,19 @@ void Estimator::UpdateMap(const FeatureSet& features, const Pose3& T_world_base,
     local_map_.AddKeyframe(features, T_world_base);
     scans_since_keyframe_ = 0;
   }
-  std::vector<Eigen::Vector3d> p_world;
-  p_world.reserve(preprocessed_.size());
-  for (const ScanPoint& p : preprocessed_)
-    if (p.range_m <= config_.output_map_max_range_m) p_world.push_back(T_world_base * p.p_base.cast<double>());
-  dense_map_.Add(p_world);
+  // World points in stack chunks (no per-scan heap buffer; the map sees the same sequence as in one call).
+  constexpr size_t kChunk = 256;
+  Eigen::Vector3d chunk[kChunk];
+  size_t n = 0;
+  for (const ScanPoint& p : preprocessed_) {
+    if (!(p.range_m <= config_.output_map_max_range_m)) continue;
+    chunk[n++] = T_world_base * p.p_base.cast<double>();
+    if (n == kChunk) {
+      dense_map_.Add(chunk, n);
+      n = 0;
+    }
+  }
+  dense_map_.Add(chunk, n);
   report->timings.map_ms = watch.ms();
 }
 

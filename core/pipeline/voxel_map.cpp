@@ -15,9 +15,19 @@ VoxelMap::VoxelMap(double voxel_size_m, int max_points_per_voxel)
   ROTOLIDAR_CHECK(voxel_size_m > 0 && max_points_per_voxel >= 1, "bad VoxelMap parameters");
 }
 
-VoxelMap::Key VoxelMap::KeyOf(const Eigen::Vector3d& p) const {
-  return {int32_t(std::floor(p.x() / voxel_size_m_)), int32_t(std::floor(p.y() / voxel_size_m_)),
-          int32_t(std::floor(p.z() / voxel_size_m_))};
+namespace {
+
+/// int32_t(std::floor(d)) without the libm call (no SSE4.1 round instruction in the baseline ISA): exact for every
+/// d whose floor fits int32_t (the only case where the cast is defined).
+inline int32_t FloorToInt(double d) {
+  const int64_t i = int64_t(d);  // truncation toward zero
+  return int32_t(double(i) > d ? i - 1 : i);
+}
+
+}  // namespace
+
+inline VoxelMap::Key VoxelMap::KeyOf(const Eigen::Vector3d& p) const {
+  return {FloorToInt(p.x() / voxel_size_m_), FloorToInt(p.y() / voxel_size_m_), FloorToInt(p.z() / voxel_size_m_)};
 }
 
 size_t VoxelMap::HomeSlot(const Key& key) const {
@@ -36,18 +46,29 @@ void VoxelMap::Rehash(size_t num_slots) {
   for (size_t v = 0; v < keys_.size(); ++v) table_[SlotOf(keys_[v])] = Slot{keys_[v], uint32_t(v)};
 }
 
-VoxelMap::Key VoxelMap::BlockKeyOf(const Key& v) {
+inline VoxelMap::Key VoxelMap::BlockKeyOf(const Key& v) {
   return {v.x >> kBlockBits, v.y >> kBlockBits, v.z >> kBlockBits};  // arithmetic shift: floor division
 }
 
-size_t VoxelMap::BitOf(const Key& v) {
-  const uint32_t m = kBlock - 1;
-  return size_t(uint32_t(v.x) & m) | size_t(uint32_t(v.y) & m) << kBlockBits |
-         size_t(uint32_t(v.z) & m) << (2 * kBlockBits);
+// Brick layout: bits 0-5 a 4^3 brick (one word), bits 6-8 a 2^3 group of bricks (one 64-byte line: 8^3 voxels),
+// bits 9-14 the line within the block. Any surface through a line's 40 cm cube shares it (a row-major layout
+// gave a vertical wall a new line per 5 cm of height: a cache miss per point).
+inline size_t VoxelMap::CacheSlotOf(const Key& b) {
+  return size_t(uint32_t(b.x) * 73856093u ^ uint32_t(b.y) * 19349663u ^ uint32_t(b.z) * 83492791u) % kBlockCache;
+}
+
+inline size_t VoxelMap::BitOf(const Key& v) {
+  const uint32_t x = uint32_t(v.x), y = uint32_t(v.y), z = uint32_t(v.z);
+  const auto field = [&](int shift, uint32_t mask, int width) {
+    return size_t((x >> shift) & mask) | size_t((y >> shift) & mask) << width |
+           size_t((z >> shift) & mask) << (2 * width);
+  };
+  return field(0, 3, 2) | field(2, 1, 1) << 6 | field(3, 3, 2) << 9;
 }
 
 VoxelMap::BlockBits* VoxelMap::FindBlock(const Key& block_key, bool create) {
-  if (last_block_ != nullptr && last_block_key_ == block_key) return last_block_;
+  BlockCacheEntry& cached = block_cache_[CacheSlotOf(block_key)];
+  if (cached.bits != nullptr && cached.key == block_key) return cached.bits;
   if (block_table_.empty() || (create && 2 * (blocks_.size() + 1) > block_table_.size())) {
     std::vector<BlockSlot> old = std::move(block_table_);
     block_table_.assign(std::max<size_t>(256, 2 * old.size()), BlockSlot{{0, 0, 0}, kEmpty});
@@ -67,9 +88,8 @@ VoxelMap::BlockBits* VoxelMap::FindBlock(const Key& block_key, bool create) {
     blocks_.push_back(std::make_unique<BlockBits>());
     blocks_.back()->fill(0);
   }
-  last_block_key_ = block_key;
-  last_block_ = blocks_[block_table_[slot].block].get();
-  return last_block_;
+  cached = BlockCacheEntry{block_key, blocks_[block_table_[slot].block].get()};
+  return cached.bits;
 }
 
 void VoxelMap::MarkFull(const Key& voxel) {
@@ -80,19 +100,52 @@ void VoxelMap::MarkFull(const Key& voxel) {
 void VoxelMap::RebuildFullBits() {
   block_table_.clear();
   blocks_.clear();
-  last_block_ = nullptr;
+  block_cache_.fill(BlockCacheEntry{});
   for (size_t v = 0; v < keys_.size(); ++v)
     if (counts_[v] >= uint32_t(max_points_per_voxel_)) MarkFull(keys_[v]);
 }
 
-void VoxelMap::Add(const std::vector<Eigen::Vector3d>& p_world) {
+// One point per voxel: a voxel exists iff it is full, so its bit is the whole index and the large voxel table is
+// never probed (a new voxel costs appends and one bit, no cache miss into table_).
+void VoxelMap::AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n) {
+  constexpr size_t kBatch = 64;  // pass 1 finds (and prefetches) the words, pass 2 tests them in order
+  uint64_t* words[kBatch];
+  uint64_t masks[kBatch];
+  Key keys[kBatch];
+  for (size_t begin = 0; begin < n; begin += kBatch) {
+    const size_t count = std::min(kBatch, n - begin);
+    for (size_t i = 0; i < count; ++i) {
+      const Key key = KeyOf(p_world[begin + i]);
+      const size_t bit = BitOf(key);
+      const Key block_key = BlockKeyOf(key);
+      BlockBits* bits = FindBlock(block_key, true);
+      keys[i] = key;
+      words[i] = &(*bits)[bit >> 6];
+      masks[i] = uint64_t(1) << (bit & 63);
+      __builtin_prefetch(words[i], 1);
+    }
+    for (size_t i = 0; i < count; ++i) {
+      if (*words[i] & masks[i]) continue;  // the voxel is full
+      *words[i] |= masks[i];
+      keys_.push_back(keys[i]);
+      counts_.push_back(1);
+      points_.push_back(p_world[begin + i]);
+      ++num_points_;
+    }
+  }
+}
+
+void VoxelMap::Add(const std::vector<Eigen::Vector3d>& p_world) { Add(p_world.data(), p_world.size()); }
+
+void VoxelMap::Add(const Eigen::Vector3d* p_world, size_t n) {
+  if (max_points_per_voxel_ == 1) return AddOnePerVoxel(p_world, n);
   // Room for every point to open a voxel, so the table stays put during the loop.
   size_t num_slots = std::max<size_t>(table_.size(), 1024);
-  while (2 * (keys_.size() + p_world.size()) > num_slots) num_slots *= 2;
+  while (2 * (keys_.size() + n) > num_slots) num_slots *= 2;
   if (num_slots != table_.size()) Rehash(num_slots);
   const double min_sq = min_spacing_m_ * min_spacing_m_;
   const size_t per_voxel = size_t(max_points_per_voxel_);
-  for (size_t i = 0; i < p_world.size(); ++i) {
+  for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d& p = p_world[i];
     const Key key = KeyOf(p);
     if (const BlockBits* bits = FindBlock(BlockKeyOf(key), false)) {

@@ -1,7 +1,9 @@
 #pragma once
 // A sparse voxel map of world points (KISS-ICP's voxel hash map): at most `max_points_per_voxel` points per
 // voxel, so density stays bounded however long the rig dwells. Used as the local map (registration target)
-// and as the global map (the dense output).
+// and as the global map (the dense output). Voxel of p: floor(p / voxel_size_m) per axis (double division).
+// With one point per voxel the full-voxel bits below are the whole index (a voxel exists iff it is full), so the
+// voxel table stays empty; with more, the table finds a voxel's points. Thread-safety: none.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -19,6 +21,9 @@ class VoxelMap {
   /// Adds world points; a point is kept when its voxel has room and it is at least voxel/sqrt(n) from the
   /// voxel's points already there (uniform spread inside the voxel).
   void Add(const std::vector<Eigen::Vector3d>& p_world);
+  /// The same for n points at p_world (not kept; the caller may reuse the buffer, e.g. in chunks: adding a
+  /// sequence in pieces gives the same map as adding it at once).
+  void Add(const Eigen::Vector3d* p_world, size_t n);
   /// Removes voxels whose centre is farther than max_distance_m from `center_world`.
   void RemoveFar(const Eigen::Vector3d& center_world, double max_distance_m);
   /// All points (order unspecified but deterministic for the same insertion sequence).
@@ -42,6 +47,7 @@ class VoxelMap {
   size_t HomeSlot(const Key& key) const;  ///< where the key's probe starts (its hash)
   size_t SlotOf(const Key& key) const;    ///< the key's slot, or the empty slot where it would go
   void Rehash(size_t num_slots);         ///< rebuilds the table from keys_ (num_slots: a power of two)
+  void AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n);  ///< Add for max_points_per_voxel 1
 
   // Full-voxel filter: one bit per voxel, set once the voxel holds max_points_per_voxel points, in blocks of
   // kBlock^3 voxels found through a small table of block keys. A scan mostly revisits full voxels of surfaces seen
@@ -63,8 +69,13 @@ class VoxelMap {
 
   std::vector<BlockSlot> block_table_;              ///< linear probing, power-of-two size, at most half full
   std::vector<std::unique_ptr<BlockBits>> blocks_;  ///< per block its bits (stable addresses)
-  Key last_block_key_{0, 0, 0};                     ///< FindBlock's one-entry cache
-  BlockBits* last_block_ = nullptr;
+  struct BlockCacheEntry {
+    Key key{0, 0, 0};
+    BlockBits* bits = nullptr;  ///< nullptr: unused
+  };
+  static constexpr size_t kBlockCache = 64;
+  static size_t CacheSlotOf(const Key& block_key);
+  std::array<BlockCacheEntry, kBlockCache> block_cache_{};  ///< FindBlock's direct-mapped cache (the ring's blocks)
 
   double voxel_size_m_;
   int max_points_per_voxel_;

@@ -39,7 +39,7 @@ void KdTree3f::Build(const std::vector<float>& xyz) {
   for (int i = 0; i < n; ++i) items[size_t(i)] = {{xyz[size_t(3 * i)], xyz[size_t(3 * i + 1)], xyz[size_t(3 * i + 2)]}, i};
   nodes_.clear();
   nodes_.reserve(size_t(2 * (n / kLeafSize + 1)));
-  if (n > 0) BuildRange(0, n);
+  if (n > 0) BuildRoot(n);
   points_.resize(xyz.size());
   original_.resize(size_t(n));
   for (int i = 0; i < n; ++i) {
@@ -48,48 +48,100 @@ void KdTree3f::Build(const std::vector<float>& xyz) {
   }
 }
 
-int KdTree3f::BuildRange(int begin, int end) {
+namespace {
+
+struct Box {
+  float lo[3], hi[3];
+  void Reset() {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::numeric_limits<float>::infinity();
+      hi[d] = -std::numeric_limits<float>::infinity();
+    }
+  }
+  void Grow(const float p[3]) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[d]);
+      hi[d] = std::max(hi[d], p[d]);
+    }
+  }
+};
+
+/// libstdc++'s std::partition (bidirectional form) step for step, so the arrangement and hence the tree are the
+/// ones std::partition gives; on the way, the bounding boxes of both sides (each element is counted when it
+/// settles on its side).
+template <class Item, class Pred>
+Item* PartitionWithBoxes(Item* first, Item* last, Pred pred, Box* left, Box* right) {
+  left->Reset();
+  right->Reset();
+  while (true) {
+    while (true) {
+      if (first == last) return first;
+      if (!pred(*first)) break;
+      left->Grow(first->p);
+      ++first;
+    }
+    --last;
+    while (true) {
+      if (first == last) {  // the item at first failed pred above: it is the right side's first
+        right->Grow(first->p);
+        return first;
+      }
+      if (pred(*last)) break;
+      right->Grow(last->p);
+      --last;
+    }
+    std::iter_swap(first, last);
+    left->Grow(first->p);
+    right->Grow(last->p);
+    ++first;
+  }
+}
+
+}  // namespace
+
+void KdTree3f::BuildRoot(int n) {
+  Box box;
+  box.Reset();
+  for (int i = 0; i < n; ++i) box.Grow(scratch_[size_t(i)].p);
+  BuildRange(0, n, box.lo, box.hi);
+}
+
+int KdTree3f::BuildRange(int begin, int end, const float lo[3], const float hi[3]) {
   const int self = int(nodes_.size());
   nodes_.emplace_back();
-  if (end - begin <= kLeafSize) {
-    nodes_[size_t(self)].a = begin;
-    nodes_[size_t(self)].b = end;
-    return self;
-  }
-  Item* first = scratch_.data() + begin;
-  Item* last = scratch_.data() + end;
-  float lo[3] = {first->p[0], first->p[1], first->p[2]};
-  float hi[3] = {lo[0], lo[1], lo[2]};
-  for (const Item* it = first + 1; it != last; ++it)
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], it->p[d]);
-      hi[d] = std::max(hi[d], it->p[d]);
-    }
   int axis = 0;
   for (int d = 1; d < 3; ++d)
     if (hi[d] - lo[d] > hi[axis] - lo[axis]) axis = d;
-  if (!(hi[axis] > lo[axis])) {  // all points coincide: one (oversized) leaf
+  // A leaf when small enough, or when all points coincide (one oversized leaf).
+  if (end - begin <= kLeafSize || !(hi[axis] > lo[axis])) {
     nodes_[size_t(self)].a = begin;
     nodes_[size_t(self)].b = end;
     return self;
   }
-  // Midpoint split of the cell's widest side (one partition pass; the children's extents along `axis` are
-  // tracked on the way), then both children are non-empty: lo and hi are attained on either side of the midpoint.
+  // Midpoint split of the cell's widest side (lo/hi: the exact bounding box of the range), one partition pass
+  // that also yields both children's boxes; both children are non-empty: lo and hi are attained on either side.
+  Item* first = scratch_.data() + begin;
+  Item* last = scratch_.data() + end;
   const float mid_value = 0.5f * (lo[axis] + hi[axis]);
-  Item* split = std::partition(first, last, [&](const Item& it) { return it.p[axis] < mid_value; });
-  if (split == first) ++split;  // float midpoint rounded onto lo: keep lo's points left
-  float left_max = -std::numeric_limits<float>::infinity(), right_min = std::numeric_limits<float>::infinity();
-  for (const Item* it = first; it != split; ++it) left_max = std::max(left_max, it->p[axis]);
-  for (const Item* it = split; it != last; ++it) right_min = std::min(right_min, it->p[axis]);
+  Box left, right;
+  Item* split = PartitionWithBoxes(first, last, [&](const Item& it) { return it.p[axis] < mid_value; }, &left,
+                                   &right);
+  if (split == first) {  // float midpoint rounded onto lo: keep lo's points left (the first item moves over)
+    ++split;
+    left.Reset();
+    right.Reset();
+    left.Grow(first->p);
+    for (const Item* it = split; it != last; ++it) right.Grow(it->p);
+  }
   const int mid = int(split - scratch_.data());
-  const int left = BuildRange(begin, mid);
-  const int right = BuildRange(mid, end);
+  const int left_node = BuildRange(begin, mid, left.lo, left.hi);
+  const int right_node = BuildRange(mid, end, right.lo, right.hi);
   Node& node = nodes_[size_t(self)];
   node.axis = axis;
-  node.left_max = left_max;
-  node.right_min = right_min;
-  node.a = left;
-  node.b = right;
+  node.left_max = left.hi[axis];
+  node.right_min = right.lo[axis];
+  node.a = left_node;
+  node.b = right_node;
   return self;
 }
 

@@ -40,7 +40,9 @@ class KdTree3f {
     int index;
   };
   struct Result;
-  int BuildRange(int begin, int end);  ///< over scratch_[begin, end); returns the node
+  void BuildRoot(int n);  ///< over scratch_[0, n), n > 0
+  /// Over scratch_[begin, end) whose exact bounding box is [lo, hi]; returns the node.
+  int BuildRange(int begin, int end, const float lo[3], const float hi[3]);
   void Search(int node, const float q[3], float min_sq, float* axis_sq, Result* r) const;
 
   std::vector<float> points_;    ///< reordered so that every leaf's points are contiguous

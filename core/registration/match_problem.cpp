@@ -1,5 +1,7 @@
 #include "core/registration/match_problem.hpp"
 
+#include <algorithm>
+
 namespace rotolidar {
 namespace {
 
@@ -9,17 +11,23 @@ ceres::Context* ThreadContext() {
   return context.get();
 }
 
-/// Grows (adding blocks for pooled, placeholder-initialised cost functions) or shrinks (removing the most
-/// recently added blocks) `ids` to n blocks of one residual type.
+/// Makes `pool` (a deque: its elements never move) hold at least n per-point residuals, placeholders from `make`,
+/// and re-blocks its first n into ceil(n / group_size) GroupedResidual blocks: the old blocks are removed and new
+/// ones added (a few dozen problem edits per correspondence set, however many points change).
 template <typename Residual, typename MakePlaceholder>
-void ResizeBlocks(size_t n, ceres::Problem* problem, ceres::LossFunction* loss, double* x, std::deque<Residual>* pool,
-                  std::vector<ceres::ResidualBlockId>* ids, MakePlaceholder make) {
-  while (ids->size() > n) {
-    problem->RemoveResidualBlock(ids->back());
-    ids->pop_back();
-  }
+void RegroupBlocks(size_t n, size_t group_size, ceres::Problem* problem, const ceres::LossFunction* loss, double* x,
+                   std::deque<Residual>* pool, std::deque<GroupedResidual<Residual>>* groups,
+                   std::vector<ceres::ResidualBlockId>* ids, MakePlaceholder make) {
+  for (ceres::ResidualBlockId id : *ids) problem->RemoveResidualBlock(id);
+  ids->clear();
   while (pool->size() < n) make(pool);
-  while (ids->size() < n) ids->push_back(problem->AddResidualBlock(&(*pool)[ids->size()], loss, x));
+  for (size_t begin = 0; begin < n; begin += group_size) {
+    if (groups->size() <= ids->size()) groups->emplace_back(loss);
+    GroupedResidual<Residual>& g = (*groups)[ids->size()];
+    g.Clear();
+    for (size_t i = begin; i < std::min(begin + group_size, n); ++i) g.Add(&(*pool)[i]);
+    ids->push_back(problem->AddResidualBlock(&g, nullptr, x));  // the loss is applied per point, inside
+  }
 }
 
 }  // namespace
@@ -53,10 +61,10 @@ MatchProblem::MatchProblem(const ScanToMapConfig& config) : loss_(MakeLoss(confi
 
 void MatchProblem::Resize(size_t num_lines, size_t num_planes) {
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero(), unit = Eigen::Vector3d::UnitX();
-  ResizeBlocks(num_lines, problem_.get(), loss_.get(), x_.data(), &lines_, &line_ids_,
-               [&](std::deque<PointToLineResidual>* pool) { pool->emplace_back(zero, zero, unit); });
-  ResizeBlocks(num_planes, problem_.get(), loss_.get(), x_.data(), &planes_, &plane_ids_,
-               [&](std::deque<PointToPlaneResidual>* pool) { pool->emplace_back(zero, unit, 0.0); });
+  RegroupBlocks(num_lines, kPointsPerGroup, problem_.get(), loss_.get(), x_.data(), &lines_, &line_groups_,
+                &line_ids_, [&](std::deque<PointToLineResidual>* pool) { pool->emplace_back(zero, zero, unit); });
+  RegroupBlocks(num_planes, kPointsPerGroup, problem_.get(), loss_.get(), x_.data(), &planes_, &plane_groups_,
+                &plane_ids_, [&](std::deque<PointToPlaneResidual>* pool) { pool->emplace_back(zero, unit, 0.0); });
 }
 
 ceres::Solver::Summary MatchProblem::Solve(Pose3* T) {

@@ -1,11 +1,13 @@
 #pragma once
 // The Ceres side of scan-to-map registration (core/registration/scan_to_map.hpp): ONE ceres::Problem over the
 // 7-double pose block (PoseManifold, residuals.hpp) that every correspondence set of a Register call is solved
-// in. Per set, the problem is resized to one residual block per match (a point-to-line or point-to-plane cost
-// function from a pool, re-targeted in place with Reset, each block under the configured per-point robust
-// loss); blocks are only added or removed when the counts grow or shrink, so a rebuild costs O(changed count)
-// problem edits instead of building and destroying ~2000 blocks. The optimum and the Ceres iterates are those of
-// a freshly built problem with the same blocks (only the residual order, i.e. float summation order, may differ).
+// in. The matches live in two pools of per-point cost functions (point-to-line, point-to-plane; re-targeted in
+// place with SetLine / SetPlane); the problem holds them as GroupedResidual blocks of up to kPointsPerGroup
+// consecutive points each, every point under the configured per-point robust loss applied inside the group
+// exactly as Ceres applies a block's loss. So the gradient, Gauss-Newton matrix, LM steps, costs and optimum
+// are those of the problem with one residual block per match under that loss (up to float rounding; pinned by
+// scan_to_map_test's MatchProblem tests), while Ceres' per-block work (evaluation dispatch, loss correction,
+// Jacobian writing, manifold products) runs ~kPointsPerGroup times less often.
 //
 // Thread-safety: one MatchProblem per thread (it is not re-entrant); distinct instances are independent (the
 // Ceres context is per thread).
@@ -28,16 +30,24 @@ std::unique_ptr<ceres::LossFunction> MakeLoss(const ScanToMapConfig& c);
 
 class MatchProblem {
  public:
+  /// Points per residual block: large enough that Ceres' per-block overhead vanishes, small enough that
+  /// num_threads > 1 still has blocks to spread.
+  static constexpr size_t kPointsPerGroup = 64;
+
   /// Solver options (DENSE_NORMAL_CHOLESKY, max_solver_iterations, num_threads) and loss from `config`.
   explicit MatchProblem(const ScanToMapConfig& config);
   MatchProblem(const MatchProblem&) = delete;
   MatchProblem& operator=(const MatchProblem&) = delete;
 
-  /// The loss every residual block is under (nullptr: least squares); lives as long as this object.
+  /// The loss every point's residual is under (nullptr: least squares); lives as long as this object.
   const ceres::LossFunction* loss() const { return loss_.get(); }
+  /// The options Solve runs Ceres with.
+  const ceres::Solver::Options& options() const { return options_; }
 
-  /// Makes the problem hold exactly num_lines point-to-line and num_planes point-to-plane blocks. Blocks kept
-  /// from the previous size keep their old correspondence until SetLine / SetPlane: set every index before Solve.
+  /// Makes the problem hold exactly num_lines point-to-line and num_planes point-to-plane residuals (in
+  /// ceil(n / kPointsPerGroup) blocks per kind, each with one extra zero-Jacobian cost row, GroupedResidual).
+  /// Points kept from the previous size keep their old correspondence until SetLine / SetPlane: set every index
+  /// before Solve.
   void Resize(size_t num_lines, size_t num_planes);
   /// Re-targets line block i < num_lines (PointToLineResidual's contract: |u_map| = 1).
   void SetLine(size_t i, const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map) {
@@ -56,8 +66,10 @@ class MatchProblem {
   ceres::Solver::Options options_;
   PoseParameters x_{};
   PoseManifold manifold_;
-  std::deque<PointToLineResidual> lines_;  ///< pool: the first line_ids_.size() are in the problem
+  std::deque<PointToLineResidual> lines_;  ///< pool: the first num_lines (Resize) are in the problem
   std::deque<PointToPlaneResidual> planes_;
+  std::deque<GroupedResidual<PointToLineResidual>> line_groups_;  ///< pool: the first line_ids_.size() in use
+  std::deque<GroupedResidual<PointToPlaneResidual>> plane_groups_;
   std::vector<ceres::ResidualBlockId> line_ids_, plane_ids_;
   std::unique_ptr<ceres::Problem> problem_;  ///< declared last: destroyed before what it points to
 };

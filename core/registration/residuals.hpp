@@ -13,9 +13,18 @@
 // a rotation by 2|d|; residuals_test pins this), which is why the Hessian is computed from EvaluateTangent below
 // and never taken from Ceres' tangent-space Jacobian.
 //
+// GroupedResidual<Residual> evaluates a contiguous run of per-point residuals as ONE Ceres cost function, with
+// each point's robust loss applied inside it exactly as Ceres' Corrector would for a per-point block (see below):
+// the same gradient, Gauss-Newton matrix, model cost and cost, at a fraction of Ceres' per-block overhead.
+//
 // Thread-safety: Evaluate is const and re-entrant. Reset (re-targets a pooled cost function at another
 // correspondence) must not run while a Ceres solve that uses the function is in progress.
 #include <array>
+#include <cstddef>
+#include <vector>
+
+#include <ceres/cost_function.h>
+#include <ceres/loss_function.h>
 
 #include <ceres/manifold.h>
 #include <ceres/product_manifold.h>
@@ -48,6 +57,7 @@ Eigen::Matrix<double, 3, 4> RotatedPointQuaternionJacobian(const Eigen::Quaterni
 /// scan point to the map plane {x : n . x + d = 0}. `n_map` must be unit length (checked).
 class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
  public:
+  static constexpr int kRows = 1;
   PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
   /// Becomes PointToPlaneResidual(p_scan, n_map, d_m) (same checks).
   void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
@@ -67,6 +77,7 @@ class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
 /// Jacobian. `u_map` must be unit length (checked).
 class PointToLineResidual final : public ceres::SizedCostFunction<2, 7> {
  public:
+  static constexpr int kRows = 2;
   PointToLineResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map);
   /// Becomes PointToLineResidual(p_scan, a_map, u_map) (same checks, same basis B).
   void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map);
@@ -79,5 +90,38 @@ class PointToLineResidual final : public ceres::SizedCostFunction<2, 7> {
   Eigen::Vector3d a_map_;
   Eigen::Matrix<double, 2, 3> Bt_;  ///< rows b1^T, b2^T
 };
+
+/// Ceres' robust-loss correction of ONE residual block (ceres/internal/ceres/corrector.cc, the rho'' <= 0 branch):
+/// with s = |r|^2 and rho = loss(s), scales r (rows) and, if J != nullptr, J (rows x cols, row-major) by
+/// sqrt(rho'(s)). Returns rho(s) - |r_scaled|^2 >= 0 (up to rounding), the part of the loss the scaled residual
+/// does not carry. Requires rho''(s) <= 0 or s = 0 (true for Huber, Cauchy, soft-L1, Arctan, Tukey): only there
+/// is Ceres' correction a pure scaling and the returned deficit non-negative; otherwise a fatal check.
+double CorrectForLoss(const ceres::LossFunction& loss, int rows, int cols, double* r, double* J);
+
+/// A run of per-point residuals (PointToPlaneResidual or PointToLineResidual, added with Add) as ONE Ceres cost
+/// function on the 7-double pose block, each point under `loss` (nullptr: least squares). Rows: Residual::kRows
+/// per point in Add order (the loss-corrected residual and ambient Jacobian, CorrectForLoss), then ONE
+/// bookkeeping row sqrt(max(0, sum_i deficit_i)) with a zero Jacobian, so that Ceres' block cost 1/2 |rows|^2
+/// equals 1/2 sum_i rho(s_i), and the gradient J^T r, Gauss-Newton matrix J^T J and LM model cost equal those
+/// of one block per point under `loss` (up to float rounding). Add the group to a problem WITHOUT a loss of its
+/// own. Does not own the points or the loss: both must outlive every Evaluate.
+template <typename Residual>
+class GroupedResidual final : public ceres::CostFunction {
+ public:
+  explicit GroupedResidual(const ceres::LossFunction* loss);
+  /// Clear / Add change num_residuals(): only between solves, and only while the group is not in a problem
+  /// (Ceres reads the sizes when the block is added and when a solve starts).
+  void Clear();
+  void Add(const Residual* point);
+  size_t size() const { return points_.size(); }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
+
+ private:
+  const ceres::LossFunction* loss_;
+  std::vector<const Residual*> points_;
+};
+
+extern template class GroupedResidual<PointToPlaneResidual>;
+extern template class GroupedResidual<PointToLineResidual>;
 
 }  // namespace rotolidar

@@ -1,9 +1,11 @@
 // Residual Jacobians against numeric differentiation, the pose manifold's tangent convention, and the
 // degeneracy analysis on Hessians with known structure.
 #include <cmath>
+#include <deque>
 #include <vector>
 
 #include <ceres/gradient_checker.h>
+#include <ceres/loss_function.h>
 #include <gtest/gtest.h>
 
 #include "core/registration/degeneracy.hpp"
@@ -285,6 +287,54 @@ TEST(Degeneracy, ValidateNamesTheField) {
   config.min_eigenvalue = -1.0;
   EXPECT_FALSE(config.Validate(&error));
   EXPECT_NE(error.find("degeneracy.min_eigenvalue"), std::string::npos) << error;
+}
+
+// A group's rows give Ceres the gradient, Gauss-Newton matrix and cost of one block per point under the loss,
+// with Ceres' per-block correction (sqrt(rho') on residual and Jacobian; Huber and Cauchy have rho'' <= 0).
+TEST(GroupedResidual, MatchesPerPointBlocksUnderTheLoss) {
+  RandomStream rng(23);
+  const Pose3 T = RandomPose(rng);
+  const PoseParameters x = PoseToParameters(T);
+  const double* params[] = {x.data()};
+  std::deque<PointToLineResidual> lines;
+  for (int i = 0; i < 9; ++i) {
+    const Eigen::Vector3d p = RandomVector(rng, 5.0), u = RandomVector(rng, 1.0).normalized();
+    const double off = (i % 3 == 0) ? 0.6 : 0.02;  // every third point deep in the robust zone (scale 0.1)
+    lines.emplace_back(p, T * p + off * u.unitOrthogonal() + RandomVector(rng, 0.01), u);
+  }
+  const ceres::HuberLoss huber(0.1);
+  const ceres::CauchyLoss cauchy(0.1);
+  const std::vector<const ceres::LossFunction*> losses = {&huber, &cauchy, nullptr};
+  for (const ceres::LossFunction* loss : losses) {
+    GroupedResidual<PointToLineResidual> group(loss);
+    for (const auto& l : lines) group.Add(&l);
+    ASSERT_EQ(group.num_residuals(), 2 * 9 + 1);
+    Eigen::VectorXd r(group.num_residuals());
+    Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J(group.num_residuals(), 7);
+    double* jac[] = {J.data()};
+    ASSERT_TRUE(group.Evaluate(params, r.data(), jac));
+    EXPECT_TRUE(J.bottomRows<1>().isZero(0.0));  // the cost row carries no Jacobian
+    Eigen::Matrix<double, 7, 1> g = Eigen::Matrix<double, 7, 1>::Zero();
+    Eigen::Matrix<double, 7, 7> H = Eigen::Matrix<double, 7, 7>::Zero();
+    double cost = 0.0;
+    for (const auto& l : lines) {
+      Eigen::Vector2d ri;
+      Eigen::Matrix<double, 2, 7, Eigen::RowMajor> Ji;
+      double* jaci[] = {Ji.data()};
+      l.Evaluate(params, ri.data(), jaci);
+      double rho[3] = {ri.squaredNorm(), 1.0, 0.0};
+      if (loss != nullptr) loss->Evaluate(ri.squaredNorm(), rho);
+      g += rho[1] * Ji.transpose() * ri;
+      H += rho[1] * Ji.transpose() * Ji;
+      cost += 0.5 * rho[0];
+    }
+    EXPECT_LT((J.transpose() * r - g).norm(), 1e-12 * g.norm());
+    EXPECT_LT((J.transpose() * J - H).norm(), 1e-12 * H.norm());
+    EXPECT_NEAR(0.5 * r.squaredNorm(), cost, 1e-12 * cost);
+    double r_only[19];
+    ASSERT_TRUE(group.Evaluate(params, r_only, nullptr));  // cost-only evaluations: the same rows
+    EXPECT_LT((Eigen::Map<Eigen::VectorXd>(r_only, 19) - r).norm(), 1e-15 * r.norm());
+  }
 }
 
 }  // namespace

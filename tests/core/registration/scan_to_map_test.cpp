@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -238,7 +239,10 @@ TEST(MatchProblem, AReusedProblemSolvesLikeAFreshOne) {
       ceres::Solver::Summary s_reused, s_fresh;
       const Pose3 T_reused = SolveIn(&reused, c, Pose3::Identity(), &s_reused);
       const Pose3 T_fresh = SolveIn(&fresh, c, Pose3::Identity(), &s_fresh);
-      EXPECT_EQ(s_reused.num_residual_blocks, nl + np);
+      const int g = int(MatchProblem::kPointsPerGroup);
+      const auto groups = [g](int n) { return (n + g - 1) / g; };
+      EXPECT_EQ(s_reused.num_residual_blocks, groups(nl) + groups(np));
+      EXPECT_EQ(s_reused.num_residuals, 2 * nl + np + groups(nl) + groups(np));  // + one cost row per group
       EXPECT_EQ(s_reused.iterations.size(), s_fresh.iterations.size());
       EXPECT_NEAR(s_reused.initial_cost, s_fresh.initial_cost, 1e-12 * s_fresh.initial_cost);
       EXPECT_NEAR(s_reused.final_cost, s_fresh.final_cost, 1e-9 * s_fresh.final_cost);
@@ -247,6 +251,55 @@ TEST(MatchProblem, AReusedProblemSolvesLikeAFreshOne) {
       if (loss != RobustLoss::kNone)  // and it does register (least squares is pulled off by the outliers)
         EXPECT_LT(PoseBoxMinus(T_fresh, T_true).head<3>().norm(), 0.05) << nl << " lines, " << np << " planes";
     }
+  }
+}
+
+/// The reference: one Ceres residual block per match under the configured loss, MatchProblem's options.
+Pose3 SolvePerPoint(const ScanToMapConfig& config, const Correspondences& c, const Pose3& guess,
+                    ceres::Solver::Summary* s) {
+  const std::unique_ptr<ceres::LossFunction> loss = MakeLoss(config);
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  for (const auto& l : c.lines) costs.push_back(std::make_unique<PointToLineResidual>(l[0], l[1], l[2]));
+  for (const auto& p : c.planes)
+    costs.push_back(std::make_unique<PointToPlaneResidual>(p.first[0], p.first[1], p.second));
+  ceres::Problem::Options po;
+  po.cost_function_ownership = po.loss_function_ownership = po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  PoseManifold manifold;
+  PoseParameters x = PoseToParameters(guess);
+  problem.AddParameterBlock(x.data(), 7, &manifold);
+  for (const auto& cost : costs) problem.AddResidualBlock(cost.get(), loss.get(), x.data());
+  ceres::Solve(MatchProblem(config).options(), &problem, s);
+  return ParametersToPose(x.data());
+}
+
+TEST(MatchProblem, GroupedBlocksSolveLikeOneBlockPerPoint) {
+  RandomStream rng(17);
+  const Pose3 T_true =
+      MakePose(Eigen::Vector3d(0.2, 0.3, -0.1), Eigen::Quaterniond(ExpSO3(Eigen::Vector3d(-0.03, 0.02, 0.04))));
+  for (RobustLoss loss : {RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kNone}) {
+    ScanToMapConfig config;
+    config.loss = loss;
+    // Partial groups of both kinds; every 7th point is a 0.5 m outlier (5x loss_scale_m: deep in the robust zone).
+    const Correspondences c = MakeCorrespondences(rng, T_true, 70, 1300);
+    ceres::Solver::Summary s_grouped, s_point;
+    MatchProblem grouped(config);
+    const Pose3 T_grouped = SolveIn(&grouped, c, Pose3::Identity(), &s_grouped);
+    const Pose3 T_point = SolvePerPoint(config, c, Pose3::Identity(), &s_point);
+    EXPECT_EQ(s_point.num_residual_blocks, 1370);
+    ASSERT_EQ(s_grouped.iterations.size(), s_point.iterations.size()) << int(loss);
+    for (size_t k = 0; k < s_point.iterations.size(); ++k) {  // the same LM path, step by step
+      const ceres::IterationSummary &g = s_grouped.iterations[k], &p = s_point.iterations[k];
+      EXPECT_EQ(g.step_is_successful, p.step_is_successful) << k;
+      EXPECT_NEAR(g.cost, p.cost, 1e-9 * p.cost) << k;
+      EXPECT_NEAR(g.gradient_max_norm, p.gradient_max_norm, 1e-9 * s_point.iterations[0].gradient_max_norm) << k;
+      EXPECT_NEAR(g.step_norm, p.step_norm, 1e-9 * (1.0 + p.step_norm)) << k;
+      EXPECT_NEAR(g.trust_region_radius, p.trust_region_radius, 1e-9 * p.trust_region_radius) << k;
+    }
+    EXPECT_NEAR(s_grouped.initial_cost, s_point.initial_cost, 1e-12 * s_point.initial_cost);
+    EXPECT_NEAR(s_grouped.final_cost, s_point.final_cost, 1e-9 * s_point.final_cost);
+    const Vector6d d = PoseBoxMinus(T_grouped, T_point);
+    EXPECT_LT(d.norm(), 1e-9) << d.transpose();
   }
 }
 

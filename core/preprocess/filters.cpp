@@ -271,10 +271,11 @@ std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>
     const double sq = (positions[i].cast<double>() - centroid[voxel_of[i]]).squaredNorm();
     if (sq < v.best_sq) v.best_sq = sq, v.best = i;
   }
-  std::vector<std::size_t> kept;
+  for (const Voxel& v : voxels) voxel_of[v.best] = -2;  // marks the representatives (voxel_of is done with)
+  std::vector<std::size_t> kept;  // ascending by construction: a scan instead of a sort of the voxels' choices
   kept.reserve(voxels.size());
-  for (const Voxel& v : voxels) kept.push_back(v.best);
-  std::sort(kept.begin(), kept.end());
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (voxel_of[i] == -2) kept.push_back(i);
   return kept;
 }
 

@@ -15,12 +15,12 @@ constexpr int kLeafSize = 8;  ///< points per leaf at most (measured: 6..12 are 
 /// The k best so far, sorted ascending by distance.
 struct KdTree3f::Result {
   int k = 0, count = 0;
-  float bound = std::numeric_limits<float>::infinity();  ///< only distances below this count
+  float worst = std::numeric_limits<float>::infinity();  ///< only distances below this count (the bound, then
+                                                          ///< the k-th best once k are held)
   int index[kMaxK];
   float dist[kMaxK];
-  float worst() const { return count < k ? bound : dist[k - 1]; }
   void Offer(int i, float d) {
-    if (d >= worst()) return;
+    if (d >= worst) return;
     int j = count < k ? count++ : k - 1;  // the slot freed at the end
     for (; j > 0 && dist[j - 1] > d; --j) {
       dist[j] = dist[j - 1];
@@ -28,6 +28,7 @@ struct KdTree3f::Result {
     }
     dist[j] = d;
     index[j] = i;
+    if (count == k) worst = dist[k - 1];
   }
 };
 
@@ -40,12 +41,14 @@ void KdTree3f::Build(const std::vector<float>& xyz) {
   nodes_.clear();
   nodes_.reserve(size_t(2 * (n / kLeafSize + 1)));
   if (n > 0) BuildRoot(n);
-  points_.resize(xyz.size());
+  // Padded by one leaf: Search reads whole kLeafSize blocks (the padding's distances are never offered).
+  for (auto& axis : coords_) axis.assign(size_t(n + kLeafSize), 0.0f);
   original_.resize(size_t(n));
   for (int i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) points_[size_t(3 * i + d)] = items[size_t(i)].p[d];
+    for (int d = 0; d < 3; ++d) coords_[d][size_t(i)] = items[size_t(i)].p[d];
     original_[size_t(i)] = items[size_t(i)].index;
   }
+  size_ = size_t(n);
 }
 
 namespace {
@@ -148,10 +151,20 @@ int KdTree3f::BuildRange(int begin, int end, const float lo[3], const float hi[3
 void KdTree3f::Search(int node_index, const float q[3], float min_sq, float* axis_sq, Result* r) const {
   const Node& node = nodes_[size_t(node_index)];
   if (node.axis < 0) {
-    for (int i = node.a; i < node.b; ++i) {
-      const float* p = &points_[size_t(3 * i)];
-      const float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-      r->Offer(i, dx * dx + dy * dy + dz * dz);
+    // Whole blocks of kLeafSize (SIMD-friendly, the same float operations as one point at a time); only the
+    // leaf's own points are offered, in order.
+    for (int base = node.a; base < node.b; base += kLeafSize) {
+      const float* x = coords_[0].data() + base;
+      const float* y = coords_[1].data() + base;
+      const float* z = coords_[2].data() + base;
+      float d[kLeafSize];
+      for (int j = 0; j < kLeafSize; ++j) {
+        const float dx = q[0] - x[j], dy = q[1] - y[j], dz = q[2] - z[j];
+        d[j] = dx * dx + dy * dy + dz * dz;
+      }
+      const int n = std::min(kLeafSize, node.b - base);
+      for (int j = 0; j < n; ++j)
+        if (d[j] < r->worst) r->Offer(base + j, d[j]);
     }
     return;
   }
@@ -166,25 +179,28 @@ void KdTree3f::Search(int node_index, const float q[3], float min_sq, float* axi
   Search(near, q, min_sq, axis_sq, r);
   const float saved = axis_sq[node.axis];
   const float far_sq = min_sq - saved + cut;
-  if (far_sq < r->worst()) {
+  if (far_sq < r->worst) {
     axis_sq[node.axis] = cut;
     Search(far, q, far_sq, axis_sq, r);
     axis_sq[node.axis] = saved;
   }
 }
 
-int KdTree3f::Nearest(const float q[3], int k, int* indices, float* sq_dist, float max_sq_dist) const {
+int KdTree3f::Nearest(const float q[3], int k, int* indices, float* sq_dist, float max_sq_dist, float* xyz) const {
   ROTOLIDAR_CHECK(k >= 1 && k <= kMaxK, "k = " << k);
   if (nodes_.empty()) return 0;
   Result r;
   r.k = k;
-  r.bound = max_sq_dist;
+  r.worst = max_sq_dist;
   float axis_sq[3] = {0.0f, 0.0f, 0.0f};
   Search(0, q, 0.0f, axis_sq, &r);
   for (int i = 0; i < r.count; ++i) {
     indices[i] = original_[size_t(r.index[i])];
     sq_dist[i] = r.dist[i];
   }
+  if (xyz != nullptr)  // from the tree's own copy: just searched, so in cache
+    for (int i = 0; i < r.count; ++i)
+      for (int d = 0; d < 3; ++d) xyz[3 * i + d] = coords_[d][size_t(r.index[i])];
   return r.count;
 }
 

@@ -19,21 +19,22 @@ class KdTree3f {
 
   /// (Re)builds over `xyz` (3 floats per point, n = xyz.size() / 3). O(n log n).
   void Build(const std::vector<float>& xyz);
-  size_t size() const { return points_.size() / 3; }
+  size_t size() const { return size_; }
 
   /// The min(k, size()) nearest points to q: their indices (into the Build input) in *indices and squared
   /// distances [unit^2] in *sq_dist, both arrays of at least k entries, nearest first. 1 <= k <= kMaxK.
   /// Returns how many were written. Only points with squared distance < max_sq_dist count (default: all), so
-  /// fewer than k come back when fewer lie that close.
+  /// fewer than k come back when fewer lie that close. With xyz (3 k floats), also the points themselves (the
+  /// Build input's values).
   int Nearest(const float q[3], int k, int* indices, float* sq_dist,
-              float max_sq_dist = std::numeric_limits<float>::infinity()) const;
+              float max_sq_dist = std::numeric_limits<float>::infinity(), float* xyz = nullptr) const;
 
  private:
   struct Node {
     float left_max = 0.0f;   ///< inner: the largest `axis` coordinate in the left child
     float right_min = 0.0f;  ///< inner: the smallest in the right child (>= left_max)
     int32_t axis = -1;    ///< inner: 0..2; leaf: -1
-    int32_t a = 0, b = 0; ///< inner: children; leaf: [a, b) range in points_
+    int32_t a = 0, b = 0; ///< inner: children; leaf: [a, b) range in coords_
   };
   struct Item {
     float p[3];
@@ -45,8 +46,9 @@ class KdTree3f {
   int BuildRange(int begin, int end, const float lo[3], const float hi[3]);
   void Search(int node, const float q[3], float min_sq, float* axis_sq, Result* r) const;
 
-  std::vector<float> points_;    ///< reordered so that every leaf's points are contiguous
-  std::vector<int> original_;    ///< original index of points_[i]
+  std::vector<float> coords_[3];  ///< x, y, z, reordered so that every leaf's points are contiguous (+ padding)
+  size_t size_ = 0;
+  std::vector<int> original_;    ///< original index of point i of coords_
   std::vector<Node> nodes_;
   std::vector<Item> scratch_;    ///< Build's working copy, capacity kept across builds
 };

@@ -50,14 +50,7 @@ struct Searchable {
   std::vector<float> xyz;  ///< Rebuild's scratch, capacity kept across scans
 
   void Rebuild() {
-    table.Centroids(cloud.get());
-    table.MeanViews(&views);
-    xyz.resize(3 * cloud->size());
-    for (size_t i = 0; i < cloud->size(); ++i) {
-      xyz[3 * i] = (*cloud)[i].x;
-      xyz[3 * i + 1] = (*cloud)[i].y;
-      xyz[3 * i + 2] = (*cloud)[i].z;
-    }
+    table.Export(cloud.get(), &views, &xyz);
     tree.Build(xyz);
   }
 };
@@ -153,13 +146,11 @@ int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std
   const float query[3] = {float(p_map.x()), float(p_map.y()), float(p_map.z())};
   int indices[kMaxNearest];
   sq_dist_m2->resize(size_t(k));
-  const int found = s.tree.Nearest(query, k, indices, sq_dist_m2->data(), max_sq_dist_m2);
+  float xyz[3 * kMaxNearest];  // the cloud's points (the tree's copy of them)
+  const int found = s.tree.Nearest(query, k, indices, sq_dist_m2->data(), max_sq_dist_m2, xyz);
   sq_dist_m2->resize(size_t(found));
   points->resize(size_t(found));
-  for (int i = 0; i < found; ++i) {
-    const pcl::PointXYZI& p = (*s.cloud)[size_t(indices[i])];
-    (*points)[size_t(i)] = Eigen::Vector3d(p.x, p.y, p.z);
-  }
+  for (int i = 0; i < found; ++i) (*points)[size_t(i)] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
   if (views != nullptr) {
     views->resize(size_t(found));
     for (int i = 0; i < found; ++i) (*views)[size_t(i)] = s.views[size_t(indices[i])];

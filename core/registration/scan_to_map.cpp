@@ -28,14 +28,21 @@ struct Matches {
   size_t size() const { return edges.size() + planes.size(); }
 };
 
-/// Mean and covariance of a small point set.
+/// Mean and covariance of a small point set (upper triangle summed, mirrored: the same operations in the same
+/// order, hence the same bits, as the Eigen form sum (p - mean)(p - mean)^T / n, at a third of its cost).
 void MeanCovariance(const std::vector<Eigen::Vector3d>& points, Eigen::Vector3d* mean, Eigen::Matrix3d* cov) {
   *mean = Eigen::Vector3d::Zero();
   for (const auto& p : points) *mean += p;
-  *mean /= double(points.size());
-  cov->setZero();
-  for (const auto& p : points) *cov += (p - *mean) * (p - *mean).transpose();
-  *cov /= double(points.size());
+  const double n = double(points.size());
+  *mean /= n;
+  double c[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};  // xx xy xz yy yz zz
+  for (const auto& p : points) {
+    const Eigen::Vector3d d = p - *mean;
+    for (int i = 0, e = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) c[e++] += d[i] * d[j];
+  }
+  for (int i = 0, e = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j, ++e) (*cov)(i, j) = (*cov)(j, i) = c[e] / n;
 }
 
 /// A scan point's last neighbour search. Its k nearest map points stay the k nearest while the query moves less
@@ -49,6 +56,8 @@ struct NeighbourSet {
   double reuse_radius_m = -1.0;                     ///< the set is exact within this distance of q_map (< 0: never)
   std::vector<Eigen::Vector3d> points;              ///< the k nearest, nearest first (fewer: a sparse map)
   std::vector<Eigen::Vector3f> views;               ///< their mean unit view vectors (LocalMap::Nearest)
+  bool has_next = false;                            ///< the search also found a (k+1)-th point:
+  Eigen::Vector3d next = Eigen::Vector3d::Zero();   ///< ... this one (bounds the next search, KthSquaredDistance)
   Fit fit = Fit::kUnknown;
   Eigen::Vector3d a_or_n = Eigen::Vector3d::Zero();  ///< line point (edge) or plane normal (planar)
   Eigen::Vector3d u = Eigen::Vector3d::Zero();       ///< line direction (edge)
@@ -75,8 +84,21 @@ double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Ve
     for (const Eigen::Vector3d& p : set->points) max_sq = std::max(max_sq, (p - q_map).squaredNorm());
     return max_sq;
   }
+  // The last k + 1 points bound the new (k+1)-th distance (float, as the tree computes it): searching just
+  // above it returns the same neighbours, skipping only points that could never make the result.
+  float search_sq = bound_sq;
+  if (set->has_next) {
+    const float q[3] = {float(q_map.x()), float(q_map.y()), float(q_map.z())};
+    auto tree_sq = [&q](const Eigen::Vector3d& p) {
+      const float dx = q[0] - float(p.x()), dy = q[1] - float(p.y()), dz = q[2] - float(p.z());
+      return dx * dx + dy * dy + dz * dz;
+    };
+    float farthest = tree_sq(set->next);
+    for (const Eigen::Vector3d& p : set->points) farthest = std::max(farthest, tree_sq(p));
+    search_sq = std::min(bound_sq, std::nextafter(farthest, std::numeric_limits<float>::infinity()));
+  }
   thread_local std::vector<float> sq;
-  const int found = map.Nearest(kind, q_map, k + 1, &set->points, &sq, bound_sq, &set->views);
+  const int found = map.Nearest(kind, q_map, k + 1, &set->points, &sq, search_sq, &set->views);
   set->searched = true;
   set->q_map = q_map;
   set->fit = NeighbourSet::Fit::kUnknown;
@@ -86,7 +108,9 @@ double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Ve
     const double gap_m = std::sqrt(next_sq) - std::sqrt(double(sq[size_t(k - 1)]));
     set->reuse_radius_m = 0.5 * gap_m - kReuseMarginM;
   }
+  set->has_next = found > k;
   if (found > k) {
+    set->next = set->points[size_t(k)];
     set->points.resize(size_t(k));
     set->views.resize(size_t(k));
   }

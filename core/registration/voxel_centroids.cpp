@@ -149,4 +149,29 @@ void VoxelCentroidTable::MeanViews(std::vector<Eigen::Vector3f>* out) const {
   }
 }
 
+void VoxelCentroidTable::Export(pcl::PointCloud<pcl::PointXYZI>* cloud, std::vector<Eigen::Vector3f>* views,
+                                std::vector<float>* xyz) const {
+  cloud->resize(live_);
+  views->resize(live_);
+  xyz->resize(3 * live_);
+  size_t i = 0;
+  for (const Voxel& v : voxels_) {
+    if (v.count == 0) continue;
+    const double inv = 1.0 / double(v.count);
+    pcl::PointXYZI& p = (*cloud)[i];
+    p.x = float(v.x * inv);
+    p.y = float(v.y * inv);
+    p.z = float(v.z * inv);
+    p.intensity = float(v.intensity * inv);
+    (*views)[i] = Eigen::Vector3f(float(v.vx * inv), float(v.vy * inv), float(v.vz * inv));
+    float* c = xyz->data() + 3 * i;
+    c[0] = p.x;
+    c[1] = p.y;
+    c[2] = p.z;
+    ++i;
+  }
+  ROTOLIDAR_CHECK(i == live_, "live count " << live_ << " != " << i << " live voxels");
+  cloud->is_dense = true;
+}
+
 }  // namespace rotolidar

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <tuple>
 #include <vector>
@@ -138,6 +139,28 @@ TEST(VoxelCentroidTable, RemovingASetRestoresTheTableExactly) {
   EXPECT_THROW(both.Remove(a), std::exception);  // removing what is not there is a programmer error
 }
 
+TEST(VoxelCentroidTable, ExportEqualsCentroidsAndMeanViews) {
+  RandomStream rng(10, "test.registration.voxel_table_export");
+  VoxelCentroidTable table(0.2);
+  table.Add(RoomCloud(&rng, 3000), Eigen::Vector3f(0.5f, -0.2f, 1.0f));
+  table.Add(RoomCloud(&rng, 3000), Eigen::Vector3f(-1.0f, 0.3f, 0.8f));
+  Cloud want, got;
+  std::vector<Eigen::Vector3f> want_views, got_views;
+  std::vector<float> xyz;
+  table.Centroids(&want);
+  table.MeanViews(&want_views);
+  table.Export(&got, &got_views, &xyz);
+  ASSERT_EQ(got.size(), want.size());
+  ASSERT_EQ(got_views.size(), want.size());
+  ASSERT_EQ(xyz.size(), 3 * want.size());
+  for (size_t i = 0; i < got.size(); ++i) {
+    EXPECT_TRUE(got[i].x == want[i].x && got[i].y == want[i].y && got[i].z == want[i].z);
+    EXPECT_EQ(got[i].intensity, want[i].intensity);
+    EXPECT_TRUE(got_views[i] == want_views[i]);
+    EXPECT_TRUE(xyz[3 * i] == want[i].x && xyz[3 * i + 1] == want[i].y && xyz[3 * i + 2] == want[i].z);
+  }
+}
+
 TEST(VoxelCentroidTable, SlidingWindowMatchesAFreshTableThroughGrowthAndCompaction) {
   RandomStream rng(9, "test.registration.voxel_table_window");
   std::vector<Cloud> sets;
@@ -211,6 +234,27 @@ TEST(KdTree3f, NearestIsExactAgainstBruteForceAndFlann) {
       const float dx = q[0] - p.x, dy = q[1] - p.y, dz = q[2] - p.z;
       EXPECT_EQ(dx * dx + dy * dy + dz * dz, sq[j]);  // the index belongs to the distance
     }
+  }
+  // The points come back with their indices; a search bounded just above the farthest of a nearby query's k + 1
+  // (how KthSquaredDistance re-searches) returns exactly the unbounded result, order included.
+  float pts[3 * KdTree3f::kMaxK];
+  int near_idx[KdTree3f::kMaxK], bounded_idx[KdTree3f::kMaxK];
+  float near_sq[KdTree3f::kMaxK], bounded_sq[KdTree3f::kMaxK];
+  for (int trial = 0; trial < 300; ++trial) {
+    const float q[3] = {float(rng.Uniform() * 16 - 8), float(rng.Uniform() * 14 - 7), float(rng.Uniform() * 4 - 0.5)};
+    ASSERT_EQ(tree.Nearest(q, k + 1, idx, sq, std::numeric_limits<float>::infinity(), pts), k + 1);
+    const float moved[3] = {q[0] + 0.03f, q[1] - 0.02f, q[2] + 0.01f};
+    ASSERT_EQ(tree.Nearest(moved, k + 1, near_idx, near_sq), k + 1);
+    float farthest = 0.0f;
+    for (int j = 0; j <= k; ++j) {
+      const auto& p = cloud[size_t(idx[j])];
+      EXPECT_TRUE(pts[3 * j] == p.x && pts[3 * j + 1] == p.y && pts[3 * j + 2] == p.z);
+      const float dx = moved[0] - p.x, dy = moved[1] - p.y, dz = moved[2] - p.z;
+      farthest = std::max(farthest, dx * dx + dy * dy + dz * dz);
+    }
+    const float bound = std::nextafter(farthest, std::numeric_limits<float>::infinity());
+    ASSERT_EQ(tree.Nearest(moved, k + 1, bounded_idx, bounded_sq, bound), k + 1);
+    for (int j = 0; j <= k; ++j) EXPECT_TRUE(bounded_idx[j] == near_idx[j] && bounded_sq[j] == near_sq[j]);
   }
   // Fewer points than k, and an empty tree.
   KdTree3f small;

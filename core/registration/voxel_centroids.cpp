@@ -123,30 +123,30 @@ void VoxelCentroidTable::Compact() {
   for (size_t i = 0; i < voxels_.size(); ++i) index_[Find(voxels_[i].key)] = uint32_t(i);
 }
 
+VoxelCentroidTable::Mean VoxelCentroidTable::MeanOf(const Voxel& v) {
+  const double inv = 1.0 / double(v.count);
+  Mean m;
+  m.point.x = float(v.x * inv);
+  m.point.y = float(v.y * inv);
+  m.point.z = float(v.z * inv);
+  m.point.intensity = float(v.intensity * inv);
+  m.view = Eigen::Vector3f(float(v.vx * inv), float(v.vy * inv), float(v.vz * inv));
+  return m;
+}
+
 void VoxelCentroidTable::Centroids(pcl::PointCloud<pcl::PointXYZI>* out) const {
   out->clear();
   out->reserve(live_);
-  for (const Voxel& v : voxels_) {
-    if (v.count == 0) continue;
-    const double inv = 1.0 / double(v.count);
-    pcl::PointXYZI p;
-    p.x = float(v.x * inv);
-    p.y = float(v.y * inv);
-    p.z = float(v.z * inv);
-    p.intensity = float(v.intensity * inv);
-    out->push_back(p);
-  }
+  for (const Voxel& v : voxels_)
+    if (v.count != 0) out->push_back(MeanOf(v).point);
   out->is_dense = true;
 }
 
 void VoxelCentroidTable::MeanViews(std::vector<Eigen::Vector3f>* out) const {
   out->clear();
   out->reserve(live_);
-  for (const Voxel& v : voxels_) {
-    if (v.count == 0) continue;
-    const double inv = 1.0 / double(v.count);
-    out->emplace_back(float(v.vx * inv), float(v.vy * inv), float(v.vz * inv));
-  }
+  for (const Voxel& v : voxels_)
+    if (v.count != 0) out->push_back(MeanOf(v).view);
 }
 
 void VoxelCentroidTable::Export(pcl::PointCloud<pcl::PointXYZI>* cloud, std::vector<Eigen::Vector3f>* views,
@@ -157,17 +157,13 @@ void VoxelCentroidTable::Export(pcl::PointCloud<pcl::PointXYZI>* cloud, std::vec
   size_t i = 0;
   for (const Voxel& v : voxels_) {
     if (v.count == 0) continue;
-    const double inv = 1.0 / double(v.count);
-    pcl::PointXYZI& p = (*cloud)[i];
-    p.x = float(v.x * inv);
-    p.y = float(v.y * inv);
-    p.z = float(v.z * inv);
-    p.intensity = float(v.intensity * inv);
-    (*views)[i] = Eigen::Vector3f(float(v.vx * inv), float(v.vy * inv), float(v.vz * inv));
+    const Mean m = MeanOf(v);
+    (*cloud)[i] = m.point;
+    (*views)[i] = m.view;
     float* c = xyz->data() + 3 * i;
-    c[0] = p.x;
-    c[1] = p.y;
-    c[2] = p.z;
+    c[0] = m.point.x;
+    c[1] = m.point.y;
+    c[2] = m.point.z;
     ++i;
   }
   ROTOLIDAR_CHECK(i == live_, "live count " << live_ << " != " << i << " live voxels");

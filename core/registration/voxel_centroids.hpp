@@ -52,6 +52,11 @@ class VoxelCentroidTable {
     double vx = 0, vy = 0, vz = 0;  ///< sum of unit view vectors
   };
   static constexpr uint32_t kEmpty = 0xFFFFFFFFu;
+  struct Mean {
+    pcl::PointXYZI point;  ///< centroid, intensity averaged
+    Eigen::Vector3f view;  ///< mean unit view vector
+  };
+  static Mean MeanOf(const Voxel& v);  ///< v.count > 0
   void Accumulate(const pcl::PointXYZI& p, const Eigen::Vector3f& sensor, int sign);
   size_t Home(uint64_t key) const;
   size_t Find(uint64_t key) const;  ///< the index_ slot holding key, or the empty slot where it would go

@@ -43,6 +43,7 @@ void VisitRegistration(V& v, ScanToMapConfig& c) {
   v("min_correspondences", &c.min_correspondences), v("num_threads", &c.num_threads);
   v("visibility_check", &c.visibility_check);
   v("degeneracy_remap", &c.degeneracy.remap), v("degeneracy_min_eigenvalue", &c.degeneracy.min_eigenvalue);
+  v("degeneracy_weak_eigenvalue", &c.degeneracy.weak_eigenvalue), v("degeneracy_weak_gate_m", &c.degeneracy.weak_gate_m);
 }
 
 template <class V>

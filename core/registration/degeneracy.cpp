@@ -15,6 +15,15 @@ bool DegeneracyConfig::Validate(std::string* error) const {
                         std::to_string(min_eigenvalue) + ")";
     return false;
   }
+  if (!(weak_eigenvalue >= min_eigenvalue) || !std::isfinite(weak_eigenvalue)) {
+    if (error) *error = "degeneracy.weak_eigenvalue must be finite and >= degeneracy.min_eigenvalue (got " +
+                        std::to_string(weak_eigenvalue) + ")";
+    return false;
+  }
+  if (!(weak_gate_m > 0.0)) {
+    if (error) *error = "degeneracy.weak_gate_m must be > 0 (got " + std::to_string(weak_gate_m) + ")";
+    return false;
+  }
   return true;
 }
 
@@ -51,13 +60,27 @@ DegeneracyInfo AnalyzeDegeneracy(const Matrix6d& hessian, const Matrix6d& displa
   // Zhang et al.: keep the eigen-directions that pass the threshold; the update loses its components along the
   // others. Eigenvalues ascend, so the degenerate ones are the first few.
   int num_degenerate = 0;
-  while (num_degenerate < 6 && info.eigenvalues(num_degenerate) < config.min_eigenvalue) {
-    info.degenerate_directions.push_back(info.eigenvectors.col(num_degenerate).normalized());
-    ++num_degenerate;
-  }
-  info.degenerate = num_degenerate > 0;
-  info.projection = ProjectionWithout(info, num_degenerate);
+  while (num_degenerate < 6 && info.eigenvalues(num_degenerate) < config.min_eigenvalue) ++num_degenerate;
+  MarkDegenerate(num_degenerate, &info);
   return info;
+}
+
+void MarkDegenerate(int num, DegeneracyInfo* info) {
+  ROTOLIDAR_CHECK(num >= 0 && num <= 6, "num = " << num);
+  info->degenerate_directions.clear();
+  for (int i = 0; i < num; ++i) info->degenerate_directions.push_back(info->eigenvectors.col(i).normalized());
+  info->degenerate = num > 0;
+  info->projection = ProjectionWithout(*info, num);
+}
+
+int GatedDegenerateCount(const DegeneracyInfo& info, const Vector6d& delta_from_guess, const DegeneracyConfig& config) {
+  int num = 0;
+  for (int i = 0; i < 6 && info.eigenvalues(i) < config.weak_eigenvalue; ++i) {
+    // G-orthonormal eigenvectors: delta = sum_i c_i v_i with c_i = v_i^T G delta, the RMS point motion along v_i.
+    const double motion_m = std::abs(info.eigenvectors.col(i).dot(info.displacement_metric * delta_from_guess));
+    if (info.eigenvalues(i) < config.min_eigenvalue || motion_m > config.weak_gate_m) num = i + 1;
+  }
+  return num;
 }
 
 Matrix6d ProjectionWithout(const DegeneracyInfo& info, int num_smallest) {

@@ -30,8 +30,15 @@ struct DegeneracyConfig {
   bool remap = true;  ///< project updates onto the well-observed subspace (false: detect and report only)
   /// A direction is degenerate when its generalised eigenvalue lambda (see above, dimensionless) is below this.
   /// Measured smallest lambda: box room 0.27 and corridor axis 0.013 (= the noise floor; scan_to_map_test, 1 cm
-  /// noise), KITTI 00 street scans 0.12-0.14 (registration_realdata_test).
-  double min_eigenvalue = 0.05;
+  /// noise), KITTI 00 street scans 0.12-0.14 (registration_realdata_test); the sim corridor's axis seen only
+  /// through its end wall 2-20 m away: 0.005-0.04 (docs/registration.md).
+  double min_eigenvalue = 0.005;
+  /// Weak directions (min_eigenvalue <= lambda < weak_eigenvalue) rest on a few points: a far end wall, or a
+  /// person walking by. Their estimate is an innovation against the guess (the motion prior); it is kept only
+  /// when it moves the matched points by at most weak_gate_m RMS along the direction (|v^T G delta|), otherwise
+  /// the direction is treated as degenerate (remapped; the prior / IMU keeps it).
+  double weak_eigenvalue = 0.05;
+  double weak_gate_m = 0.03;  ///< [m] RMS point motion along a weak direction, guess -> solution
   bool Validate(std::string* error) const;  ///< false with the offending field named in *error
 };
 
@@ -60,6 +67,14 @@ DegeneracyInfo AnalyzeDegeneracy(const Matrix6d& hessian, const Matrix6d& displa
 /// The remapping matrix that removes the `num_smallest` lowest eigen-directions of `info` (whatever their
 /// eigenvalues): sum over the other eigenvectors of v v^T G. num_smallest in [0, 6]; 0 gives the identity.
 Matrix6d ProjectionWithout(const DegeneracyInfo& info, int num_smallest);
+
+/// Marks the num lowest eigen-directions of *info degenerate (flag, directions, projection); num in [0, 6].
+void MarkDegenerate(int num, DegeneracyInfo* info);
+
+/// How many of the lowest eigen-directions to remap given the solve's update delta_from_guess (original tangent,
+/// solution boxminus guess): those below min_eigenvalue and the weak ones whose component |v^T G delta| exceeds
+/// weak_gate_m, together with every direction below them (remapping removes a lowest-k set).
+int GatedDegenerateCount(const DegeneracyInfo& info, const Vector6d& delta_from_guess, const DegeneracyConfig& config);
 
 /// Solution remapping: the well-observed part of a full tangent update (projection * delta).
 Vector6d RemapUpdate(const DegeneracyInfo& info, const Vector6d& delta);

@@ -372,6 +372,8 @@ ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& 
   result.planar_inliers = int(matches.planes.size());
   result.degeneracy = AnalyzeDegeneracy(result.hessian, MetricOf(matches, result.T_map_scan), int(matches.size()),
                                         config.degeneracy);
+  if (num_degenerate > int(result.degeneracy.degenerate_directions.size()))  // the remapped (gated) directions
+    MarkDegenerate(num_degenerate, &result.degeneracy);
   if (!result.converged && result.message.empty())
     result.message = "no convergence in " + std::to_string(n) + " rebuilds";
   return result;
@@ -389,11 +391,14 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   MatchCache cache;
   MatchProblem problem(config);  // one Ceres problem for every correspondence set of both phases
   ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0, &cache, &problem);
-  if (!config.degeneracy.remap || !full.degeneracy.degenerate) return full;
+  // Degenerate directions, and weak ones whose solution strays from the guess beyond the gate.
+  const int num_degenerate =
+      GatedDegenerateCount(full.degeneracy, PoseBoxMinus(full.T_map_scan, T_map_scan_guess), config.degeneracy);
+  if (num_degenerate > int(full.degeneracy.degenerate_directions.size())) MarkDegenerate(num_degenerate, &full.degeneracy);
+  if (!config.degeneracy.remap || num_degenerate == 0) return full;
   // Phase 2 (Zhang et al.'s solution remapping): solve again from the guess with every update projected onto
   // the well-observed subspace, so the degenerate directions keep the guess (the prior / IMU's value).
-  ScanToMapResult remapped =
-      Solve(scan, map, T_map_scan_guess, config, int(full.degeneracy.degenerate_directions.size()), &cache, &problem);
+  ScanToMapResult remapped = Solve(scan, map, T_map_scan_guess, config, num_degenerate, &cache, &problem);
   remapped.remapped = true;
   remapped.iterations += full.iterations;
   remapped.solver_iterations += full.solver_iterations;

@@ -265,7 +265,7 @@ TEST(Degeneracy, CoupledWeakDirectionIsFoundAndRemovedInTheMetric) {
   w << 1.0, 0.0, 0.0, 0.0, 0.0, 0.2;
   w /= std::sqrt(w.dot(G * w));
   const int n = 40;
-  const double c = 0.99;
+  const double c = 0.999;  // lambda = 0.001, below the default min_eigenvalue (0.005)
   const Matrix6d H = n * (G - c * G * w * w.transpose() * G);
   const DegeneracyInfo d = AnalyzeDegeneracy(H, G, n, DegeneracyConfig());
   ASSERT_EQ(d.degenerate_directions.size(), 1u);

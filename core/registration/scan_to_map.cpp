@@ -67,7 +67,21 @@ struct NeighbourSet {
 /// The neighbour sets of one scan's features, shared by every FindMatches of one Register call.
 struct MatchCache {
   std::vector<NeighbourSet> edges, planes;
+  /// Forgets every search (a set's vectors keep their capacity: no per-point allocation per registration).
+  void Reset(size_t num_edges, size_t num_planes) {
+    edges.resize(num_edges);
+    planes.resize(num_planes);
+    for (auto* sets : {&edges, &planes})
+      for (NeighbourSet& s : *sets) s.searched = s.has_next = false;
+  }
 };
+
+/// This thread's cache (Register is re-entrant per thread), reset for `scan`.
+MatchCache& ThreadMatchCache(const FeatureSet& scan) {
+  thread_local MatchCache cache;
+  cache.Reset(scan.edge.points.size(), scan.planar.points.size());
+  return cache;
+}
 
 /// Kd-tree distances are float: the reuse radius keeps this margin against their rounding [m].
 constexpr double kReuseMarginM = 1e-5;
@@ -150,8 +164,6 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
   const int k = c.num_neighbours;
   const float max_sq = float(c.max_neighbour_distance_m * c.max_neighbour_distance_m);
   const float bound_sq = std::nextafter(max_sq, std::numeric_limits<float>::infinity());  // k-th == max passes
-  cache->edges.resize(scan.edge.points.size());
-  cache->planes.resize(scan.planar.points.size());
   for (size_t i = 0; i < scan.edge.points.size(); ++i) {
     const auto& pt = scan.edge.points[i];
     const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
@@ -388,7 +400,7 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   // Phase 1: the full solve. Its converged correspondences tell which directions the scene observes; deciding
   // that at the guess instead (as LOAM does at its first iteration) misjudges a far guess (KITTI 0->1 from
   // identity, 0.7 m off, looks degenerate there and would freeze the very direction it has to move along).
-  MatchCache cache;
+  MatchCache& cache = ThreadMatchCache(scan);
   MatchProblem problem(config);  // one Ceres problem for every correspondence set of both phases
   ScanToMapResult full = Solve(scan, map, T_map_scan_guess, config, 0, &cache, &problem);
   // Degenerate directions, and weak ones whose solution strays from the guess beyond the gate.

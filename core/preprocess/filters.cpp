@@ -218,64 +218,135 @@ std::size_t RingStatisticalOutlierFilter(int k, double std_mul, bool range_norma
 // 32-bit index over the cloud's bounding box and, when that overflows (e.g. a rotating rig's 60 m-range scan, a
 // 120 m cube, at 0.05 m: 1.4e10 voxels), logs a warning and returns the input unfiltered; and it outputs centroids,
 // which carry no ring or firing time. Linear time (a sort of the keys cost 3x more per scan). The open-addressing
-// table holds 32-bit voxel numbers and grows with the voxel count (load <= 1/2), not with the point count; a point
-// in the previous point's voxel (ring order keeps neighbours together) skips the lookup. Centroid sums are in
-// double, in index order (VoxelFilter's reference test rebuilds them with a std::map).
-std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>& positions, double voxel_m) {
-  ROTOLIDAR_CHECK(voxel_m > 0.0 && std::isfinite(voxel_m), "voxel_m = " << voxel_m);
-  ROTOLIDAR_CHECK(positions.size() < (std::size_t(1) << 31), "VoxelRepresentatives: too many points");
-  struct Voxel {
-    int64_t key[3];
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();  ///< summed in index order
-    std::size_t count = 0, best = 0;
-    double best_sq = std::numeric_limits<double>::infinity();
-  };
-  std::vector<Voxel> voxels;
-  std::vector<int32_t> table(64, -1);  // slot -> voxel number, -1 empty; size a power of two
-  const auto insert_slot = [&](const int64_t* key) {  // the key's slot: its voxel's, or the empty one ending the probe
-    std::size_t slot = VoxelHash(key[0], key[1], key[2]) & (table.size() - 1);
-    for (int32_t v; (v = table[slot]) >= 0; slot = (slot + 1) & (table.size() - 1)) {
+// table holds 32-bit voxel numbers and grows with the voxel count (load <= 1/2), not with the point count.
+// Ring order keeps neighbours together, so the points are taken as runs of consecutive finite points in one voxel:
+// one lookup per run, the voxel's sum carried in registers along it (still added point by point in index order, so
+// the sums are those of the per-point loop and of VoxelFilter's std::map reference test), and the nearest-to-centroid
+// pass walks the same runs.
+namespace {
+
+struct RepVoxel {
+  int64_t key[3];
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();  ///< summed in index order
+  std::size_t count = 0, best = 0;
+  double best_sq = std::numeric_limits<double>::infinity();
+};
+
+/// Points [begin, end) of one voxel, consecutive in the input.
+struct VoxelRun {
+  uint32_t begin, end;
+  int32_t voxel;
+};
+
+/// The voxel table: voxel numbers in creation order, found by key through open addressing.
+class RepVoxelTable {
+ public:
+  explicit RepVoxelTable(std::size_t expected) {
+    std::size_t slots = 64;
+    while (slots < 2 * expected) slots *= 2;  // presized: rehashing only when the guess was low
+    table_.assign(slots, -1);
+    voxels.reserve(expected);
+  }
+  /// The voxel number of `key`, created (sums zero) when new.
+  int32_t FindOrAdd(const int64_t* key) {
+    std::size_t slot = SlotOf(key);
+    if (table_[slot] >= 0) return table_[slot];
+    if (2 * (voxels.size() + 1) > table_.size()) {  // grow and rehash, then find the new key's slot again
+      table_.assign(2 * table_.size(), -1);
+      for (std::size_t v = 0; v < voxels.size(); ++v) table_[SlotOf(voxels[v].key)] = static_cast<int32_t>(v);
+      slot = SlotOf(key);
+    }
+    table_[slot] = static_cast<int32_t>(voxels.size());
+    voxels.push_back(RepVoxel{{key[0], key[1], key[2]}});
+    return table_[slot];
+  }
+  std::vector<RepVoxel> voxels;
+
+ private:
+  std::size_t SlotOf(const int64_t* key) const {  // the key's slot: its voxel's, or the empty one ending the probe
+    const std::size_t mask = table_.size() - 1;
+    std::size_t slot = VoxelHash(key[0], key[1], key[2]) & mask;
+    for (int32_t v; (v = table_[slot]) >= 0; slot = (slot + 1) & mask) {
       const int64_t* o = voxels[v].key;
       if (o[0] == key[0] && o[1] == key[1] && o[2] == key[2]) break;
     }
     return slot;
-  };
-  std::vector<int32_t> voxel_of(positions.size(), -1);
-  const double inv = 1.0 / voxel_m;
-  int32_t last = -1;  // voxel of the previous finite point
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Eigen::Vector3f& p = positions[i];
-    if (!p.allFinite()) continue;
-    const int64_t key[3] = {FloorToInt(p.x() * inv), FloorToInt(p.y() * inv), FloorToInt(p.z() * inv)};
-    if (last < 0 || key[0] != voxels[last].key[0] || key[1] != voxels[last].key[1] || key[2] != voxels[last].key[2]) {
-      std::size_t slot = insert_slot(key);
-      if (table[slot] < 0) {
-        if (2 * (voxels.size() + 1) > table.size()) {  // grow and rehash, then find the new key's slot again
-          table.assign(2 * table.size(), -1);
-          for (std::size_t v = 0; v < voxels.size(); ++v) table[insert_slot(voxels[v].key)] = static_cast<int32_t>(v);
-          slot = insert_slot(key);
-        }
-        table[slot] = static_cast<int32_t>(voxels.size());
-        voxels.push_back(Voxel{{key[0], key[1], key[2]}});
-      }
-      last = table[slot];
+  }
+  std::vector<int32_t> table_;  ///< slot -> voxel number, -1 empty; size a power of two
+};
+
+/// Bounds [lo, hi) of the scaled coordinates d whose FloorToInt(d) is the key k: lo = k, hi = k + 1, exact below
+/// 2^52; beyond that hi = lo, an empty range (such a point only starts runs of one, found through the table).
+struct KeyRange {
+  double lo[3], hi[3];
+  explicit KeyRange(const int64_t* key) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = static_cast<double>(key[a]);
+      hi[a] = std::abs(lo[a]) < 0x1p52 ? lo[a] + 1.0 : lo[a];
     }
-    voxels[last].sum += p.cast<double>(), ++voxels[last].count;
-    voxel_of[i] = last;
   }
-  std::vector<Eigen::Vector3d> centroid(voxels.size());
-  for (std::size_t v = 0; v < voxels.size(); ++v) centroid[v] = voxels[v].sum / static_cast<double>(voxels[v].count);
-  for (std::size_t i = 0; i < positions.size(); ++i) {  // nearest to the centroid, ties to the lower index
-    if (voxel_of[i] < 0) continue;
-    Voxel& v = voxels[voxel_of[i]];
-    const double sq = (positions[i].cast<double>() - centroid[voxel_of[i]]).squaredNorm();
-    if (sq < v.best_sq) v.best_sq = sq, v.best = i;
+  /// FloorToInt(d) == key on every axis; false for non-finite d (NaN and +-inf fail a bound).
+  bool Holds(double dx, double dy, double dz) const {
+    return lo[0] <= dx && dx < hi[0] && lo[1] <= dy && dy < hi[1] && lo[2] <= dz && dz < hi[2];
   }
-  for (const Voxel& v : voxels) voxel_of[v.best] = -2;  // marks the representatives (voxel_of is done with)
-  std::vector<std::size_t> kept;  // ascending by construction: a scan instead of a sort of the voxels' choices
+};
+
+/// Splits the finite points into runs of one voxel and adds each point to its voxel's sum (index order).
+std::vector<VoxelRun> AccumulateRuns(const std::vector<Eigen::Vector3f>& positions, double inv, RepVoxelTable* table) {
+  std::vector<VoxelRun> runs;
+  const std::size_t n = positions.size();
+  for (std::size_t i = 0; i < n;) {
+    const Eigen::Vector3f& p = positions[i];
+    if (!p.allFinite()) {
+      ++i;
+      continue;
+    }
+    const int64_t key[3] = {FloorToInt(p.x() * inv), FloorToInt(p.y() * inv), FloorToInt(p.z() * inv)};
+    const KeyRange range(key);
+    const int32_t v = table->FindOrAdd(key);
+    RepVoxel& voxel = table->voxels[v];
+    Eigen::Vector3d sum = voxel.sum + p.cast<double>();
+    std::size_t end = i + 1;
+    for (; end < n; ++end) {  // the run goes on while the next point is in the same voxel (hence finite)
+      const Eigen::Vector3f& q = positions[end];
+      if (!range.Holds(q.x() * inv, q.y() * inv, q.z() * inv)) break;
+      sum += q.cast<double>();
+    }
+    voxel.sum = sum;
+    voxel.count += end - i;
+    runs.push_back(VoxelRun{static_cast<uint32_t>(i), static_cast<uint32_t>(end), v});
+    i = end;
+  }
+  return runs;
+}
+
+}  // namespace
+
+std::vector<std::size_t> VoxelRepresentatives(const std::vector<Eigen::Vector3f>& positions, double voxel_m) {
+  ROTOLIDAR_CHECK(voxel_m > 0.0 && std::isfinite(voxel_m), "voxel_m = " << voxel_m);
+  ROTOLIDAR_CHECK(positions.size() < (std::size_t(1) << 31), "VoxelRepresentatives: too many points");
+  RepVoxelTable table(positions.size() / 8 + 16);  // a scan's less-flat set: ~10 points per 0.2 m voxel
+  const std::vector<VoxelRun> runs = AccumulateRuns(positions, 1.0 / voxel_m, &table);
+  std::vector<RepVoxel>& voxels = table.voxels;
+  for (RepVoxel& v : voxels) v.sum /= static_cast<double>(v.count);  // the centroid, in place of the sum
+  for (const VoxelRun& run : runs) {  // nearest to the centroid, ties to the lower index (runs in index order)
+    RepVoxel& v = voxels[run.voxel];
+    double best_sq = v.best_sq;
+    std::size_t best = v.best;
+    for (uint32_t i = run.begin; i < run.end; ++i) {  // select, not branch: which point wins is random
+      const double sq = (positions[i].cast<double>() - v.sum).squaredNorm();
+      const bool better = sq < best_sq;
+      best_sq = better ? sq : best_sq;
+      best = better ? i : best;
+    }
+    v.best_sq = best_sq, v.best = best;
+  }
+  std::vector<uint8_t> is_best(positions.size(), 0);  // a flag scan keeps the indices ascending (no sort)
+  for (const RepVoxel& v : voxels) is_best[v.best] = 1;
+  std::vector<std::size_t> kept;
   kept.reserve(voxels.size());
   for (std::size_t i = 0; i < positions.size(); ++i)
-    if (voxel_of[i] == -2) kept.push_back(i);
+    if (is_best[i]) kept.push_back(i);
   return kept;
 }
 

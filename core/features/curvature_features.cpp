@@ -272,6 +272,15 @@ pcl::PointCloud<pcl::PointXYZI> LessFlatCloud(const Context& ctx, const std::vec
   return out;
 }
 
+/// One point per voxel_m voxel of `cloud` (VoxelRepresentatives: the point nearest the centroid), in list order.
+pcl::PointCloud<pcl::PointXYZI> VoxelDownsampled(const pcl::PointCloud<pcl::PointXYZI>& cloud, double voxel_m) {
+  std::vector<Eigen::Vector3f> positions(cloud.size());
+  for (std::size_t k = 0; k < cloud.size(); ++k) positions[k] = cloud.points[k].getVector3fMap();
+  pcl::PointCloud<pcl::PointXYZI> out;
+  for (const std::size_t k : VoxelRepresentatives(positions, voxel_m)) out.push_back(cloud.points[k]);
+  return out;
+}
+
 FeatureStats CountLabels(const std::vector<FeatureLabel>& labels, const FeatureSet& set, std::size_t less_flat_raw) {
   FeatureStats s;
   s.num_input = labels.size();
@@ -313,6 +322,8 @@ bool FeatureConfig::Validate(std::string* error) const {
   if (!(occlusion_jump_ratio >= 0.0)) return fail("occlusion_jump_ratio", ">= 0", occlusion_jump_ratio);
   if (!(beam_parallel_max_incidence_deg > 0.0) || !(beam_parallel_max_incidence_deg < 90.0))
     return fail("beam_parallel_max_incidence_deg", "in (0, 90)", beam_parallel_max_incidence_deg);
+  if (!(planar_voxel_m >= 0.0) || !std::isfinite(planar_voxel_m))
+    return fail("planar_voxel_m", "finite and >= 0", planar_voxel_m);
   if (!(less_flat_voxel_m >= 0.0) || !std::isfinite(less_flat_voxel_m))
     return fail("less_flat_voxel_m", "finite and >= 0", less_flat_voxel_m);
   if (!(range_sigma_m >= 0.0) || !std::isfinite(range_sigma_m))
@@ -375,6 +386,8 @@ FeatureResult ExtractFeatures(const std::vector<ScanPoint>& points, Seconds t_sc
   for (const Ring& ring : ctx.rings)
     for (std::size_t i = 0; i < ring.index.size(); ++i) result.curvature[ring.index[i]] = ring.c[i];
   result.features.less_flat = LessFlatCloud(ctx, less_flat_raw, result.curvature, config.less_flat_voxel_m);
+  if (config.planar_voxel_m > 0.0)
+    result.features.planar = VoxelDownsampled(result.features.planar, config.planar_voxel_m);
   result.stats = CountLabels(ctx.labels, result.features, less_flat_raw.size());
   result.labels = std::move(ctx.labels);
   return result;

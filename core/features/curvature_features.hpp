@@ -43,6 +43,11 @@ struct FeatureConfig {
   /// Rejected when the surface's incidence angle, estimated from the range slope over N steps on BOTH sides
   /// (tan(beta) = dr / (r dgamma)), exceeds this. A-LOAM's 0.0002 r^2 gap rule is 75.7 deg at 0.2 deg steps.
   double beam_parallel_max_incidence_deg = 75.0;
+  /// Scan-side planar set downsampling: one point per voxel of this edge (the one nearest the voxel's centroid,
+  /// VoxelRepresentatives) [m]; 0 keeps every selected point (the seed's per-sector counts). A rotary band puts
+  /// many planar points within centimetres of each other near the rig; A-LOAM's mapping thins its surface
+  /// points to 0.4 m the same way.
+  double planar_voxel_m = 0.0;
   double less_flat_voxel_m = 0.2;  ///< map-side planar set downsampling (LOAM: 0.2 m); 0 keeps every point
   int threads = 0;  ///< worker threads; 0 = std::thread::hardware_concurrency(); results never depend on it
   /// False (and *error names the field, e.g. "features.sectors must be in [1, 360] (got 0)") if a value is invalid.

@@ -23,6 +23,7 @@ template <class V>
 void VisitFeatures(V& v, FeatureConfig& c) {
   v("sectors", &c.sectors), v("edges_per_sector", &c.edges_per_sector);
   v("planars_per_sector", &c.planars_per_sector), v("less_sharp_per_sector", &c.less_sharp_per_sector);
+  v("planar_voxel_m", &c.planar_voxel_m);
   v("neighbours", &c.neighbours), v("edge_threshold", &c.edge_threshold), v("planar_threshold", &c.planar_threshold);
   v("range_sigma_m", &c.range_sigma_m), v("edge_min_snr", &c.edge_min_snr);
   v("max_neighbour_step_deg", &c.max_neighbour_step_deg), v("reject_occluded", &c.reject_occluded);

@@ -66,9 +66,10 @@ TEST(SlamScenario, LabHandheld) {
   const double seconds = 8.0;
   const ScenarioResult r = RunScenario("lab", seconds);
   ExpectHealthy(r, seconds);
-  // Measured (seed 1, 8 s: ~2.2 s at rest, then ~6 m walked): 0.0127 m RMSE (0.0143 m before the visibility
-  // check and 5 neighbours; 0.0243 m without the static-start hold: the first bands drifted 3.8 deg). ~2x headroom. Frame, time or gravity bugs gave decimetres to
-  // metres while this was built.
+  // Measured (seed 1, 8 s: ~2.2 s at rest, then ~6 m walked): 0.0131 m RMSE (0.0127 m with the full planar
+  // set, 0.0143 m before the visibility check and 5 neighbours; 0.0243 m without the static-start hold: the first
+  // bands drifted 3.8 deg). ~2x headroom. Frame, time or gravity bugs gave decimetres to metres while this was
+  // built.
   EXPECT_LT(r.ape.stats.rmse, 0.03);
 }
 
@@ -78,19 +79,19 @@ TEST(SlamScenario, CorridorHandheld) {
   const ScenarioResult r = RunScenario("corridor", seconds);
   ExpectHealthy(r, seconds);
   const DegeneracyConfig d = EstimatorConfig().registration.degeneracy;
-  size_t degenerate = 0, weak_used = 0;
+  size_t remapped = 0, weak = 0;
   for (const ScanReport& s : r.slam.scans) {
-    degenerate += s.degeneracy.degenerate ? 1 : 0;
-    const double lambda = s.degeneracy.eigenvalues(0);
-    weak_used += s.registration.attempted && !s.degeneracy.degenerate && lambda < d.weak_eigenvalue ? 1 : 0;
+    remapped += s.degeneracy.degenerate ? 1 : 0;
+    weak += s.registration.attempted && s.degeneracy.eigenvalues(0) < d.weak_eigenvalue ? 1 : 0;
   }
-  std::printf("corridor: %zu scans remapped, %zu weak directions used\n", degenerate, weak_used);
-  // The corridor is the degenerate case: along its axis only the end wall is seen (lambda 0.005-0.04, weak).
-  // Scans whose axis estimate strays from the IMU prediction beyond the gate are remapped (the IMU holds the
-  // axis); the others use the end wall. Measured (seed 1): 0.0048 m RMSE, 3 remapped scans, 142 weak
-  // directions used (0.0597 m when every weak direction was remapped, min_eigenvalue 0.05). ~3x headroom.
-  EXPECT_GT(degenerate, 0u);
-  EXPECT_GT(weak_used, 0u);
+  std::printf("corridor: %zu of %zu scans weak along one direction, %zu remapped\n", weak, r.slam.scans.size(),
+              remapped);
+  // The corridor is the degeneracy case: along its axis only the west end wall is seen, so the registration's
+  // weakest direction stays below weak_eigenvalue (lambda 0.005-0.04). Within the innovation gate the end wall
+  // fixes the axis; beyond it the IMU holds it (remapped). Measured (seed 1): 0.0043 m RMSE, 120 of 200 scans
+  // weak, none remapped (0.0597 m when every weak direction was remapped: min_eigenvalue 0.05, no gate, and the
+  // full planar set). ~3x headroom.
+  EXPECT_GT(weak, r.slam.scans.size() / 2);
   EXPECT_LT(r.ape.stats.rmse, 0.015);
 }
 
@@ -100,8 +101,9 @@ TEST(SlamScenario, ParkingHandheld) {
   const double seconds = 12.0;
   const ScenarioResult r = RunScenario("parking", seconds);
   ExpectHealthy(r, seconds);
-  // Measured (seed 1, 12 s: ~2.2 s at rest, then ~11 m walked): 0.0406 m RMSE (3-5 cm lateral errors in the
-  // first seconds after the static initialisation; the full 202 s loop: 0.028 m). 2x headroom; the loop's goal is 0.10 m.
+  // Measured (seed 1, 12 s: ~2.2 s at rest, then ~11 m walked): 0.0346 m RMSE (0.0406 m with the full planar
+  // set; 3-5 cm lateral errors in the first seconds after the static initialisation; the full 202 s loop:
+  // 0.028 m). 2x headroom; the loop's goal is 0.10 m.
   EXPECT_LT(r.ape.stats.rmse, 0.08);
 }
 

@@ -42,6 +42,7 @@ TEST(FeatureConfig, ValidateNamesTheField) {
        [](FeatureConfig* c) { c->beam_parallel_max_incidence_deg = 90; }},
       {"features.range_sigma_m", [](FeatureConfig* c) { c->range_sigma_m = -0.01; }},
       {"features.edge_min_snr", [](FeatureConfig* c) { c->edge_min_snr = -1; }},
+      {"features.planar_voxel_m", [](FeatureConfig* c) { c->planar_voxel_m = -1; }},
       {"features.less_flat_voxel_m", [](FeatureConfig* c) { c->less_flat_voxel_m = -1; }},
       {"features.threads", [](FeatureConfig* c) { c->threads = -1; }},
   };

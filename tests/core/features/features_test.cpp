@@ -332,6 +332,36 @@ TEST(ExtractFeatures, PerSectorCountsNeverExceedConfig) {
   EXPECT_EQ(n_sharp, r.features.less_sharp.size());
 }
 
+// planar_voxel_m thins the scan-side planar set to one point per voxel: an in-order subset that still has a
+// point in every voxel the full set occupies.
+TEST(ExtractFeatures, PlanarVoxelKeepsOnePointPerOccupiedVoxel) {
+  Scene scene = PillarRoom();
+  scene.noise_sigma_m = 0.01;
+  const std::vector<ScanPoint> pts = CastScan(scene, 9);
+  FeatureConfig config;
+  const FeatureResult full = ExtractFeatures(pts, 0.0, config);
+  const double v = 1.0;  // [m]: measured 769 planar points in 456 voxels
+  config.planar_voxel_m = v;
+  const FeatureResult thin = ExtractFeatures(pts, 0.0, config);
+  auto voxel = [v](const pcl::PointXYZI& p) {
+    return std::array<long, 3>{long(std::floor(p.x / v)), long(std::floor(p.y / v)), long(std::floor(p.z / v))};
+  };
+  std::set<std::array<long, 3>> occupied, kept;
+  for (const auto& p : full.features.planar.points) occupied.insert(voxel(p));
+  size_t next = 0;  // thin is a subsequence of full
+  for (const auto& p : thin.features.planar.points) {
+    while (next < full.features.planar.size() &&
+           (full.features.planar[next].x != p.x || full.features.planar[next].y != p.y ||
+            full.features.planar[next].z != p.z))
+      ++next;
+    ASSERT_LT(next, full.features.planar.size()) << "not in the full set, or out of order";
+    EXPECT_TRUE(kept.insert(voxel(p)).second) << "two points in one voxel";
+  }
+  EXPECT_EQ(kept, occupied);
+  EXPECT_LT(thin.features.planar.size(), full.features.planar.size());
+  EXPECT_EQ(thin.stats.num_planar, thin.features.planar.size());
+  EXPECT_TRUE(SameCloud(thin.features.edge, full.features.edge));  // only the planar set changes
+}
 
 TEST(ExtractFeatures, IdenticalForAnyThreadCount) {
   Scene scene = PillarRoom();

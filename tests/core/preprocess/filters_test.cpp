@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "core/preprocess/filters.hpp"
+#include "tests/core/preprocess/voxel_reference.hpp"
 #include "core/util/rng.hpp"
 
 namespace rotolidar {
@@ -302,21 +303,7 @@ std::vector<std::size_t> ReferenceVoxelRepresentatives(const std::vector<Eigen::
     voxels[{int64_t(std::floor(p.x() / voxel_m)), int64_t(std::floor(p.y() / voxel_m)),
             int64_t(std::floor(p.z() / voxel_m))}].push_back(i);
   }
-  std::vector<std::size_t> kept;
-  for (const auto& [key, members] : voxels) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const std::size_t i : members) sum += positions[i].cast<double>();
-    const Eigen::Vector3d centroid = sum / static_cast<double>(members.size());
-    std::size_t best = members.front();
-    double best_sq = std::numeric_limits<double>::infinity();
-    for (const std::size_t i : members) {
-      const double sq = (positions[i].cast<double>() - centroid).squaredNorm();
-      if (sq < best_sq) best_sq = sq, best = i;
-    }
-    kept.push_back(best);
-  }
-  std::sort(kept.begin(), kept.end());
-  return kept;
+  return test::NearestToCentroids(voxels, positions);
 }
 
 // The hashed filter (growing table, previous-voxel shortcut) keeps exactly the reference's points: on ring-like

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/preprocess/filters.hpp"
+#include "tests/core/preprocess/voxel_reference.hpp"
 
 namespace rotolidar {
 namespace {
@@ -26,21 +27,7 @@ std::vector<std::size_t> PerPointReference(const std::vector<Eigen::Vector3f>& p
     if (!p.allFinite()) continue;
     voxels[{std::floor(p.x() * inv), std::floor(p.y() * inv), std::floor(p.z() * inv)}].push_back(i);
   }
-  std::vector<std::size_t> kept;
-  for (const auto& [key, members] : voxels) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const std::size_t i : members) sum += positions[i].cast<double>();
-    const Eigen::Vector3d centroid = sum / static_cast<double>(members.size());
-    std::size_t best = members.front();
-    double best_sq = std::numeric_limits<double>::infinity();
-    for (const std::size_t i : members) {
-      const double sq = (positions[i].cast<double>() - centroid).squaredNorm();
-      if (sq < best_sq) best_sq = sq, best = i;
-    }
-    kept.push_back(best);
-  }
-  std::sort(kept.begin(), kept.end());
-  return kept;
+  return test::NearestToCentroids(voxels, positions);
 }
 
 float Next(float v, float toward) { return std::nextafter(v, toward); }

@@ -19,6 +19,7 @@
 
 #include "core/features/feature_set.hpp"
 #include "core/registration/degeneracy.hpp"
+#include "core/registration/local_fits.hpp"
 #include "core/registration/local_map.hpp"
 #include "core/types/geometry.hpp"
 
@@ -69,14 +70,5 @@ struct ScanToMapResult {
 /// Registers the scan's edge and planar points (scan frame) against `map`, starting from T_map_scan_guess.
 ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan_guess,
                          const ScanToMapConfig& config);
-
-/// LOAM line fit of neighbours (map frame): true when lambda_max >= min_ratio * lambda_mid of their covariance;
-/// *point = centroid, *direction = unit principal axis.
-bool FitLine(const std::vector<Eigen::Vector3d>& points, double min_ratio, Eigen::Vector3d* point,
-             Eigen::Vector3d* direction);
-/// Plane fit of neighbours: true when lambda_min <= max_ratio * lambda_mid and every point lies within
-/// max_deviation_m of the plane; the plane is {x : normal . x + d = 0}, |normal| = 1.
-bool FitPlane(const std::vector<Eigen::Vector3d>& points, double max_ratio, double max_deviation_m,
-              Eigen::Vector3d* normal, double* d_m);
 
 }  // namespace rotolidar

@@ -248,8 +248,9 @@ TEST(MatchProblem, AReusedProblemSolvesLikeAFreshOne) {
       EXPECT_NEAR(s_reused.final_cost, s_fresh.final_cost, 1e-9 * s_fresh.final_cost);
       const Vector6d d = PoseBoxMinus(T_reused, T_fresh);
       EXPECT_LT(d.norm(), 1e-9) << d.transpose();
-      if (loss != RobustLoss::kNone)  // and it does register (least squares is pulled off by the outliers)
+      if (loss != RobustLoss::kNone) {  // and it does register (least squares is pulled off by the outliers)
         EXPECT_LT(PoseBoxMinus(T_fresh, T_true).head<3>().norm(), 0.05) << nl << " lines, " << np << " planes";
+      }
     }
   }
 }

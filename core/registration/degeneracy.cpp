@@ -67,6 +67,7 @@ DegeneracyInfo AnalyzeDegeneracy(const Matrix6d& hessian, const Matrix6d& displa
 
 void MarkDegenerate(int num, DegeneracyInfo* info) {
   ROTOLIDAR_CHECK(num >= 0 && num <= 6, "num = " << num);
+  if (num <= int(info->degenerate_directions.size())) return;
   info->degenerate_directions.clear();
   for (int i = 0; i < num; ++i) info->degenerate_directions.push_back(info->eigenvectors.col(i).normalized());
   info->degenerate = num > 0;

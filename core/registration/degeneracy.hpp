@@ -68,7 +68,8 @@ DegeneracyInfo AnalyzeDegeneracy(const Matrix6d& hessian, const Matrix6d& displa
 /// eigenvalues): sum over the other eigenvectors of v v^T G. num_smallest in [0, 6]; 0 gives the identity.
 Matrix6d ProjectionWithout(const DegeneracyInfo& info, int num_smallest);
 
-/// Marks the num lowest eigen-directions of *info degenerate (flag, directions, projection); num in [0, 6].
+/// Marks at least the num lowest eigen-directions of *info degenerate (flag, directions, projection); a no-op
+/// when that many or more already are. num in [0, 6].
 void MarkDegenerate(int num, DegeneracyInfo* info);
 
 /// How many of the lowest eigen-directions to remap given the solve's update delta_from_guess (original tangent,

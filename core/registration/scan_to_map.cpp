@@ -338,8 +338,7 @@ ScanToMapResult Solve(const FeatureSet& scan, const LocalMap& map, const Pose3& 
   result.planar_inliers = int(matches.planes.size());
   result.degeneracy = AnalyzeDegeneracy(result.hessian, MetricOf(matches, result.T_map_scan), int(matches.size()),
                                         config.degeneracy);
-  if (num_degenerate > int(result.degeneracy.degenerate_directions.size()))  // the remapped (gated) directions
-    MarkDegenerate(num_degenerate, &result.degeneracy);
+  MarkDegenerate(num_degenerate, &result.degeneracy);  // the remapped directions, gated ones included
   if (!result.converged && result.message.empty())
     result.message = "no convergence in " + std::to_string(n) + " rebuilds";
   return result;
@@ -360,8 +359,7 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   // Degenerate directions, and weak ones whose solution strays from the guess beyond the gate.
   const int num_degenerate =
       GatedDegenerateCount(full.degeneracy, PoseBoxMinus(full.T_map_scan, T_map_scan_guess), config.degeneracy);
-  if (num_degenerate > int(full.degeneracy.degenerate_directions.size()))
-    MarkDegenerate(num_degenerate, &full.degeneracy);
+  MarkDegenerate(num_degenerate, &full.degeneracy);
   if (!config.degeneracy.remap || num_degenerate == 0) return full;
   // Phase 2 (Zhang et al.'s solution remapping): solve again from the guess with every update projected onto
   // the well-observed subspace, so the degenerate directions keep the guess (the prior / IMU's value).

@@ -1,6 +1,7 @@
 #include "core/registration/kd_tree.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "core/util/log.hpp"
@@ -44,11 +45,67 @@ void KdTree3f::Build(const std::vector<float>& xyz) {
   // Padded by one leaf: Search reads whole kLeafSize blocks (the padding's distances are never offered).
   for (auto& axis : coords_) axis.assign(size_t(n + kLeafSize), 0.0f);
   original_.resize(size_t(n));
+  position_.resize(size_t(n));
   for (int i = 0; i < n; ++i) {
     for (int d = 0; d < 3; ++d) coords_[d][size_t(i)] = items[size_t(i)].p[d];
     original_[size_t(i)] = items[size_t(i)].index;
+    position_[size_t(items[size_t(i)].index)] = i;
+  }
+  leaf_of_.resize(size_t(n));
+  parent_.assign(nodes_.size(), -1);
+  leaf_box_.assign(6 * nodes_.size(), 0.0f);
+  for (size_t node = 0; node < nodes_.size(); ++node) {
+    const Node& nd = nodes_[node];
+    if (nd.axis < 0) {
+      float* box = &leaf_box_[6 * node];
+      for (int d = 0; d < 3; ++d) {
+        box[d] = std::numeric_limits<float>::infinity();
+        box[3 + d] = -std::numeric_limits<float>::infinity();
+      }
+      for (int i = nd.a; i < nd.b; ++i) {
+        leaf_of_[size_t(i)] = int(node);
+        for (int d = 0; d < 3; ++d) {
+          box[d] = std::min(box[d], coords_[d][size_t(i)]);
+          box[3 + d] = std::max(box[3 + d], coords_[d][size_t(i)]);
+        }
+      }
+    } else {
+      parent_[size_t(nd.a)] = parent_[size_t(nd.b)] = int(node);
+    }
   }
   size_ = size_t(n);
+}
+
+void KdTree3f::Move(int index, const float p[3]) {
+  ROTOLIDAR_CHECK(index >= 0 && size_t(index) < size_, "index " << index << " of " << size_);
+  ROTOLIDAR_CHECK(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]), "non-finite point");
+  const int at = position_[size_t(index)];
+  for (int d = 0; d < 3; ++d) coords_[d][size_t(at)] = p[d];
+  // Every split above the point must still bound it on its side (the bounds only widen; Search clamps). Each
+  // split above a leaf bounds the leaf's box (kept so by this function), so a point inside it needs nothing more.
+  const int leaf = leaf_of_[size_t(at)];
+  float* box = &leaf_box_[6 * size_t(leaf)];
+  bool inside = true;
+  for (int d = 0; d < 3; ++d) {
+    inside = inside && box[d] <= p[d] && p[d] <= box[3 + d];
+    box[d] = std::min(box[d], p[d]);
+    box[3 + d] = std::max(box[3 + d], p[d]);
+  }
+  if (inside) return;
+  for (int child = leaf, node = parent_[size_t(child)]; node >= 0;
+       child = node, node = parent_[size_t(node)]) {
+    Node& nd = nodes_[size_t(node)];
+    if (child == nd.a)
+      nd.left_max = std::max(nd.left_max, p[nd.axis]);
+    else
+      nd.right_min = std::min(nd.right_min, p[nd.axis]);
+  }
+}
+
+void KdTree3f::Hide(int index) {
+  ROTOLIDAR_CHECK(index >= 0 && size_t(index) < size_, "index " << index << " of " << size_);
+  // An infinite coordinate gives an infinite distance, which is never below the search bound.
+  for (auto& axis : coords_) axis[size_t(position_[size_t(index)])] = std::numeric_limits<float>::infinity();
 }
 
 namespace {
@@ -175,7 +232,9 @@ void KdTree3f::Search(int node_index, const float q[3], float min_sq, float* axi
   const bool go_left = to_left + to_right < 0.0f;
   const int near = go_left ? node.a : node.b;
   const int far = go_left ? node.b : node.a;
-  const float cut = go_left ? to_right * to_right : to_left * to_left;
+  // The far child's distance along the axis; 0 where moved points made the children's bounds overlap around q.
+  const float cut = go_left ? (to_right < 0.0f ? to_right * to_right : 0.0f)
+                            : (to_left > 0.0f ? to_left * to_left : 0.0f);
   Search(near, q, min_sq, axis_sq, r);
   const float saved = axis_sq[node.axis];
   const float far_sq = min_sq - saved + cut;

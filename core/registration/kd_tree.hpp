@@ -5,7 +5,10 @@
 // Contract: Build copies the points (any frame, metres); Nearest returns the exact k nearest points to the query
 // in squared float distance (dx*dx + dy*dy + dz*dz, as FLANN's L2_Simple computes it), nearest first. Among
 // equal distances the order is unspecified. Non-finite points must not be passed to Build (the caller filters).
-// Thread-safety: Build is not; const queries are re-entrant.
+// Moving points: Move puts a point anywhere (finite) and widens the split bounds on its path to the root, so the
+// search stays exact without a rebuild (the bounds only grow: a tree whose points drift a little, such as voxel
+// centroids, prunes almost as well as a fresh one); Hide takes a point out of the results. O(depth) each.
+// Thread-safety: Build, Move and Hide are not; const queries are re-entrant.
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -19,6 +22,10 @@ class KdTree3f {
 
   /// (Re)builds over `xyz` (3 floats per point, n = xyz.size() / 3). O(n log n).
   void Build(const std::vector<float>& xyz);
+  /// Moves point `index` (its Build input index) to p (finite, checked). A hidden point comes back.
+  void Move(int index, const float p[3]);
+  /// Takes point `index` out of every search result until it is moved again.
+  void Hide(int index);
   size_t size() const { return size_; }
 
   /// The min(k, size()) nearest points to q: their indices (into the Build input) in *indices and squared
@@ -49,6 +56,10 @@ class KdTree3f {
   std::vector<float> coords_[3];  ///< x, y, z, reordered so that every leaf's points are contiguous (+ padding)
   size_t size_ = 0;
   std::vector<int> original_;    ///< original index of point i of coords_
+  std::vector<int> position_;    ///< position in coords_ of original index i (inverse of original_)
+  std::vector<int> leaf_of_;     ///< per position in coords_: its leaf node
+  std::vector<float> leaf_box_;  ///< per node (leaves used): lo x y z, hi x y z of its points, widened by Move
+  std::vector<int> parent_;      ///< per node: its parent (-1 for the root)
   std::vector<Node> nodes_;
   std::vector<Item> scratch_;    ///< Build's working copy, capacity kept across builds
 };

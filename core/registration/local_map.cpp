@@ -6,7 +6,7 @@
 #include <pcl/common/transforms.h>
 #include <pcl/filters/voxel_grid.h>
 
-#include "core/registration/kd_tree.hpp"
+#include "core/registration/centroid_index.hpp"
 #include "core/registration/voxel_centroids.hpp"
 #include "core/util/log.hpp"
 
@@ -40,18 +40,22 @@ struct Keyframe {
   Cloud planar_map;  ///< downsampled, map frame
 };
 
-/// One searchable cloud: the table's centroids plus a kd-tree over them.
+/// One searchable cloud: the table's centroids plus an index over them that follows the table's changes.
 struct Searchable {
   explicit Searchable(double voxel_m) : table(voxel_m) {}
   VoxelCentroidTable table;  ///< running per-voxel sums of the live keyframes' points
-  Cloud::Ptr cloud{new Cloud};
-  KdTree3f tree;
-  std::vector<Eigen::Vector3f> views;  ///< per cloud point: mean unit view vector (map frame)
-  std::vector<float> xyz;  ///< Rebuild's scratch, capacity kept across scans
+  CentroidIndex index;
+  mutable Cloud cloud;              ///< the centroids as a cloud, exported on demand (cloud())
+  mutable bool cloud_stale = true;
 
   void Rebuild() {
-    table.Export(cloud.get(), &views, &xyz);
-    tree.Build(xyz);
+    index.Sync(&table);
+    cloud_stale = true;
+  }
+  const Cloud& Exported() const {
+    if (cloud_stale) table.Centroids(&cloud);
+    cloud_stale = false;
+    return cloud;
   }
 };
 
@@ -144,21 +148,21 @@ int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std
   ROTOLIDAR_CHECK(k >= 1 && k <= kMaxNearest && points != nullptr && sq_dist_m2 != nullptr, "k = " << k);
   const Searchable& s = impl_->Get(kind);
   const float query[3] = {float(p_map.x()), float(p_map.y()), float(p_map.z())};
-  int indices[kMaxNearest];
+  int slots[kMaxNearest];
   sq_dist_m2->resize(size_t(k));
-  float xyz[3 * kMaxNearest];  // the cloud's points (the tree's copy of them)
-  const int found = s.tree.Nearest(query, k, indices, sq_dist_m2->data(), max_sq_dist_m2, xyz);
+  float xyz[3 * kMaxNearest];  // the centroids (the index's copy of them)
+  const int found = s.index.Nearest(query, k, slots, sq_dist_m2->data(), max_sq_dist_m2, xyz);
   sq_dist_m2->resize(size_t(found));
   points->resize(size_t(found));
   for (int i = 0; i < found; ++i) (*points)[size_t(i)] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
   if (views != nullptr) {
     views->resize(size_t(found));
-    for (int i = 0; i < found; ++i) (*views)[size_t(i)] = s.views[size_t(indices[i])];
+    for (int i = 0; i < found; ++i) (*views)[size_t(i)] = s.table.MeanAt(size_t(slots[i])).view;
   }
   return found;
 }
 
-const pcl::PointCloud<pcl::PointXYZI>& LocalMap::cloud(FeatureKind kind) const { return *impl_->Get(kind).cloud; }
+const pcl::PointCloud<pcl::PointXYZI>& LocalMap::cloud(FeatureKind kind) const { return impl_->Get(kind).Exported(); }
 
 std::vector<Pose3> LocalMap::keyframe_poses() const {
   std::vector<Pose3> poses;

@@ -1,19 +1,20 @@
 #pragma once
 // The local feature map that scan-to-map registration matches against: the map-side features (FeatureSet
 // less_sharp -> edge cloud, less_flat -> planar cloud) of the most recent keyframes, transformed into the map
-// (world) frame, voxel-downsampled, with one kd-tree per cloud (KdTree3f, core/registration/kd_tree.hpp).
+// (world) frame, voxel-downsampled, with one exact nearest-neighbour index per cloud (CentroidIndex,
+// core/registration/centroid_index.hpp: kd-trees that follow the centroids' changes).
 //
 // Downsampling: each keyframe's clouds are voxel-downsampled on their own (PCL VoxelGrid), and the map cloud is
 // the VoxelGrid of the union of the live keyframes' downsampled clouds (per voxel: centroid of the keyframe
 // points in it, intensity averaged). That union grid is maintained incrementally (VoxelCentroidTable,
 // voxel_centroids.hpp): a new keyframe adds its points' sums, a dropped one subtracts exactly its own, so
-// AddKeyframe costs ~ the keyframe's size plus one kd-tree build over the map cloud, not a re-merge of the
+// AddKeyframe costs ~ the keyframe's size (plus an occasional rebuild of the index), not a re-merge of the
 // window. Cloud order: voxel creation order (deterministic for a given keyframe sequence).
 //
 // Policy: a scan becomes a keyframe when the map is empty or its pose is at least keyframe_distance_m or
 // keyframe_angle_rad away from the newest keyframe (NeedsKeyframe; the caller decides and calls AddKeyframe).
 // The map is bounded: keyframes beyond max_keyframes (oldest first) or farther than max_distance_m from the newest
-// keyframe are dropped. Each AddKeyframe updates the downsampled clouds and rebuilds the kd-trees.
+// keyframe are dropped. Each AddKeyframe updates the downsampled clouds and their indices.
 //
 // Ownership: owns copies of its clouds. Thread-safety: none (one thread at a time, also for const searches).
 #include <limits>
@@ -55,7 +56,7 @@ class LocalMap {
   /// True when the map has no keyframe or T_map_scan moved/turned enough from the newest keyframe.
   bool NeedsKeyframe(const Pose3& T_map_scan) const;
   /// Adds `features.less_sharp` / `features.less_flat` (scan frame) at T_map_scan as a keyframe, applies the
-  /// window bounds and rebuilds clouds and kd-trees. Empty feature clouds are allowed.
+  /// window bounds and updates clouds and indices. Empty feature clouds are allowed.
   void AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan);
   void Clear();
 
@@ -69,7 +70,8 @@ class LocalMap {
               std::vector<float>* sq_dist_m2, float max_sq_dist_m2 = std::numeric_limits<float>::infinity(),
               std::vector<Eigen::Vector3f>* views = nullptr) const;
 
-  /// The downsampled cloud of `kind` in the map frame (intensity: averaged curvature of the merged points).
+  /// The downsampled cloud of `kind` in the map frame (intensity: averaged curvature of the merged points),
+  /// exported on the first call after a change (valid until the next AddKeyframe / Clear).
   const pcl::PointCloud<pcl::PointXYZI>& cloud(FeatureKind kind) const;
   std::vector<Pose3> keyframe_poses() const;  ///< T_map_scan of the kept keyframes, oldest first
   size_t num_keyframes() const;

@@ -74,9 +74,15 @@ void VoxelCentroidTable::Accumulate(const pcl::PointXYZI& p, const Eigen::Vector
     ROTOLIDAR_CHECK(sign > 0, "VoxelCentroidTable::Remove of a point that was never added");
     index_[slot] = uint32_t(voxels_.size());
     voxels_.push_back(Voxel{key, 0, 0, 0, 0, 0, 0, 0, 0});
+    touched_flag_.push_back(0);
     ++live_;
   }
-  Voxel& v = voxels_[index_[slot]];
+  const uint32_t position = index_[slot];
+  if (!touched_flag_[position]) {
+    touched_flag_[position] = 1;
+    touched_.push_back(position);
+  }
+  Voxel& v = voxels_[position];
   v.count += sign;
   if (v.count == 0) {  // exact reset: no rounding residue survives the voxel
     v = Voxel{key, 0, 0, 0, 0, 0, 0, 0, 0};
@@ -110,7 +116,16 @@ void VoxelCentroidTable::Remove(const pcl::PointCloud<pcl::PointXYZI>& points, c
 void VoxelCentroidTable::Clear() {
   voxels_.clear();
   index_.clear();
+  touched_flag_.clear();
+  touched_.clear();
   live_ = dead_ = 0;
+  ++layout_version_;
+}
+
+void VoxelCentroidTable::TakeTouched(std::vector<uint32_t>* out) {
+  out->swap(touched_);
+  touched_.clear();
+  for (uint32_t slot : *out) touched_flag_[slot] = 0;
 }
 
 void VoxelCentroidTable::Compact() {
@@ -119,6 +134,9 @@ void VoxelCentroidTable::Compact() {
     if (voxels_[i].count != 0) voxels_[out++] = voxels_[i];
   voxels_.resize(out);
   dead_ = 0;
+  touched_flag_.assign(voxels_.size(), 0);
+  touched_.clear();
+  ++layout_version_;
   index_.assign(index_.size(), kEmpty);
   for (size_t i = 0; i < voxels_.size(); ++i) index_[Find(voxels_[i].key)] = uint32_t(i);
 }

@@ -11,6 +11,10 @@
 // Views: Add/Remove may name the sensor position the points were seen from (same frame); each point then adds
 // its unit view vector (point -> sensor) to its voxel, and MeanViews() gives each centroid the mean of those
 // vectors (which side of a surface the map saw it from; ~0 where both sides merged in one voxel).
+// Slots: every voxel has a slot (its position in creation order, dead ones included) that stays fixed until the
+// table compacts or clears (layout_version() then changes). A voxel that dies keeps its dead slot; one re-created
+// later gets a new slot. TakeTouched lists the slots whose sums changed since the previous call, so an index over
+// the centroids (CentroidIndex) can follow the table without re-reading it.
 // Contract: Remove must be given a point set previously Added (with the same sensor position) and not yet
 // removed (checked: a voxel's count never goes negative). Thread-safety: none.
 #include <cstdint>
@@ -24,6 +28,11 @@ namespace rotolidar {
 
 class VoxelCentroidTable {
  public:
+  struct Mean {
+    pcl::PointXYZI point;  ///< centroid, intensity averaged
+    Eigen::Vector3f view;  ///< mean unit view vector
+  };
+
   explicit VoxelCentroidTable(double voxel_m);  ///< voxel_m > 0 (checked)
 
   void Add(const pcl::PointCloud<pcl::PointXYZI>& points, const Eigen::Vector3f& sensor = Eigen::Vector3f::Zero());
@@ -44,6 +53,15 @@ class VoxelCentroidTable {
   /// The voxel key of a point under PCL VoxelGrid's indexing (21 bits per axis, two's complement).
   uint64_t KeyOf(const pcl::PointXYZI& p) const;
 
+  // Slot access (see the top comment).
+  size_t num_slots() const { return voxels_.size(); }
+  bool live(size_t slot) const { return voxels_[slot].count != 0; }  ///< slot < num_slots()
+  Mean MeanAt(size_t slot) const { return MeanOf(voxels_[slot]); }    ///< a live slot
+  /// The slots touched (sums changed, or died) since the previous call, each once, into *out (replaced).
+  void TakeTouched(std::vector<uint32_t>* out);
+  /// Changes whenever slots are renumbered (Compact, Clear); the touched list is then emptied.
+  uint64_t layout_version() const { return layout_version_; }
+
  private:
   struct Voxel {
     uint64_t key = 0;
@@ -52,10 +70,6 @@ class VoxelCentroidTable {
     double vx = 0, vy = 0, vz = 0;  ///< sum of unit view vectors
   };
   static constexpr uint32_t kEmpty = 0xFFFFFFFFu;
-  struct Mean {
-    pcl::PointXYZI point;  ///< centroid, intensity averaged
-    Eigen::Vector3f view;  ///< mean unit view vector
-  };
   static Mean MeanOf(const Voxel& v);  ///< v.count > 0
   void Accumulate(const pcl::PointXYZI& p, const Eigen::Vector3f& sensor, int sign);
   size_t Home(uint64_t key) const;
@@ -66,6 +80,9 @@ class VoxelCentroidTable {
 
   float inverse_leaf_;
   std::vector<Voxel> voxels_;    ///< creation order; dead entries until Compact
+  std::vector<uint8_t> touched_flag_;  ///< per slot: listed in touched_
+  std::vector<uint32_t> touched_;      ///< slots touched since TakeTouched
+  uint64_t layout_version_ = 0;
   std::vector<uint32_t> index_;  ///< open addressing, linear probing: voxels_ position or kEmpty; power of 2
   size_t live_ = 0;
   size_t dead_ = 0;

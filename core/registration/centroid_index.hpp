@@ -1,0 +1,60 @@
+#pragma once
+// Exact k-nearest-neighbour search over the live centroids of a VoxelCentroidTable that follows the table's
+// changes instead of rebuilding a kd-tree over every centroid after each change (the local map changes by one
+// keyframe per scan, while its tens of thousands of centroids would otherwise be re-indexed every scan).
+//
+// How: a main kd-tree over the centroids of the voxels live at its build; a voxel's later centroids are moved in
+// place (KdTree3f::Move), voxels that died are hidden, and voxels created since go to a small overflow tree,
+// rebuilt at each Sync. The main tree is rebuilt when the overflow or the dead outgrow a fraction of it, or when
+// the table renumbers its slots. Queries search both trees and merge.
+//
+// Contract: Nearest returns the same squared distances as an exact search over the table's Centroids() (float
+// arithmetic as KdTree3f: dx*dx + dy*dy + dz*dz), nearest first; the order among equal distances is unspecified.
+// Frames and units: the table's (map frame, metres).
+// Ownership: owns its trees; reads the table only inside Sync (one index per table: Sync consumes the table's
+// touched list). Thread-safety: Sync is not; const queries are re-entrant.
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "core/registration/kd_tree.hpp"
+#include "core/registration/voxel_centroids.hpp"
+
+namespace rotolidar {
+
+class CentroidIndex {
+ public:
+  static constexpr int kMaxK = KdTree3f::kMaxK;
+
+  /// Brings the index up to date with `table` (the table's touched list is consumed).
+  void Sync(VoxelCentroidTable* table);
+
+  /// The min(k, live) nearest centroids to q with squared distance < max_sq_dist: their table slots in *slots,
+  /// squared distances [m^2] in *sq_dist and, with xyz (3 k floats), the centroids; arrays of at least k entries,
+  /// nearest first. 1 <= k <= kMaxK. Returns how many were written.
+  int Nearest(const float q[3], int k, int* slots, float* sq_dist,
+              float max_sq_dist = std::numeric_limits<float>::infinity(), float* xyz = nullptr) const;
+
+  size_t size() const { return main_live_ + overflow_slots_.size(); }  ///< live centroids indexed
+  int main_builds() const { return main_builds_; }  ///< how often the main tree was rebuilt (tests, tuning)
+
+ private:
+  void BuildMain(VoxelCentroidTable* table);
+  void ApplyTouched(const VoxelCentroidTable& table);
+  void BuildOverflow(const VoxelCentroidTable& table);
+
+  KdTree3f main_, overflow_;
+  std::vector<int> main_slot_;        ///< main tree index -> table slot
+  std::vector<int> main_index_;       ///< table slot (< main_slots_) -> main tree index, or -1
+  std::vector<uint8_t> hidden_;       ///< per main tree index: its voxel died
+  size_t main_slots_ = 0;             ///< slots [0, main_slots_) existed at the main build
+  size_t main_live_ = 0;              ///< live centroids held by the main tree
+  size_t main_dead_ = 0;              ///< main tree entries hidden (dead or evicted)
+  std::vector<int> overflow_slots_;   ///< overflow tree index -> table slot
+  uint64_t layout_version_ = std::numeric_limits<uint64_t>::max();
+  int main_builds_ = 0;
+  std::vector<uint32_t> touched_;     ///< scratch
+  std::vector<float> xyz_;            ///< scratch
+};
+
+}  // namespace rotolidar

@@ -71,6 +71,7 @@ void CentroidIndex::ApplyTouched(const VoxelCentroidTable& table) {
     const float xyz[3] = {p.x, p.y, p.z};
     main_.Move(i, xyz);
   }
+  main_.Refit();
 }
 
 void CentroidIndex::BuildOverflow(const VoxelCentroidTable& table) {

@@ -52,28 +52,16 @@ void KdTree3f::Build(const std::vector<float>& xyz) {
     position_[size_t(items[size_t(i)].index)] = i;
   }
   leaf_of_.resize(size_t(n));
-  parent_.assign(nodes_.size(), -1);
-  leaf_box_.assign(6 * nodes_.size(), 0.0f);
-  for (size_t node = 0; node < nodes_.size(); ++node) {
-    const Node& nd = nodes_[node];
-    if (nd.axis < 0) {
-      float* box = &leaf_box_[6 * node];
-      for (int d = 0; d < 3; ++d) {
-        box[d] = std::numeric_limits<float>::infinity();
-        box[3 + d] = -std::numeric_limits<float>::infinity();
-      }
-      for (int i = nd.a; i < nd.b; ++i) {
-        leaf_of_[size_t(i)] = int(node);
-        for (int d = 0; d < 3; ++d) {
-          box[d] = std::min(box[d], coords_[d][size_t(i)]);
-          box[3 + d] = std::max(box[3 + d], coords_[d][size_t(i)]);
-        }
-      }
-    } else {
-      parent_[size_t(nd.a)] = parent_[size_t(nd.b)] = int(node);
-    }
-  }
+  for (size_t node = 0; node < nodes_.size(); ++node)
+    if (nodes_[node].axis < 0)
+      for (int i = nodes_[node].a; i < nodes_[node].b; ++i) leaf_of_[size_t(i)] = int(node);
+  boxes_.assign(6 * nodes_.size(), 0.0f);
+  dirty_.assign(nodes_.size(), 1);
+  dirty_leaves_.clear();
+  for (size_t node = 0; node < nodes_.size(); ++node)
+    if (nodes_[node].axis < 0) dirty_leaves_.push_back(int(node));
   size_ = size_t(n);
+  Refit();  // the same split bounds as the build's (every box is the exact box of its points)
 }
 
 void KdTree3f::Move(int index, const float p[3]) {
@@ -81,31 +69,54 @@ void KdTree3f::Move(int index, const float p[3]) {
   ROTOLIDAR_CHECK(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]), "non-finite point");
   const int at = position_[size_t(index)];
   for (int d = 0; d < 3; ++d) coords_[d][size_t(at)] = p[d];
-  // Every split above the point must still bound it on its side (the bounds only widen; Search clamps). Each
-  // split above a leaf bounds the leaf's box (kept so by this function), so a point inside it needs nothing more.
-  const int leaf = leaf_of_[size_t(at)];
-  float* box = &leaf_box_[6 * size_t(leaf)];
-  bool inside = true;
-  for (int d = 0; d < 3; ++d) {
-    inside = inside && box[d] <= p[d] && p[d] <= box[3 + d];
-    box[d] = std::min(box[d], p[d]);
-    box[3 + d] = std::max(box[3 + d], p[d]);
-  }
-  if (inside) return;
-  for (int child = leaf, node = parent_[size_t(child)]; node >= 0;
-       child = node, node = parent_[size_t(node)]) {
-    Node& nd = nodes_[size_t(node)];
-    if (child == nd.a)
-      nd.left_max = std::max(nd.left_max, p[nd.axis]);
-    else
-      nd.right_min = std::min(nd.right_min, p[nd.axis]);
-  }
+  MarkDirty(leaf_of_[size_t(at)]);
 }
 
 void KdTree3f::Hide(int index) {
   ROTOLIDAR_CHECK(index >= 0 && size_t(index) < size_, "index " << index << " of " << size_);
   // An infinite coordinate gives an infinite distance, which is never below the search bound.
-  for (auto& axis : coords_) axis[size_t(position_[size_t(index)])] = std::numeric_limits<float>::infinity();
+  const int at = position_[size_t(index)];
+  for (auto& axis : coords_) axis[size_t(at)] = std::numeric_limits<float>::infinity();
+  MarkDirty(leaf_of_[size_t(at)]);
+}
+
+void KdTree3f::MarkDirty(int leaf) {
+  if (dirty_[size_t(leaf)]) return;
+  dirty_[size_t(leaf)] = 1;
+  dirty_leaves_.push_back(leaf);
+}
+
+void KdTree3f::Refit() {
+  if (dirty_leaves_.empty()) return;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  for (const int leaf : dirty_leaves_) {  // the exact box of the leaf's shown points (empty: lo +inf, hi -inf)
+    float* box = &boxes_[6 * size_t(leaf)];
+    for (int d = 0; d < 3; ++d) box[d] = kInf, box[3 + d] = -kInf;
+    for (int i = nodes_[size_t(leaf)].a; i < nodes_[size_t(leaf)].b; ++i) {
+      if (coords_[0][size_t(i)] == kInf) continue;  // hidden
+      for (int d = 0; d < 3; ++d) {
+        box[d] = std::min(box[d], coords_[d][size_t(i)]);
+        box[3 + d] = std::max(box[3 + d], coords_[d][size_t(i)]);
+      }
+    }
+  }
+  // Children follow their parent in nodes_ (BuildRange's preorder): one backward pass is bottom-up. Every inner
+  // node is recomputed (a sequential pass over ~n/4 nodes, cheaper than walking each moved point's path).
+  for (size_t node = nodes_.size(); node-- > 0;) {
+    Node& nd = nodes_[node];
+    dirty_[node] = 0;
+    if (nd.axis < 0) continue;
+    const float* l = &boxes_[6 * size_t(nd.a)];
+    const float* r = &boxes_[6 * size_t(nd.b)];
+    float* box = &boxes_[6 * node];
+    for (int d = 0; d < 3; ++d) {
+      box[d] = std::min(l[d], r[d]);
+      box[3 + d] = std::max(l[3 + d], r[3 + d]);
+    }
+    nd.left_max = l[3 + nd.axis];  // -inf for an empty side: Search never enters it (cut = inf)
+    nd.right_min = r[nd.axis];     // +inf likewise
+  }
+  dirty_leaves_.clear();
 }
 
 namespace {
@@ -232,7 +243,8 @@ void KdTree3f::Search(int node_index, const float q[3], float min_sq, float* axi
   const bool go_left = to_left + to_right < 0.0f;
   const int near = go_left ? node.a : node.b;
   const int far = go_left ? node.b : node.a;
-  // The far child's distance along the axis; 0 where moved points made the children's bounds overlap around q.
+  // The far child's distance along the axis; 0 where moved points made the children's bounds overlap around q
+  // (infinite for an empty side: it is never entered).
   const float cut = go_left ? (to_right < 0.0f ? to_right * to_right : 0.0f)
                             : (to_left > 0.0f ? to_left * to_left : 0.0f);
   Search(near, q, min_sq, axis_sq, r);
@@ -247,6 +259,7 @@ void KdTree3f::Search(int node_index, const float q[3], float min_sq, float* axi
 
 int KdTree3f::Nearest(const float q[3], int k, int* indices, float* sq_dist, float max_sq_dist, float* xyz) const {
   ROTOLIDAR_CHECK(k >= 1 && k <= kMaxK, "k = " << k);
+  ROTOLIDAR_CHECK(dirty_leaves_.empty(), "KdTree3f::Nearest after Move / Hide without Refit");
   if (nodes_.empty()) return 0;
   Result r;
   r.k = k;

@@ -5,10 +5,11 @@
 // Contract: Build copies the points (any frame, metres); Nearest returns the exact k nearest points to the query
 // in squared float distance (dx*dx + dy*dy + dz*dz, as FLANN's L2_Simple computes it), nearest first. Among
 // equal distances the order is unspecified. Non-finite points must not be passed to Build (the caller filters).
-// Moving points: Move puts a point anywhere (finite) and widens the split bounds on its path to the root, so the
-// search stays exact without a rebuild (the bounds only grow: a tree whose points drift a little, such as voxel
-// centroids, prunes almost as well as a fresh one); Hide takes a point out of the results. O(depth) each.
-// Thread-safety: Build, Move and Hide are not; const queries are re-entrant.
+// Moving points: Move puts a point anywhere (finite) and Hide takes one out of the results, both O(1); Refit then
+// recomputes the split bounds (the boxes of the changed leaves, then every inner node, O(n / leaf size)), so the
+// search is exact again without a rebuild. The structure stays the build's: a tree whose points drift a little,
+// such as voxel centroids, prunes as well as a fresh one. Search only after Refit (checked).
+// Thread-safety: Build, Move, Hide and Refit are not; const queries are re-entrant.
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -26,6 +27,8 @@ class KdTree3f {
   void Move(int index, const float p[3]);
   /// Takes point `index` out of every search result until it is moved again.
   void Hide(int index);
+  /// Makes the tree searchable after Move / Hide (a no-op when nothing changed).
+  void Refit();
   size_t size() const { return size_; }
 
   /// The min(k, size()) nearest points to q: their indices (into the Build input) in *indices and squared
@@ -58,8 +61,10 @@ class KdTree3f {
   std::vector<int> original_;    ///< original index of point i of coords_
   std::vector<int> position_;    ///< position in coords_ of original index i (inverse of original_)
   std::vector<int> leaf_of_;     ///< per position in coords_: its leaf node
-  std::vector<float> leaf_box_;  ///< per node (leaves used): lo x y z, hi x y z of its points, widened by Move
-  std::vector<int> parent_;      ///< per node: its parent (-1 for the root)
+  std::vector<float> boxes_;     ///< per node: lo x y z, hi x y z of its shown points (as of the last Refit)
+  std::vector<uint8_t> dirty_;   ///< per node: a leaf changed since Refit
+  std::vector<int> dirty_leaves_;
+  void MarkDirty(int leaf);
   std::vector<Node> nodes_;
   std::vector<Item> scratch_;    ///< Build's working copy, capacity kept across builds
 };

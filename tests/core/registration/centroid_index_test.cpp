@@ -11,6 +11,7 @@
 #include "core/registration/centroid_index.hpp"
 #include "core/registration/kd_tree.hpp"
 #include "core/registration/voxel_centroids.hpp"
+#include "core/util/log.hpp"
 #include "core/util/rng.hpp"
 
 namespace rotolidar {
@@ -47,6 +48,7 @@ void ExpectExactAfterMoves(float move_m) {
     tree.Move(i, p);
     std::copy(p, p + 3, now.begin() + 3 * i);
   }
+  tree.Refit();
   const int k = 8;
   int idx[KdTree3f::kMaxK];
   float sq[KdTree3f::kMaxK], xyz[3 * KdTree3f::kMaxK];
@@ -67,6 +69,7 @@ void ExpectExactAfterMoves(float move_m) {
   // A hidden point comes back when moved again, wherever it goes.
   const float back[3] = {-3.0f, 20.0f, 1.0f};  // point 3 is hidden
   tree.Move(3, back);
+  tree.Refit();
   ASSERT_EQ(tree.Nearest(back, 1, idx, sq), 1);
   EXPECT_EQ(idx[0], 3);
   EXPECT_EQ(sq[0], 0.0f);
@@ -77,6 +80,26 @@ TEST(KdTree3fMoves, MovedAndHiddenPointsAreSearchedExactly) {
   // Moves far beyond the spacing: the children's bounds overlap widely, which only the search's clamped
   // far-side distance handles.
   ExpectExactAfterMoves(0.6f);
+}
+
+TEST(KdTree3fMoves, EmptiedSubtreesAndUnrefittedSearches) {
+  std::vector<float> xyz;
+  for (int i = 0; i < 64; ++i) xyz.insert(xyz.end(), {float(i), 0.5f * float(i % 3), 0.0f});
+  KdTree3f tree;
+  tree.Build(xyz);
+  for (int i = 0; i < 60; ++i) tree.Hide(i);  // whole leaves and subtrees empty
+  const float q[3] = {10.0f, 0.0f, 0.0f};
+  int idx[4];
+  float sq[4];
+  EXPECT_THROW(tree.Nearest(q, 2, idx, sq), InternalError);  // searched before Refit: refused
+  tree.Refit();
+  ASSERT_EQ(tree.Nearest(q, 4, idx, sq), 4);
+  std::vector<int> got(idx, idx + 4);
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, (std::vector<int>{60, 61, 62, 63}));
+  for (int i = 60; i < 64; ++i) tree.Hide(i);
+  tree.Refit();
+  EXPECT_EQ(tree.Nearest(q, 4, idx, sq), 0);
 }
 
 /// Points of a 6 x 5 x 2 m box shifted along x by `shift`, in float.

@@ -41,12 +41,14 @@ void CentroidIndex::BuildMain(VoxelCentroidTable* table) {
   main_index_.assign(main_slots_, -1);
   main_slot_.clear();
   xyz_.clear();
+  slot_xyz_.resize(3 * main_slots_);
+  views_.resize(main_slots_);
   for (size_t slot = 0; slot < main_slots_; ++slot) {
     if (!table->live(slot)) continue;
     main_index_[slot] = int(main_slot_.size());
     main_slot_.push_back(int(slot));
-    const pcl::PointXYZI p = table->MeanAt(slot).point;
-    xyz_.insert(xyz_.end(), {p.x, p.y, p.z});
+    Remember(slot, table->MeanAt(slot));
+    xyz_.insert(xyz_.end(), slot_xyz_.begin() + long(3 * slot), slot_xyz_.begin() + long(3 * slot + 3));
   }
   main_.Build(xyz_);
   main_live_ = main_slot_.size();
@@ -55,8 +57,19 @@ void CentroidIndex::BuildMain(VoxelCentroidTable* table) {
   BuildOverflow(*table);
 }
 
+void CentroidIndex::Remember(size_t slot, const VoxelCentroidTable::Mean& m) {
+  float* c = &slot_xyz_[3 * slot];
+  c[0] = m.point.x;
+  c[1] = m.point.y;
+  c[2] = m.point.z;
+  views_[slot] = m.view;
+}
+
 void CentroidIndex::ApplyTouched(const VoxelCentroidTable& table) {
+  slot_xyz_.resize(3 * table.num_slots());
+  views_.resize(table.num_slots());
   for (const uint32_t slot : touched_) {
+    if (table.live(slot)) Remember(slot, table.MeanAt(slot));
     if (slot >= main_slots_) continue;  // created since the main build: in the overflow
     const int i = main_index_[slot];
     if (i < 0 || hidden_[size_t(i)]) continue;  // (a voxel never comes back to a dead slot)
@@ -67,9 +80,7 @@ void CentroidIndex::ApplyTouched(const VoxelCentroidTable& table) {
       ++main_dead_;
       continue;
     }
-    const pcl::PointXYZI p = table.MeanAt(slot).point;
-    const float xyz[3] = {p.x, p.y, p.z};
-    main_.Move(i, xyz);
+    main_.Move(i, &slot_xyz_[3 * size_t(slot)]);
   }
   main_.Refit();
 }
@@ -79,9 +90,8 @@ void CentroidIndex::BuildOverflow(const VoxelCentroidTable& table) {
   xyz_.clear();
   for (size_t slot = main_slots_; slot < table.num_slots(); ++slot) {
     if (!table.live(slot)) continue;
-    const pcl::PointXYZI p = table.MeanAt(slot).point;
     overflow_slots_.push_back(int(slot));
-    xyz_.insert(xyz_.end(), {p.x, p.y, p.z});
+    xyz_.insert(xyz_.end(), slot_xyz_.begin() + long(3 * slot), slot_xyz_.begin() + long(3 * slot + 3));
   }
   overflow_.Build(xyz_);
 }

@@ -35,6 +35,8 @@ class CentroidIndex {
   int Nearest(const float q[3], int k, int* slots, float* sq_dist,
               float max_sq_dist = std::numeric_limits<float>::infinity(), float* xyz = nullptr) const;
 
+  /// The mean unit view vector of a live slot's voxel (VoxelCentroidTable::MeanViews), as of the last Sync.
+  const Eigen::Vector3f& view(int slot) const { return views_[size_t(slot)]; }
   size_t size() const { return main_live_ + overflow_slots_.size(); }  ///< live centroids indexed
   int main_builds() const { return main_builds_; }  ///< how often the main tree was rebuilt (tests, tuning)
 
@@ -42,6 +44,7 @@ class CentroidIndex {
   void BuildMain(VoxelCentroidTable* table);
   void ApplyTouched(const VoxelCentroidTable& table);
   void BuildOverflow(const VoxelCentroidTable& table);
+  void Remember(size_t slot, const VoxelCentroidTable::Mean& m);  ///< into slot_xyz_ / views_
 
   KdTree3f main_, overflow_;
   std::vector<int> main_slot_;        ///< main tree index -> table slot
@@ -53,6 +56,8 @@ class CentroidIndex {
   std::vector<int> overflow_slots_;   ///< overflow tree index -> table slot
   uint64_t layout_version_ = std::numeric_limits<uint64_t>::max();
   int main_builds_ = 0;
+  std::vector<float> slot_xyz_;       ///< per table slot: its centroid (x, y, z) as of the last Sync
+  std::vector<Eigen::Vector3f> views_;  ///< per table slot: its mean view vector, likewise
   std::vector<uint32_t> touched_;     ///< scratch
   std::vector<float> xyz_;            ///< scratch
 };

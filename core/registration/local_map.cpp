@@ -157,7 +157,7 @@ int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std
   for (int i = 0; i < found; ++i) (*points)[size_t(i)] = Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
   if (views != nullptr) {
     views->resize(size_t(found));
-    for (int i = 0; i < found; ++i) (*views)[size_t(i)] = s.table.MeanAt(size_t(slots[i])).view;
+    for (int i = 0; i < found; ++i) (*views)[size_t(i)] = s.index.view(slots[i]);
   }
   return found;
 }

@@ -140,6 +140,7 @@ void ExpectExact(const CentroidIndex& index, const VoxelCentroidTable& table, Ra
       const pcl::PointXYZI c = table.MeanAt(size_t(slots[j])).point;
       EXPECT_TRUE(xyz[3 * j] == c.x && xyz[3 * j + 1] == c.y && xyz[3 * j + 2] == c.z);
       EXPECT_EQ(SqDist(q, xyz + 3 * j), sq[j]);
+      EXPECT_TRUE(index.view(slots[j]) == table.MeanAt(size_t(slots[j])).view);
     }
   }
 }

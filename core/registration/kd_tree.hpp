@@ -1,6 +1,7 @@
 #pragma once
-// A static 3-D kd-tree over float points for the local map's exact k-nearest-neighbour queries (replaces PCL's
-// KdTreeFLANN there: no per-query heap allocation, no OpenMP region per query, no index remapping).
+// A 3-D kd-tree over float points (fixed structure, movable points) for the local map's exact k-nearest-neighbour
+// queries (replaces PCL's KdTreeFLANN there: no per-query heap allocation, no OpenMP region per query, no index
+// remapping).
 //
 // Contract: Build copies the points (any frame, metres); Nearest returns the exact k nearest points to the query
 // in squared float distance (dx*dx + dy*dy + dz*dz, as FLANN's L2_Simple computes it), nearest first. Among

@@ -52,7 +52,7 @@ class CentroidIndex {
   std::vector<uint8_t> hidden_;       ///< per main tree index: its voxel died
   size_t main_slots_ = 0;             ///< slots [0, main_slots_) existed at the main build
   size_t main_live_ = 0;              ///< live centroids held by the main tree
-  size_t main_dead_ = 0;              ///< main tree entries hidden (dead or evicted)
+  size_t main_dead_ = 0;              ///< main tree entries hidden (their voxels died)
   std::vector<int> overflow_slots_;   ///< overflow tree index -> table slot
   uint64_t layout_version_ = std::numeric_limits<uint64_t>::max();
   int main_builds_ = 0;

@@ -208,9 +208,7 @@ int KdTree3f::BuildRange(int begin, int end, const float lo[3], const float hi[3
   const int left_node = BuildRange(begin, mid, left.lo, left.hi);
   const int right_node = BuildRange(mid, end, right.lo, right.hi);
   Node& node = nodes_[size_t(self)];
-  node.axis = axis;
-  node.left_max = left.hi[axis];
-  node.right_min = right.lo[axis];
+  node.axis = axis;  // left_max / right_min: set by Refit, from the same exact boxes
   node.a = left_node;
   node.b = right_node;
   return self;

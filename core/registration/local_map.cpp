@@ -48,7 +48,7 @@ struct Searchable {
   mutable Cloud cloud;              ///< the centroids as a cloud, exported on demand (cloud())
   mutable bool cloud_stale = true;
 
-  void Rebuild() {
+  void Sync() {
     index.Sync(&table);
     cloud_stale = true;
   }
@@ -97,9 +97,9 @@ struct LocalMap::Impl {
       PopFront();  // the newest keyframe is at distance 0, so the loop ends
   }
 
-  void Rebuild() {
-    edge.Rebuild();
-    planar.Rebuild();
+  void Sync() {
+    edge.Sync();
+    planar.Sync();
   }
 };
 
@@ -132,14 +132,14 @@ void LocalMap::AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan) 
   impl_->planar.table.Add(kf.planar_map, SensorOf(T_map_scan));
   impl_->keyframes.push_back(std::move(kf));
   impl_->Trim();
-  impl_->Rebuild();
+  impl_->Sync();
 }
 
 void LocalMap::Clear() {
   impl_->keyframes.clear();
   impl_->edge.table.Clear();
   impl_->planar.table.Clear();
-  impl_->Rebuild();
+  impl_->Sync();
 }
 
 int LocalMap::Nearest(FeatureKind kind, const Eigen::Vector3d& p_map, int k, std::vector<Eigen::Vector3d>* points,

@@ -167,25 +167,4 @@ void VoxelCentroidTable::MeanViews(std::vector<Eigen::Vector3f>* out) const {
     if (v.count != 0) out->push_back(MeanOf(v).view);
 }
 
-void VoxelCentroidTable::Export(pcl::PointCloud<pcl::PointXYZI>* cloud, std::vector<Eigen::Vector3f>* views,
-                                std::vector<float>* xyz) const {
-  cloud->resize(live_);
-  views->resize(live_);
-  xyz->resize(3 * live_);
-  size_t i = 0;
-  for (const Voxel& v : voxels_) {
-    if (v.count == 0) continue;
-    const Mean m = MeanOf(v);
-    (*cloud)[i] = m.point;
-    (*views)[i] = m.view;
-    float* c = xyz->data() + 3 * i;
-    c[0] = m.point.x;
-    c[1] = m.point.y;
-    c[2] = m.point.z;
-    ++i;
-  }
-  ROTOLIDAR_CHECK(i == live_, "live count " << live_ << " != " << i << " live voxels");
-  cloud->is_dense = true;
-}
-
 }  // namespace rotolidar

@@ -44,10 +44,6 @@ class VoxelCentroidTable {
   void Centroids(pcl::PointCloud<pcl::PointXYZI>* out) const;
   /// Per centroid (same order as Centroids), the mean unit view vector of its points, into *out (replaced).
   void MeanViews(std::vector<Eigen::Vector3f>* out) const;
-  /// Centroids, MeanViews and the centroids' x, y, z (3 floats per point, as KdTree3f::Build takes them) in one
-  /// pass; each output replaced, with the same values as the separate calls give.
-  void Export(pcl::PointCloud<pcl::PointXYZI>* cloud, std::vector<Eigen::Vector3f>* views,
-              std::vector<float>* xyz) const;
   size_t num_voxels() const { return live_; }
 
   /// The voxel key of a point under PCL VoxelGrid's indexing (21 bits per axis, two's complement).

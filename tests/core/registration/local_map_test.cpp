@@ -139,28 +139,6 @@ TEST(VoxelCentroidTable, RemovingASetRestoresTheTableExactly) {
   EXPECT_THROW(both.Remove(a), std::exception);  // removing what is not there is a programmer error
 }
 
-TEST(VoxelCentroidTable, ExportEqualsCentroidsAndMeanViews) {
-  RandomStream rng(10, "test.registration.voxel_table_export");
-  VoxelCentroidTable table(0.2);
-  table.Add(RoomCloud(&rng, 3000), Eigen::Vector3f(0.5f, -0.2f, 1.0f));
-  table.Add(RoomCloud(&rng, 3000), Eigen::Vector3f(-1.0f, 0.3f, 0.8f));
-  Cloud want, got;
-  std::vector<Eigen::Vector3f> want_views, got_views;
-  std::vector<float> xyz;
-  table.Centroids(&want);
-  table.MeanViews(&want_views);
-  table.Export(&got, &got_views, &xyz);
-  ASSERT_EQ(got.size(), want.size());
-  ASSERT_EQ(got_views.size(), want.size());
-  ASSERT_EQ(xyz.size(), 3 * want.size());
-  for (size_t i = 0; i < got.size(); ++i) {
-    EXPECT_TRUE(got[i].x == want[i].x && got[i].y == want[i].y && got[i].z == want[i].z);
-    EXPECT_EQ(got[i].intensity, want[i].intensity);
-    EXPECT_TRUE(got_views[i] == want_views[i]);
-    EXPECT_TRUE(xyz[3 * i] == want[i].x && xyz[3 * i + 1] == want[i].y && xyz[3 * i + 2] == want[i].z);
-  }
-}
-
 TEST(VoxelCentroidTable, SlidingWindowMatchesAFreshTableThroughGrowthAndCompaction) {
   RandomStream rng(9, "test.registration.voxel_table_window");
   std::vector<Cloud> sets;

@@ -12,22 +12,24 @@ ceres::Context* ThreadContext() {
 }
 
 /// Makes `pool` (a deque: its elements never move) hold at least n per-point residuals, placeholders from `make`,
-/// and re-blocks its first n into ceil(n / group_size) GroupedResidual blocks: the old blocks are removed and new
-/// ones added (a few dozen problem edits per correspondence set, however many points change).
+/// and spreads its first n over ceil(n / group_size) GroupedResidual blocks in the problem. A group has a fixed
+/// number of rows however many points it holds, so the blocks in use stay in the problem and are refilled; only
+/// the difference in their number is added or removed.
 template <typename Residual, typename MakePlaceholder>
 void RegroupBlocks(size_t n, size_t group_size, ceres::Problem* problem, const ceres::LossFunction* loss, double* x,
                    std::deque<Residual>* pool, std::deque<GroupedResidual<Residual>>* groups,
                    std::vector<ceres::ResidualBlockId>* ids, MakePlaceholder make) {
-  for (ceres::ResidualBlockId id : *ids) problem->RemoveResidualBlock(id);
-  ids->clear();
   while (pool->size() < n) make(pool);
-  for (size_t begin = 0; begin < n; begin += group_size) {
-    if (groups->size() <= ids->size()) groups->emplace_back(loss);
-    GroupedResidual<Residual>& g = (*groups)[ids->size()];
+  const size_t num_groups = (n + group_size - 1) / group_size;
+  for (; ids->size() > num_groups; ids->pop_back()) problem->RemoveResidualBlock(ids->back());
+  while (groups->size() < num_groups) groups->emplace_back(loss);
+  for (size_t k = 0; k < num_groups; ++k) {
+    GroupedResidual<Residual>& g = (*groups)[k];
     g.Clear();
-    for (size_t i = begin; i < std::min(begin + group_size, n); ++i) g.Add(&(*pool)[i]);
-    ids->push_back(problem->AddResidualBlock(&g, nullptr, x));  // the loss is applied per point, inside
+    for (size_t i = k * group_size; i < std::min((k + 1) * group_size, n); ++i) g.Add(&(*pool)[i]);
   }
+  while (ids->size() < num_groups)  // the loss is applied per point, inside
+    ids->push_back(problem->AddResidualBlock(&(*groups)[ids->size()], nullptr, x));
 }
 
 }  // namespace

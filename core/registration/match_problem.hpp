@@ -2,12 +2,13 @@
 // The Ceres side of scan-to-map registration (core/registration/scan_to_map.hpp): ONE ceres::Problem over the
 // 7-double pose block (PoseManifold, residuals.hpp) that every correspondence set of a Register call is solved
 // in. The matches live in two pools of per-point cost functions (point-to-line, point-to-plane; re-targeted in
-// place with SetLine / SetPlane); the problem holds them as GroupedResidual blocks of up to kPointsPerGroup
-// consecutive points each, every point under the configured per-point robust loss applied inside the group
-// exactly as Ceres applies a block's loss. So the gradient, Gauss-Newton matrix, LM steps, costs and optimum
-// are those of the problem with one residual block per match under that loss (up to float rounding; pinned by
-// scan_to_map_test's MatchProblem tests), while Ceres' per-block work (evaluation dispatch, loss correction,
-// Jacobian writing, manifold products) runs ~kPointsPerGroup times less often.
+// place with SetLine / SetPlane); the problem holds them as GroupedResidual blocks (grouped_residual.hpp) of up
+// to kPointsPerGroup consecutive points each, every point under the configured per-point robust loss applied
+// inside the group exactly as Ceres applies a block's loss, each group compressed to 7 rows (its square-root
+// information). So the gradient, Gauss-Newton matrix, LM steps, costs and optimum are those of the problem with
+// one residual block per match under that loss (up to float rounding; pinned by scan_to_map_test's MatchProblem
+// tests), while Ceres' per-block and per-row work (evaluation dispatch, Jacobian writing, manifold products,
+// J^T J) shrinks from one block and 1-2 rows per point to one block and 7 rows per group.
 //
 // Thread-safety: one MatchProblem per thread (it is not re-entrant); distinct instances are independent (the
 // Ceres context is per thread).
@@ -19,6 +20,7 @@
 #include <ceres/ceres.h>
 #include <Eigen/Core>
 
+#include "core/registration/grouped_residual.hpp"
 #include "core/registration/residuals.hpp"
 #include "core/registration/scan_to_map.hpp"
 #include "core/types/geometry.hpp"
@@ -45,7 +47,7 @@ class MatchProblem {
   const ceres::Solver::Options& options() const { return options_; }
 
   /// Makes the problem hold exactly num_lines point-to-line and num_planes point-to-plane residuals (in
-  /// ceil(n / kPointsPerGroup) blocks per kind, each with one extra zero-Jacobian cost row, GroupedResidual).
+  /// ceil(n / kPointsPerGroup) GroupedResidual blocks of 7 rows per kind).
   /// Points kept from the previous size keep their old correspondence until SetLine / SetPlane: set every index
   /// before Solve.
   void Resize(size_t num_lines, size_t num_planes);

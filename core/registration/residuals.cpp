@@ -139,57 +139,5 @@ Eigen::Vector2d PointToLineResidual::EvaluateTangent(const Pose3& T, Eigen::Matr
   return Bt_ * (Rp + T.translation() - a_map_);
 }
 
-double CorrectForLoss(const ceres::LossFunction& loss, int rows, int cols, double* r, double* J) {
-  Eigen::Map<Eigen::VectorXd> res(r, rows);
-  const double s = res.squaredNorm();
-  double rho[3];
-  loss.Evaluate(s, rho);
-  // Ceres' Corrector: residual_scaling = sqrt(rho'), and no curvature (alpha) term when s = 0 or rho'' <= 0.
-  ROTOLIDAR_CHECK(s == 0.0 || rho[2] <= 0.0, "grouped residuals need a loss with rho'' <= 0, got " << rho[2]);
-  const double k = std::sqrt(rho[1]);
-  res *= k;
-  if (J != nullptr) Eigen::Map<Eigen::VectorXd>(J, rows * cols) *= k;
-  return rho[0] - res.squaredNorm();
-}
-
-template <typename Residual>
-GroupedResidual<Residual>::GroupedResidual(const ceres::LossFunction* loss) : loss_(loss) {
-  mutable_parameter_block_sizes()->push_back(7);
-  set_num_residuals(1);
-}
-
-template <typename Residual>
-void GroupedResidual<Residual>::Clear() {
-  points_.clear();
-  set_num_residuals(1);
-}
-
-template <typename Residual>
-void GroupedResidual<Residual>::Add(const Residual* point) {
-  points_.push_back(point);
-  set_num_residuals(int(points_.size()) * Residual::kRows + 1);
-}
-
-template <typename Residual>
-bool GroupedResidual<Residual>::Evaluate(double const* const* parameters, double* residuals,
-                                         double** jacobians) const {
-  constexpr int kRows = Residual::kRows;
-  double* J = (jacobians != nullptr) ? jacobians[0] : nullptr;
-  double deficit = 0.0;
-  for (size_t i = 0; i < points_.size(); ++i) {
-    double* r_i = residuals + i * kRows;
-    double* J_i = (J != nullptr) ? J + i * kRows * 7 : nullptr;
-    points_[i]->Evaluate(parameters, r_i, J_i != nullptr ? &J_i : nullptr);
-    if (loss_ != nullptr) deficit += CorrectForLoss(*loss_, kRows, 7, r_i, J_i);
-  }
-  const size_t last = points_.size() * kRows;  // the bookkeeping row: the loss the scaled rows do not carry
-  residuals[last] = std::sqrt(std::max(0.0, deficit));
-  if (J != nullptr) std::fill(J + last * 7, J + last * 7 + 7, 0.0);
-  return true;
-}
-
-template class GroupedResidual<PointToPlaneResidual>;
-template class GroupedResidual<PointToLineResidual>;
-
 }  // namespace rotolidar
 

@@ -13,9 +13,7 @@
 // a rotation by 2|d|; residuals_test pins this), which is why the Hessian is computed from EvaluateTangent below
 // and never taken from Ceres' tangent-space Jacobian.
 //
-// GroupedResidual<Residual> evaluates a contiguous run of per-point residuals as ONE Ceres cost function, with
-// each point's robust loss applied inside it exactly as Ceres' Corrector would for a per-point block (see below):
-// the same gradient, Gauss-Newton matrix, model cost and cost, at a fraction of Ceres' per-block overhead.
+// Many of these are solved as one Ceres block each run of points: GroupedResidual (grouped_residual.hpp).
 //
 // Thread-safety: Evaluate is const and re-entrant. Reset (re-targets a pooled cost function at another
 // correspondence) must not run while a Ceres solve that uses the function is in progress.
@@ -24,8 +22,6 @@
 #include <vector>
 
 #include <ceres/cost_function.h>
-#include <ceres/loss_function.h>
-
 #include <ceres/manifold.h>
 #include <ceres/product_manifold.h>
 #include <ceres/sized_cost_function.h>
@@ -64,6 +60,20 @@ class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [n^T, -n^T [R p]x].
   double EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 1, 6>* J) const;
+  /// The residual at rotation R and translation t, into r[0] (the grouped solve's cost-only inner loop).
+  void Residual(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double* r) const {
+    r[0] = n_map_.dot(R * p_scan_ + t) + d_m_;
+  }
+  /// EvaluateTangent at rotation R and translation t, into r[0] and J[0..5] (the grouped solve's inner loop).
+  void Linearize(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double* r, double* J) const {
+    const Eigen::Vector3d Rp = R * p_scan_;
+    r[0] = n_map_.dot(Rp + t) + d_m_;
+    const Eigen::Vector3d Rp_x_n = Rp.cross(n_map_);  // -n^T [Rp]x = (Rp x n)^T
+    for (int a = 0; a < 3; ++a) {
+      J[a] = n_map_(a);
+      J[3 + a] = Rp_x_n(a);
+    }
+  }
 
  private:
   Eigen::Vector3d p_scan_;
@@ -84,44 +94,31 @@ class PointToLineResidual final : public ceres::SizedCostFunction<2, 7> {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [B^T, -B^T [R p]x].
   Eigen::Vector2d EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 2, 6>* J) const;
+  /// The residual at rotation R and translation t, into r[0..1] (the grouped solve's cost-only inner loop).
+  void Residual(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double* r) const {
+    const Eigen::Vector2d v = Bt_ * (R * p_scan_ + t - a_map_);
+    r[0] = v(0);
+    r[1] = v(1);
+  }
+  /// EvaluateTangent at rotation R and translation t, into r[0..1] and J (2 x 6, row-major).
+  void Linearize(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double* r, double* J) const {
+    const Eigen::Vector3d Rp = R * p_scan_;
+    const Eigen::Vector3d e = Rp + t - a_map_;
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector3d b = Bt_.row(k).transpose();
+      r[k] = b.dot(e);
+      const Eigen::Vector3d Rp_x_b = Rp.cross(b);
+      for (int a = 0; a < 3; ++a) {
+        J[6 * k + a] = b(a);
+        J[6 * k + 3 + a] = Rp_x_b(a);
+      }
+    }
+  }
 
  private:
   Eigen::Vector3d p_scan_;
   Eigen::Vector3d a_map_;
   Eigen::Matrix<double, 2, 3> Bt_;  ///< rows b1^T, b2^T
 };
-
-/// Ceres' robust-loss correction of ONE residual block (ceres/internal/ceres/corrector.cc, the rho'' <= 0 branch):
-/// with s = |r|^2 and rho = loss(s), scales r (rows) and, if J != nullptr, J (rows x cols, row-major) by
-/// sqrt(rho'(s)). Returns rho(s) - |r_scaled|^2 >= 0 (up to rounding), the part of the loss the scaled residual
-/// does not carry. Requires rho''(s) <= 0 or s = 0 (true for Huber, Cauchy, soft-L1, Arctan, Tukey): only there
-/// is Ceres' correction a pure scaling and the returned deficit non-negative; otherwise a fatal check.
-double CorrectForLoss(const ceres::LossFunction& loss, int rows, int cols, double* r, double* J);
-
-/// A run of per-point residuals (PointToPlaneResidual or PointToLineResidual, added with Add) as ONE Ceres cost
-/// function on the 7-double pose block, each point under `loss` (nullptr: least squares). Rows: Residual::kRows
-/// per point in Add order (the loss-corrected residual and ambient Jacobian, CorrectForLoss), then ONE
-/// bookkeeping row sqrt(max(0, sum_i deficit_i)) with a zero Jacobian, so that Ceres' block cost 1/2 |rows|^2
-/// equals 1/2 sum_i rho(s_i), and the gradient J^T r, Gauss-Newton matrix J^T J and LM model cost equal those
-/// of one block per point under `loss` (up to float rounding). Add the group to a problem WITHOUT a loss of its
-/// own. Does not own the points or the loss: both must outlive every Evaluate.
-template <typename Residual>
-class GroupedResidual final : public ceres::CostFunction {
- public:
-  explicit GroupedResidual(const ceres::LossFunction* loss);
-  /// Clear / Add change num_residuals(): only between solves, and only while the group is not in a problem
-  /// (Ceres reads the sizes when the block is added and when a solve starts).
-  void Clear();
-  void Add(const Residual* point);
-  size_t size() const { return points_.size(); }
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-
- private:
-  const ceres::LossFunction* loss_;
-  std::vector<const Residual*> points_;
-};
-
-extern template class GroupedResidual<PointToPlaneResidual>;
-extern template class GroupedResidual<PointToLineResidual>;
 
 }  // namespace rotolidar

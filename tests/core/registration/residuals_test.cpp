@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "core/registration/degeneracy.hpp"
+#include "core/registration/grouped_residual.hpp"
 #include "core/registration/residuals.hpp"
 #include "core/util/rng.hpp"
 
@@ -289,52 +290,73 @@ TEST(Degeneracy, ValidateNamesTheField) {
   EXPECT_NE(error.find("degeneracy.min_eigenvalue"), std::string::npos) << error;
 }
 
-// A group's rows give Ceres the gradient, Gauss-Newton matrix and cost of one block per point under the loss,
-// with Ceres' per-block correction (sqrt(rho') on residual and Jacobian; Huber and Cauchy have rho'' <= 0).
+// A group's 7 rows give Ceres the gradient, Gauss-Newton matrix and cost of one block per point under the loss,
+// with Ceres' per-block correction (sqrt(rho') on residual and Jacobian; Huber and Cauchy have rho'' <= 0), in
+// Ceres' tangent space (the ambient Jacobians times the manifold's PlusJacobian, as Ceres uses them).
+// Lines (2 rows a point) and planes (1 row), a full-rank group and groups that observe fewer directions.
+template <typename Residual>
+void ExpectGroupMatchesPerPointBlocks(const std::deque<Residual>& points, const PoseParameters& x) {
+  const double* params[] = {x.data()};
+  Eigen::Matrix<double, 7, 6, Eigen::RowMajor> P;
+  ASSERT_TRUE(PoseManifold().PlusJacobian(x.data(), P.data()));
+  const ceres::HuberLoss huber(0.1);
+  const ceres::CauchyLoss cauchy(0.1);
+  for (const ceres::LossFunction* loss : std::vector<const ceres::LossFunction*>{&huber, &cauchy, nullptr}) {
+    GroupedResidual<Residual> group(loss);
+    for (const auto& p : points) group.Add(&p);
+    ASSERT_EQ(group.num_residuals(), 7);
+    Eigen::Matrix<double, 7, 1> r;
+    Eigen::Matrix<double, 7, 7, Eigen::RowMajor> J;
+    double* jac[] = {J.data()};
+    ASSERT_TRUE(group.Evaluate(params, r.data(), jac));
+    EXPECT_TRUE(J.bottomRows<1>().isZero(0.0));  // the cost row carries no Jacobian
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    double cost = 0.0;
+    for (const auto& p : points) {  // one Ceres block per point: its ambient Jacobian through the manifold
+      Eigen::Matrix<double, Residual::kRows, 1> ri;
+      Eigen::Matrix<double, Residual::kRows, 7, Eigen::RowMajor> Ji;
+      double* jaci[] = {Ji.data()};
+      p.Evaluate(params, ri.data(), jaci);
+      const Eigen::Matrix<double, Residual::kRows, 6> Ti = Ji * P;
+      double rho[3] = {ri.squaredNorm(), 1.0, 0.0};
+      if (loss != nullptr) loss->Evaluate(ri.squaredNorm(), rho);
+      g += rho[1] * Ti.transpose() * ri;
+      H += rho[1] * Ti.transpose() * Ti;
+      cost += 0.5 * rho[0];
+    }
+    const Eigen::Matrix<double, 7, 6> JP = J * P;
+    EXPECT_LT((JP.transpose() * r - g).norm(), 1e-12 * g.norm());
+    EXPECT_LT((JP.transpose() * JP - H).norm(), 1e-12 * H.norm());
+    EXPECT_NEAR(0.5 * r.squaredNorm(), cost, 1e-12 * cost);
+    double r_only[7];
+    ASSERT_TRUE(group.Evaluate(params, r_only, nullptr));  // cost-only evaluations: the same cost
+    double cost_only = 0.0;
+    for (double v : r_only) cost_only += 0.5 * v * v;
+    EXPECT_NEAR(cost_only, cost, 1e-12 * cost);
+  }
+}
+
 TEST(GroupedResidual, MatchesPerPointBlocksUnderTheLoss) {
   RandomStream rng(23);
   const Pose3 T = RandomPose(rng);
   const PoseParameters x = PoseToParameters(T);
-  const double* params[] = {x.data()};
   std::deque<PointToLineResidual> lines;
+  std::deque<PointToPlaneResidual> planes, one_plane;
   for (int i = 0; i < 9; ++i) {
     const Eigen::Vector3d p = RandomVector(rng, 5.0), u = RandomVector(rng, 1.0).normalized();
     const double off = (i % 3 == 0) ? 0.6 : 0.02;  // every third point deep in the robust zone (scale 0.1)
     lines.emplace_back(p, T * p + off * u.unitOrthogonal() + RandomVector(rng, 0.01), u);
+    planes.emplace_back(p, u, -u.dot(T * p) + off);
+    // All on one map plane z = 1: the group observes z, roll and pitch only (G has rank 3 in the tangent).
+    one_plane.emplace_back(p, Eigen::Vector3d::UnitZ(), -1.0);
   }
-  const ceres::HuberLoss huber(0.1);
-  const ceres::CauchyLoss cauchy(0.1);
-  const std::vector<const ceres::LossFunction*> losses = {&huber, &cauchy, nullptr};
-  for (const ceres::LossFunction* loss : losses) {
-    GroupedResidual<PointToLineResidual> group(loss);
-    for (const auto& l : lines) group.Add(&l);
-    ASSERT_EQ(group.num_residuals(), 2 * 9 + 1);
-    Eigen::VectorXd r(group.num_residuals());
-    Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor> J(group.num_residuals(), 7);
-    double* jac[] = {J.data()};
-    ASSERT_TRUE(group.Evaluate(params, r.data(), jac));
-    EXPECT_TRUE(J.bottomRows<1>().isZero(0.0));  // the cost row carries no Jacobian
-    Eigen::Matrix<double, 7, 1> g = Eigen::Matrix<double, 7, 1>::Zero();
-    Eigen::Matrix<double, 7, 7> H = Eigen::Matrix<double, 7, 7>::Zero();
-    double cost = 0.0;
-    for (const auto& l : lines) {
-      Eigen::Vector2d ri;
-      Eigen::Matrix<double, 2, 7, Eigen::RowMajor> Ji;
-      double* jaci[] = {Ji.data()};
-      l.Evaluate(params, ri.data(), jaci);
-      double rho[3] = {ri.squaredNorm(), 1.0, 0.0};
-      if (loss != nullptr) loss->Evaluate(ri.squaredNorm(), rho);
-      g += rho[1] * Ji.transpose() * ri;
-      H += rho[1] * Ji.transpose() * Ji;
-      cost += 0.5 * rho[0];
-    }
-    EXPECT_LT((J.transpose() * r - g).norm(), 1e-12 * g.norm());
-    EXPECT_LT((J.transpose() * J - H).norm(), 1e-12 * H.norm());
-    EXPECT_NEAR(0.5 * r.squaredNorm(), cost, 1e-12 * cost);
-    double r_only[19];
-    ASSERT_TRUE(group.Evaluate(params, r_only, nullptr));  // cost-only evaluations: the same rows
-    EXPECT_LT((Eigen::Map<Eigen::VectorXd>(r_only, 19) - r).norm(), 1e-15 * r.norm());
-  }
+  ExpectGroupMatchesPerPointBlocks(lines, x);
+  ExpectGroupMatchesPerPointBlocks(planes, x);
+  ExpectGroupMatchesPerPointBlocks(one_plane, x);
+  std::deque<PointToPlaneResidual> single;
+  single.emplace_back(RandomVector(rng, 5.0), Eigen::Vector3d::UnitX(), 0.3);  // one point: rank 1
+  ExpectGroupMatchesPerPointBlocks(single, x);
 }
 
 }  // namespace

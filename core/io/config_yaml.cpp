@@ -37,6 +37,7 @@ template <class V>
 void VisitRegistration(V& v, ScanToMapConfig& c) {
   v("max_solver_iterations", &c.max_solver_iterations), v("max_correspondence_rebuilds", &c.max_correspondence_rebuilds);
   v("num_neighbours", &c.num_neighbours), v("max_neighbour_distance_m", &c.max_neighbour_distance_m);
+  v("neighbour_reuse_m", &c.neighbour_reuse_m);
   v("min_line_eigen_ratio", &c.min_line_eigen_ratio), v("max_plane_eigen_ratio", &c.max_plane_eigen_ratio);
   v("max_plane_deviation_m", &c.max_plane_deviation_m), v("loss", &c.loss), v("loss_scale_m", &c.loss_scale_m);
   v("convergence_translation_m", &c.convergence_translation_m);
@@ -88,6 +89,7 @@ void VisitImuInit(V& v, ImuInitConfig& c) {
 template <class V>
 void VisitTop(V& v, EstimatorConfig& c) {
   v("cut_azimuth_deg", &c.cut_azimuth_deg), v("keyframe_every_scans", &c.keyframe_every_scans);
+  v("initial_keyframes", &c.initial_keyframes);
   v("use_imu", &c.use_imu), v("lidar_point_sigma_m", &c.lidar_point_sigma_m);
   v("hold_static_start", &c.hold_static_start);
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);

@@ -20,6 +20,12 @@ LocalMapConfig EstimatorLocalMapDefaults() {
   return c;
 }
 
+ScanToMapConfig EstimatorRegistrationDefaults() {
+  ScanToMapConfig c;
+  c.neighbour_reuse_m = 0.05;
+  return c;
+}
+
 SlidingWindowConfig EstimatorWindowDefaults() {
   SlidingWindowConfig c;
   c.max_iterations = 3;
@@ -41,6 +47,7 @@ bool EstimatorConfig::Validate(std::string* error) const {
   if (!(lidar_point_sigma_m > 0) || !std::isfinite(lidar_point_sigma_m))
     return fail("lidar_point_sigma_m must be > 0");
   if (keyframe_every_scans < 1) return fail("keyframe_every_scans must be >= 1");
+  if (initial_keyframes < 0) return fail("initial_keyframes must be >= 0");
   if (imu_init_scans < 3) return fail("imu_init_scans must be >= 3");
   if (imu_init_scans < imu_init.moving_min_poses)
     return fail("imu_init_scans must be >= imu_init.moving_min_poses");

@@ -21,6 +21,11 @@ namespace rotolidar {
 constexpr double kRangeSigmaFromCalib = -1.0;
 FeatureConfig EstimatorFeatureDefaults();          ///< planars_per_sector 20, edge_min_snr 5, range sigma from calib
 LocalMapConfig EstimatorLocalMapDefaults();        ///< planar_voxel_m 0.2, max_keyframes 40
+/// neighbour_reuse_m 0.05: a neighbour set found for a scan point serves the later outer iterations while the
+/// point moves less than 5 cm (a quarter of the map's 0.2 m voxels). Exact reuse (0) re-searched ~2.2 times per
+/// point and scan; parking register 4.4 -> 2.2 ms, ATE equal or better except the corridor's chaotic axis
+/// (0.0044 -> 0.0049 m; docs/estimator.md).
+ScanToMapConfig EstimatorRegistrationDefaults();
 /// max_iterations 3: each scan adds one state to a window already at its optimum, so Ceres converges within a
 /// few steps; 10 vs 3 changed no ATE by more than 1 mm on the lab / box-room runs and costs 1 ms per scan.
 /// SPARSE_NORMAL_CHOLESKY: the window's Jacobian (~350 x 150) is block-sparse; the dense normal equations cost
@@ -32,14 +37,20 @@ struct EstimatorConfig {
 
   PreprocessConfig preprocess;   ///< range gate, SOR, optional voxel (core/preprocess/filters.hpp)
   FeatureConfig features = EstimatorFeatureDefaults();  ///< curvature features (core/features/curvature_features.hpp)
-  /// Feature scan-to-map with degeneracy remapping, at the module's (LOAM's) defaults: 5 neighbours per match
-  /// (10 before the visibility check; with it 5 measured better: lab 20 s ATE 0.029 -> 0.024 m, corridor 0.060 ->
-  /// 0.035 m, corridor 40 s 0.47 -> 0.13 m, box room 0.016 -> 0.020 m) and ~35 % faster.
-  ScanToMapConfig registration;
+  /// Feature scan-to-map with degeneracy remapping, at the module's (LOAM's) defaults but neighbour reuse: 5
+  /// neighbours per match (10 before the visibility check; with it 5 measured better: lab 20 s ATE 0.029 -> 0.024
+  /// m, corridor 0.060 -> 0.035 m, corridor 40 s 0.47 -> 0.13 m, box room 0.016 -> 0.020 m) and ~35 % faster.
+  ScanToMapConfig registration = EstimatorRegistrationDefaults();
   LocalMapConfig local_map = EstimatorLocalMapDefaults();  ///< keyframe feature map (registration target)
   /// A rotary LiDAR sees new directions every scan even when the carrier stands still, so besides the local
-  /// map's distance/angle rule a scan becomes a keyframe at least every this many scans.
-  int keyframe_every_scans = 1;
+  /// map's distance/angle rule a scan becomes a keyframe at least every this many scans. 2: the rotor turns
+  /// 15 deg per scan and the VLP-16's fan is 30 deg wide, so every other band still covers the sphere; the
+  /// window of 40 keyframes then spans 8 s (2+ revolutions). Measured against 1 (docs/estimator.md): ATE equal
+  /// or better on lab, corridor, box room and parking (seeds 1, 2), the map stage about half.
+  int keyframe_every_scans = 2;
+  /// Every scan is a keyframe until the local map holds this many: a young map needs each band (24 = one rotor
+  /// revolution at 2.6 rad/s). Without it the box room's moving start drifted 0.017 -> 0.05 m. 0: off.
+  int initial_keyframes = 24;
   /// Before IMU initialisation, hold the pose while the IMU has been still since the start (ImuIsStill with the
   /// imu_init thresholds over the last static_window_s): the first bands then form the map (docs/estimator.md).
   bool hold_static_start = true;

@@ -74,8 +74,8 @@ constexpr double kReuseMarginM = 1e-5;
 /// acceptance limit), so a set with fewer than k is rejected exactly as an unbounded one with a far k-th would
 /// be, and a (k+1)-th beyond the bound is taken at the bound (a smaller, still exact, reuse radius).
 double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Vector3d& q_map, int k,
-                          float bound_sq, NeighbourSet* set) {
-  if (set->searched && (q_map - set->q_map).norm() <= set->reuse_radius_m) {
+                          float bound_sq, double reuse_m, NeighbourSet* set) {
+  if (set->searched && (q_map - set->q_map).norm() <= std::max(set->reuse_radius_m, reuse_m)) {
     double max_sq = 0.0;
     for (const Eigen::Vector3d& p : set->points) max_sq = std::max(max_sq, (p - q_map).squaredNorm());
     return max_sq;
@@ -150,7 +150,8 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
     const auto& pt = scan.edge.points[i];
     const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
     NeighbourSet& s = cache->edges[i];
-    const double kth_sq = KthSquaredDistance(map, FeatureKind::kEdge, T_map_scan * p_scan, k, bound_sq, &s);
+    const double kth_sq =
+        KthSquaredDistance(map, FeatureKind::kEdge, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s);
     if (int(s.points.size()) < k || kth_sq > max_sq) continue;
     if (s.fit == Fit::kUnknown)
       s.fit = FitLine(s.points, c.min_line_eigen_ratio, &s.a_or_n, &s.u) ? Fit::kAccepted : Fit::kRejected;
@@ -160,7 +161,8 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
     const auto& pt = scan.planar.points[i];
     const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
     NeighbourSet& s = cache->planes[i];
-    const double kth_sq = KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, bound_sq, &s);
+    const double kth_sq =
+        KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s);
     if (int(s.points.size()) < k || kth_sq > max_sq) continue;
     if (s.fit == Fit::kUnknown)
       s.fit = FitVisiblePlane(T_map_scan.translation() - s.q_map, c, &s) ? Fit::kAccepted : Fit::kRejected;
@@ -234,6 +236,7 @@ bool ScanToMapConfig::Validate(std::string* error) const {
   if (max_solver_iterations < 1) return fail("scan_to_map.max_solver_iterations must be >= 1");
   if (max_correspondence_rebuilds < 1) return fail("scan_to_map.max_correspondence_rebuilds must be >= 1");
   if (num_neighbours < 3) return fail("scan_to_map.num_neighbours must be >= 3 (a plane needs 3 points)");
+  if (!(neighbour_reuse_m >= 0)) return fail("scan_to_map.neighbour_reuse_m must be >= 0");
   if (num_neighbours >= LocalMap::kMaxNearest)
     return fail("scan_to_map.num_neighbours must be < " + std::to_string(LocalMap::kMaxNearest));
   if (!(max_neighbour_distance_m > 0)) return fail("scan_to_map.max_neighbour_distance_m must be > 0");

@@ -61,7 +61,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "degen_tx", "degen_ty", "degen_tz", "degen_rx", "degen_ry", "degen_rz",
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
                                  "total_ms", "held_static", "vx_mps", "vy_mps", "vz_mps", "bgx_radps", "bgy_radps",
-                                 "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2"});
+                                 "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2", "keyframe", "neighbour_searches"});
       !s)
     return s;
   for (const ScanReport& r : scans) {
@@ -82,6 +82,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
     row.push_back(double(r.held_static));
     for (const Eigen::Vector3d* v : {&r.v_world_mps, &r.bias_gyro_radps, &r.bias_accel_mps2})
       for (int i = 0; i < 3; ++i) row.push_back((*v)[i]);
+    row.push_back(double(r.keyframe));
+    row.push_back(double(g.neighbour_searches));
     csv.Row(row);
   }
   return csv.Close();

@@ -50,6 +50,7 @@ struct RegistrationSummary {
   bool remapped = false;   ///< degenerate: the solve ran again on the well-observed subspace
   int iterations = 0;      ///< correspondence rebuilds
   int solver_iterations = 0;
+  int neighbour_searches = 0;  ///< map kNN searches (ScanToMapResult::neighbour_searches)
   int edge_inliers = 0, planar_inliers = 0;
   double initial_cost = 0.0, final_cost = 0.0;  ///< [m^2]
   double rmse_m = 0.0;
@@ -82,6 +83,7 @@ struct ScanReport {
   bool imu_initialized = false;   ///< the sliding window ran for this scan
   bool imu_deskew = false;        ///< carrier motion came from the IMU (false: constant velocity / none)
   bool held_static = false;       ///< static start: the IMU was still, the pose was held (no registration)
+  bool keyframe = false;          ///< the scan's features went into the local map (UpdateMap)
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
   Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< imu origin velocity from the window, world [m/s] (0 before IMU init)

@@ -139,6 +139,7 @@ Pose3 Estimator::Register(const FeatureSet& features, const Pose3& T_world_base_
   s.remapped = r.remapped;
   s.iterations = r.iterations;
   s.solver_iterations = r.solver_iterations;
+  s.neighbour_searches = r.neighbour_searches;
   s.edge_inliers = r.edge_inliers;
   s.planar_inliers = r.planar_inliers;
   s.initial_cost = r.initial_cost;
@@ -210,6 +211,7 @@ void Estimator::UpdateMap(const FeatureSet& features, const Pose3& T_world_base,
   if (young || local_map_.NeedsKeyframe(T_world_base) || ++scans_since_keyframe_ >= config_.keyframe_every_scans) {
     local_map_.AddKeyframe(features, T_world_base);
     scans_since_keyframe_ = 0;
+    report->keyframe = true;
   }
   // World points in stack chunks (no per-scan heap buffer; the map sees the same sequence as in one call).
   constexpr size_t kChunk = 256;

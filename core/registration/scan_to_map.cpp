@@ -49,12 +49,14 @@ struct NeighbourSet {
 /// The neighbour sets of one scan's features, shared by every FindMatches of one Register call.
 struct MatchCache {
   std::vector<NeighbourSet> edges, planes;
+  int searches = 0;  ///< map searches since Reset (reused sets not counted)
   /// Forgets every search (a set's vectors keep their capacity: no per-point allocation per registration).
   void Reset(size_t num_edges, size_t num_planes) {
     edges.resize(num_edges);
     planes.resize(num_planes);
     for (auto* sets : {&edges, &planes})
       for (NeighbourSet& s : *sets) s.searched = s.has_next = false;
+    searches = 0;
   }
 };
 
@@ -74,7 +76,7 @@ constexpr double kReuseMarginM = 1e-5;
 /// acceptance limit), so a set with fewer than k is rejected exactly as an unbounded one with a far k-th would
 /// be, and a (k+1)-th beyond the bound is taken at the bound (a smaller, still exact, reuse radius).
 double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Vector3d& q_map, int k,
-                          float bound_sq, double reuse_m, NeighbourSet* set) {
+                          float bound_sq, double reuse_m, NeighbourSet* set, int* searches) {
   if (set->searched && (q_map - set->q_map).norm() <= std::max(set->reuse_radius_m, reuse_m)) {
     double max_sq = 0.0;
     for (const Eigen::Vector3d& p : set->points) max_sq = std::max(max_sq, (p - q_map).squaredNorm());
@@ -95,6 +97,7 @@ double KthSquaredDistance(const LocalMap& map, FeatureKind kind, const Eigen::Ve
   }
   thread_local std::vector<float> sq;
   const int found = map.Nearest(kind, q_map, k + 1, &set->points, &sq, search_sq, &set->views);
+  ++*searches;
   set->searched = true;
   set->q_map = q_map;
   set->fit = NeighbourSet::Fit::kUnknown;
@@ -151,7 +154,8 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
     const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
     NeighbourSet& s = cache->edges[i];
     const double kth_sq =
-        KthSquaredDistance(map, FeatureKind::kEdge, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s);
+        KthSquaredDistance(map, FeatureKind::kEdge, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s,
+                           &cache->searches);
     if (int(s.points.size()) < k || kth_sq > max_sq) continue;
     if (s.fit == Fit::kUnknown)
       s.fit = FitLine(s.points, c.min_line_eigen_ratio, &s.a_or_n, &s.u) ? Fit::kAccepted : Fit::kRejected;
@@ -162,7 +166,8 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
     const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
     NeighbourSet& s = cache->planes[i];
     const double kth_sq =
-        KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s);
+        KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s,
+                           &cache->searches);
     if (int(s.points.size()) < k || kth_sq > max_sq) continue;
     if (s.fit == Fit::kUnknown)
       s.fit = FitVisiblePlane(T_map_scan.translation() - s.q_map, c, &s) ? Fit::kAccepted : Fit::kRejected;
@@ -363,6 +368,7 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   const int num_degenerate =
       GatedDegenerateCount(full.degeneracy, PoseBoxMinus(full.T_map_scan, T_map_scan_guess), config.degeneracy);
   MarkDegenerate(num_degenerate, &full.degeneracy);
+  full.neighbour_searches = cache.searches;
   if (!config.degeneracy.remap || num_degenerate == 0) return full;
   // Phase 2 (Zhang et al.'s solution remapping): solve again from the guess with every update projected onto
   // the well-observed subspace, so the degenerate directions keep the guess (the prior / IMU's value).
@@ -370,6 +376,7 @@ ScanToMapResult Register(const FeatureSet& scan, const LocalMap& map, const Pose
   remapped.remapped = true;
   remapped.iterations += full.iterations;
   remapped.solver_iterations += full.solver_iterations;
+  remapped.neighbour_searches = cache.searches;  // both phases (the cache serves both)
   return remapped;
 }
 

@@ -58,6 +58,7 @@ struct ScanToMapResult {
   bool remapped = false;     ///< the result of the second, remapped solve (degenerate scene, remap enabled)
   int iterations = 0;        ///< outer iterations (correspondence rebuilds) run, both solves summed
   int solver_iterations = 0; ///< Ceres iterations, summed
+  int neighbour_searches = 0;  ///< map kNN searches, both solves (neighbour sets reused in between not counted)
   int edge_inliers = 0;      ///< accepted point-to-line correspondences of the last rebuild
   int planar_inliers = 0;    ///< accepted point-to-plane correspondences of the last rebuild
   double initial_cost = 0.0; ///< Ceres cost 1/2 sum rho(|r|^2) at the guess, first correspondences [m^2]

@@ -119,6 +119,23 @@ TEST(Estimator, DeskewedScansTrackAKnownPathLidarOnly) {
   EXPECT_GT(estimator.map().NumPoints(), 10000u);
 }
 
+TEST(Estimator, KeyframesEveryScanWhileYoungThenEveryNth) {
+  RigCalib calib;
+  EstimatorConfig config;
+  config.features = FeatureConfig();
+  config.features.range_sigma_m = 0.0;
+  config.initial_keyframes = 4;
+  config.keyframe_every_scans = 3;
+  Estimator estimator(calib, config);
+  std::vector<bool> keyframe;
+  for (int k = 0; k < 12; ++k) {  // 5 cm and 0.9 deg per scan: the local map's own distance / angle rule is silent
+    const double t = 0.1 * k;
+    keyframe.push_back(estimator.ProcessDeskewedScan(t, SyntheticScan(TruePose(t), t)).keyframe);
+  }
+  const std::vector<bool> expected = {true, true, true, true, false, false, true, false, false, true, false, false};
+  EXPECT_EQ(keyframe, expected);
+}
+
 TEST(Estimator, KeepDeskewedCarriesNothingForDeskewedInput) {
   RigCalib calib;
   EstimatorConfig config;

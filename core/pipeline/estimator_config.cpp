@@ -7,7 +7,8 @@ namespace rotolidar {
 FeatureConfig EstimatorFeatureDefaults() {
   FeatureConfig c;
   c.planars_per_sector = 20;
-  c.planar_voxel_m = 0.15;
+  c.planar_voxel_m = 0.25;
+  c.less_flat_voxel_m = 0.3;
   c.edge_min_snr = 5.0;
   c.range_sigma_m = kRangeSigmaFromCalib;
   return c;

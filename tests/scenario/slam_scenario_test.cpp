@@ -66,10 +66,10 @@ TEST(SlamScenario, LabHandheld) {
   const double seconds = 8.0;
   const ScenarioResult r = RunScenario("lab", seconds);
   ExpectHealthy(r, seconds);
-  // Measured (seed 1, 8 s: ~2.2 s at rest, then ~6 m walked): 0.0105 m RMSE (0.0131 m with a keyframe every
-  // scan and exact neighbour reuse, 0.0143 m before the visibility check and 5 neighbours; 0.0243 m without the
-  // static-start hold: the first bands drifted 3.8 deg). ~3x headroom. Frame, time or gravity bugs gave decimetres to metres while this was
-  // built.
+  // Measured (seed 1, 8 s: ~2.2 s at rest, then ~6 m walked): 0.0109 m RMSE (0.0131 m with a keyframe every
+  // scan, exact neighbour reuse and denser planar sets; 0.0143 m before the visibility check and 5 neighbours;
+  // 0.0243 m without the static-start hold: the first bands drifted 3.8 deg). ~3x headroom. Frame, time or
+  // gravity bugs gave decimetres to metres while this was built.
   EXPECT_LT(r.ape.stats.rmse, 0.03);
 }
 
@@ -88,9 +88,9 @@ TEST(SlamScenario, CorridorHandheld) {
               remapped);
   // The corridor is the degeneracy case: along its axis only the west end wall is seen, so the registration's
   // weakest direction stays below weak_eigenvalue (lambda 0.005-0.04). Within the innovation gate the end wall
-  // fixes the axis; beyond it the IMU holds it (remapped). Measured (seed 1): 0.0049 m RMSE, 123 of 200 scans
-  // weak, none remapped (0.0043 m with a keyframe every scan and exact neighbour reuse; 0.0597 m when every weak
-  // direction was remapped: min_eigenvalue 0.05, no gate, and the full planar set). ~3x headroom.
+  // fixes the axis; beyond it the IMU holds it (remapped). Measured (seed 1): 0.0055 m RMSE, 110 of 200 scans
+  // weak, none remapped (0.0043 m with a keyframe every scan, exact neighbour reuse and denser planar sets;
+  // 0.0597 m when every weak direction was remapped: min_eigenvalue 0.05, no gate). ~3x headroom.
   EXPECT_GT(weak, r.slam.scans.size() / 2);
   EXPECT_LT(r.ape.stats.rmse, 0.015);
 }
@@ -101,9 +101,10 @@ TEST(SlamScenario, ParkingHandheld) {
   const double seconds = 12.0;
   const ScenarioResult r = RunScenario("parking", seconds);
   ExpectHealthy(r, seconds);
-  // Measured (seed 1, 12 s: ~2.2 s at rest, then ~11 m walked): 0.0247 m RMSE (0.0346 m with a keyframe every
-  // scan and exact neighbour reuse, 0.0406 m with the full planar set; 3-5 cm lateral errors in the first seconds
-  // after the static initialisation; the full 202 s loop: 0.018 m). 3x headroom; the loop's goal is 0.10 m.
+  // Measured (seed 1, 12 s: ~2.2 s at rest, then ~11 m walked): 0.0153 m RMSE (0.0346 m with a keyframe every
+  // scan, exact neighbour reuse and denser planar sets; 0.0406 m with the full planar set; 3-5 cm lateral errors
+  // in the first seconds after the static initialisation; the full 202 s loop: 0.015 m). 5x headroom; the
+  // loop's goal is 0.10 m.
   EXPECT_LT(r.ape.stats.rmse, 0.08);
 }
 

@@ -19,8 +19,8 @@ Status SavePointCloud(const std::string& path, const std::vector<Eigen::Vector3d
   for (const auto& p : points) cloud.push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
   if (cloud.empty()) return Status::Error(path + ": refusing to write an empty point cloud");
   int rc = -1;
-  if (EndsWith(path, ".ply"))
-    rc = pcl::io::savePLYFileBinary(path, cloud);
+  if (EndsWith(path, ".ply"))  // binary, no "camera" element: a map has no viewpoint, and readers warn on it
+    rc = pcl::PLYWriter().write(path, cloud, /*binary=*/true, /*use_camera=*/false);
   else if (EndsWith(path, ".pcd"))
     rc = pcl::io::savePCDFileBinary(path, cloud);
   else

@@ -15,11 +15,15 @@ namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZI>;
 
-Cloud Downsample(const Cloud::ConstPtr& in, double voxel_m) {
+/// `in` moved into the map frame by M, then one point per voxel_m voxel (PCL's VoxelGrid centroids). An empty
+/// set stays empty (PCL's transformPointCloud warns on a width-0 cloud, e.g. a scan without edges).
+Cloud TransformedDownsample(const Cloud& in, const Eigen::Matrix4f& M, double voxel_m) {
   Cloud out;
-  if (in->empty()) return out;
+  if (in.empty()) return out;
+  Cloud::Ptr transformed(new Cloud);
+  pcl::transformPointCloud(in, *transformed, M);
   pcl::VoxelGrid<pcl::PointXYZI> grid;
-  grid.setInputCloud(in);
+  grid.setInputCloud(transformed);
   const float leaf = float(voxel_m);
   grid.setLeafSize(leaf, leaf, leaf);
   grid.filter(out);
@@ -123,11 +127,8 @@ void LocalMap::AddKeyframe(const FeatureSet& features, const Pose3& T_map_scan) 
   Keyframe kf;
   kf.T_map_scan = T_map_scan;
   const Eigen::Matrix4f M = T_map_scan.matrix().cast<float>();
-  Cloud::Ptr transformed(new Cloud);
-  pcl::transformPointCloud(features.less_sharp, *transformed, M);
-  kf.edge_map = Downsample(transformed, impl_->config.edge_voxel_m);
-  pcl::transformPointCloud(features.less_flat, *transformed, M);
-  kf.planar_map = Downsample(transformed, impl_->config.planar_voxel_m);
+  kf.edge_map = TransformedDownsample(features.less_sharp, M, impl_->config.edge_voxel_m);
+  kf.planar_map = TransformedDownsample(features.less_flat, M, impl_->config.planar_voxel_m);
   impl_->edge.table.Add(kf.edge_map, SensorOf(T_map_scan));
   impl_->planar.table.Add(kf.planar_map, SensorOf(T_map_scan));
   impl_->keyframes.push_back(std::move(kf));

@@ -9,6 +9,7 @@
 #include "bench/cli/commands.hpp"
 #include "bench/cli/options.hpp"
 #include "bench/metrics/map_metrics.hpp"
+#include "bench/run/progress.hpp"
 #include "core/io/trajectory_io.hpp"
 #include "sim/sim_config.hpp"
 
@@ -102,7 +103,8 @@ int CmdMapEval(int argc, char** argv) {
   config.keep_samples = false;
   config.keep_per_point = false;
   MapMetrics metrics;
-  if (Status s = ComputeMapMetrics(scene, map_world, config, &metrics); !s) return Fail(s);
+  if (Status s = ComputeMapMetrics(scene, map_world, config, &metrics, MakeProgressPrinter("visibility")); !s)
+    return Fail(s);
   std::cout << "scene " << scene.name << "; map frame: " << how << "\n";
   PrintMapMetrics(metrics, std::cout);
   if (!p.Get("json").empty()) {

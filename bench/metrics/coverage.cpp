@@ -1,9 +1,12 @@
 #include "bench/metrics/coverage.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <thread>
 #include <tuple>
 
 #include <pcl/kdtree/kdtree_flann.h>
@@ -69,6 +72,12 @@ std::vector<SurfaceSample> SampleSurfaces(const sim::TriangleMesh& mesh, double 
   ROTOLIDAR_CHECK(spacing_m > 0, "sample spacing must be positive");
   std::vector<SurfaceSample> samples;
   std::vector<Eigen::Vector3d> points;
+  double area_m2 = 0.0;  // reserve for the whole scene at once (a parking lot has millions of samples)
+  for (const Eigen::Vector3i& tri : mesh.triangles)
+    area_m2 += 0.5 * (mesh.vertices_m[tri[1]] - mesh.vertices_m[tri[0]])
+                         .cross(mesh.vertices_m[tri[2]] - mesh.vertices_m[tri[0]])
+                         .norm();
+  samples.reserve(size_t(area_m2 / (spacing_m * spacing_m)) + mesh.triangles.size());
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Eigen::Vector3i& tri = mesh.triangles[t];
     const Eigen::Vector3d &a = mesh.vertices_m[tri[0]], &b = mesh.vertices_m[tri[1]], &c = mesh.vertices_m[tri[2]];
@@ -106,23 +115,91 @@ void MarkCovered(const std::vector<Eigen::Vector3f>& map_world, double distance_
   }
 }
 
+namespace {
+
+constexpr double kVisibilityTileM = 2.0;  // samples are grouped in cubes of this edge for the viewpoint search
+
+using TileKey = std::tuple<long, long, long>;
+
+/// Samples grouped by tile (indices into the sample array), tiles in key order (deterministic).
+std::vector<std::vector<size_t>> GroupByTile(const std::vector<SurfaceSample>& samples) {
+  std::map<TileKey, std::vector<size_t>> tiles;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const Eigen::Vector3f& p = samples[i].p_world;
+    tiles[TileKey{std::lround(std::floor(p.x() / kVisibilityTileM)), std::lround(std::floor(p.y() / kVisibilityTileM)),
+                  std::lround(std::floor(p.z() / kVisibilityTileM))}]
+        .push_back(i);
+  }
+  std::vector<std::vector<size_t>> out;
+  out.reserve(tiles.size());
+  for (auto& [key, members] : tiles) out.push_back(std::move(members));
+  return out;
+}
+
+/// The viewpoints that can lie in [min_range_m, max_range_m] of some sample of the tile (bounding sphere test),
+/// nearest the tile's centre first: a visible sample usually stops at the first ray.
+std::vector<Eigen::Vector3d> TileCandidates(const std::vector<SurfaceSample>& samples,
+                                            const std::vector<size_t>& tile,
+                                            const std::vector<Eigen::Vector3d>& viewpoints, double min_range_m,
+                                            double max_range_m) {
+  Eigen::AlignedBox3d box;
+  for (size_t i : tile) box.extend(samples[i].p_world.cast<double>());
+  const Eigen::Vector3d centre = box.center();
+  const double radius = 0.5 * box.diagonal().norm();
+  std::vector<std::pair<double, size_t>> near;
+  for (size_t v = 0; v < viewpoints.size(); ++v) {
+    const double d = (viewpoints[v] - centre).norm();
+    if (d + radius >= min_range_m && d - radius <= max_range_m) near.emplace_back(d, v);
+  }
+  std::sort(near.begin(), near.end());
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(near.size());
+  for (const auto& [d, v] : near) out.push_back(viewpoints[v]);
+  return out;
+}
+
+bool SeenFromAny(const sim::EmbreeScene& embree, const Eigen::Vector3d& p,
+                 const std::vector<Eigen::Vector3d>& candidates, double min_range_m, double max_range_m) {
+  for (const Eigen::Vector3d& o : candidates) {
+    const double range = (p - o).norm();
+    if (range < min_range_m || range > max_range_m) continue;
+    const sim::RayHit hit = embree.Intersect(o, p - o, range + kVisibilityToleranceM);
+    if (!hit.hit || hit.distance_m >= range - kVisibilityToleranceM) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 Status MarkVisible(const sim::TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& viewpoints_world,
-                   double min_range_m, double max_range_m, std::vector<SurfaceSample>* samples) {
+                   double min_range_m, double max_range_m, std::vector<SurfaceSample>* samples,
+                   const std::function<void(double)>& progress) {
   std::unique_ptr<sim::EmbreeScene> embree;
   if (Status st = sim::EmbreeScene::Create(mesh, &embree); !st) return Status::Error("visibility: " + st.message);
-  for (SurfaceSample& s : *samples) {
-    s.visible = false;
-    const Eigen::Vector3d p = s.p_world.cast<double>();
-    for (const Eigen::Vector3d& o : viewpoints_world) {
-      const double range = (p - o).norm();
-      if (range < min_range_m || range > max_range_m) continue;
-      const sim::RayHit hit = embree->Intersect(o, p - o, range + kVisibilityToleranceM);
-      if (!hit.hit || hit.distance_m >= range - kVisibilityToleranceM) {
-        s.visible = true;
-        break;
+  const std::vector<std::vector<size_t>> tiles = GroupByTile(*samples);
+  std::atomic<size_t> next_tile{0}, tiles_done{0};
+  std::mutex progress_mutex;
+  // Each sample's flag is written by the one thread that owns its tile; Embree queries are const and
+  // thread-safe. The result does not depend on the order (visible = some viewpoint sees it).
+  auto worker = [&]() {
+    for (size_t t = next_tile++; t < tiles.size(); t = next_tile++) {
+      const auto candidates = TileCandidates(*samples, tiles[t], viewpoints_world, min_range_m, max_range_m);
+      for (size_t i : tiles[t]) {
+        SurfaceSample& s = (*samples)[i];
+        s.visible = SeenFromAny(*embree, s.p_world.cast<double>(), candidates, min_range_m, max_range_m);
+      }
+      const size_t done = ++tiles_done;
+      if (progress) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        progress(double(done) / double(tiles.size()));
       }
     }
-  }
+  };
+  const unsigned num_threads = std::max(1u, std::min(std::thread::hardware_concurrency(), 16u));
+  std::vector<std::thread> threads;
+  for (unsigned k = 1; k < num_threads; ++k) threads.emplace_back(worker);
+  worker();
+  for (std::thread& th : threads) th.join();
   return Status::Ok();
 }
 

@@ -8,6 +8,7 @@
 // covered share of the visible area. All positions in the scene's world frame [m].
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -48,9 +49,13 @@ void MarkCovered(const std::vector<Eigen::Vector3f>& map_world, double distance_
 
 /// Sets `visible` = some viewpoint lies within [min_range_m, max_range_m] of the sample and the ray from the
 /// viewpoint to the sample reaches it (first hit within 5 mm of the sample). Rays go against `mesh` (static
-/// world). Fails on an Embree error or an empty mesh.
+/// world). Fails on an Embree error or an empty mesh. Samples are grouped in 2 m tiles; each tile tries only
+/// the viewpoints that can be in range, nearest first, and tiles run on all hardware threads (the flags do
+/// not depend on the order or the thread count). `progress` (optional) gets the finished fraction in [0, 1],
+/// from one thread at a time.
 Status MarkVisible(const sim::TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& viewpoints_world,
-                   double min_range_m, double max_range_m, std::vector<SurfaceSample>* samples);
+                   double min_range_m, double max_range_m, std::vector<SurfaceSample>* samples,
+                   const std::function<void(double)>& progress = nullptr);
 
 struct ClassCoverage {
   double area_m2 = 0.0;                  ///< sampled surface area

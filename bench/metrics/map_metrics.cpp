@@ -77,7 +77,8 @@ bool MapMetricsConfig::Validate(std::string* error) const {
 }
 
 Status ComputeMapMetrics(const sim::Scene& scene, const std::vector<Eigen::Vector3f>& map_world,
-                         const MapMetricsConfig& config, MapMetrics* out) {
+                         const MapMetricsConfig& config, MapMetrics* out,
+                         const std::function<void(double)>& progress) {
   std::string why;
   if (!config.Validate(&why)) return Status::Error(why);
   if (map_world.empty()) return Status::Error("map metrics: the map has no points");
@@ -91,7 +92,7 @@ Status ComputeMapMetrics(const sim::Scene& scene, const std::vector<Eigen::Vecto
   if (visibility) {
     const auto viewpoints = ThinViewpoints(config.viewpoints_world, config.viewpoint_spacing_m);
     if (Status s = MarkVisible(mesh, viewpoints, config.visibility_min_range_m, config.visibility_max_range_m,
-                               &samples); !s)
+                               &samples, progress); !s)
       return s;
   }
   MarkCovered(map_world, config.coverage_distance_m, &samples);

@@ -7,6 +7,7 @@
 // frame at the first scan); LoadMapInSceneFrame moves it into the scene frame with the truth trajectory.
 // Determinism: no randomness; surface samples sit on a fixed grid per triangle, so equal inputs give equal
 // outputs. Thread safety: the functions share no state.
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -68,8 +69,10 @@ struct MapMetrics {
 /// Computes every metric. Fails (Status naming the field) on an invalid config, an empty map, a scene whose
 /// mesh is empty, or an Embree error. Elements that cannot be fitted (too few points) are reported with
 /// measured = false and left out of the RMSE.
+/// `progress` (optional) follows the visibility pass, the long part (minutes for a 200 s parking run).
 Status ComputeMapMetrics(const sim::Scene& scene, const std::vector<Eigen::Vector3f>& map_world,
-                         const MapMetricsConfig& config, MapMetrics* out);
+                         const MapMetricsConfig& config, MapMetrics* out,
+                         const std::function<void(double)>& progress = nullptr);
 
 /// The "map" object of metrics.json (per-point and per-sample arrays are not written).
 void ToJson(const MapMetrics& metrics, nlohmann::json* out);

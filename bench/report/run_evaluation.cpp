@@ -8,6 +8,7 @@
 #include "bench/eval/statistics.hpp"
 #include "bench/eval/trajectory_metrics.hpp"
 #include "bench/report/html_report.hpp"
+#include "bench/run/progress.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/io/trajectory_io.hpp"
 #include "sim/sim_config.hpp"
@@ -121,7 +122,9 @@ Status EvaluateMap(const std::string& recording_dir, const std::string& scene_na
   if (options.completeness)
     for (const StampedPose& p : out->truth) config.viewpoints_world.push_back(p.T_ref_body.translation());
   const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = ComputeMapMetrics(scene, out->map_points, config, &out->map); !s) return s;
+  if (Status s = ComputeMapMetrics(scene, out->map_points, config, &out->map, MakeProgressPrinter("visibility"));
+      !s)
+    return s;
   out->map_config = config;
   out->map_metrics_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   LOG_INFO("map metrics: " << out->map_points.size() << " points, " << out->map.surface_samples

@@ -1,12 +1,16 @@
 // Coverage, visibility, density and map-to-truth distance on scenes whose answers are known in closed form.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
+#include <string>
 
 #include "bench/metrics/coverage.hpp"
 #include "bench/metrics/map_metrics.hpp"
 #include "bench/metrics/surface_distance.hpp"
 #include "core/util/rng.hpp"
+#include "sim/world/embree_scene.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -120,6 +124,62 @@ TEST(Coverage, VisibilityHidesWhatABoxOccludes) {
   // A range limit of 1 m from the same points hides most of the room.
   ASSERT_TRUE(MarkVisible(mesh, {Eigen::Vector3d(-1.2, 0, 2.0)}, 0.1, 1.0, &samples));
   EXPECT_LT(SummarizeCoverage(samples, true).total.visible_area_m2, 0.2 * r.total.area_m2);
+}
+
+// Reference: every viewpoint tried for every sample, in input order, on one thread.
+std::vector<bool> BruteForceVisible(const sim::TriangleMesh& mesh, const std::vector<SurfaceSample>& samples,
+                                    const std::vector<Eigen::Vector3d>& views, double min_m, double max_m) {
+  std::unique_ptr<sim::EmbreeScene> embree;
+  EXPECT_TRUE(sim::EmbreeScene::Create(mesh, &embree));
+  std::vector<bool> out;
+  for (const SurfaceSample& s : samples) {
+    bool seen = false;
+    for (const Eigen::Vector3d& o : views) {
+      const Eigen::Vector3d p = s.p_world.cast<double>();
+      const double r = (p - o).norm();
+      if (r < min_m || r > max_m) continue;
+      const sim::RayHit hit = embree->Intersect(o, p - o, r + 0.005);
+      if (!hit.hit || hit.distance_m >= r - 0.005) seen = true;
+    }
+    out.push_back(seen);
+  }
+  return out;
+}
+
+TEST(Coverage, TiledThreadedVisibilityEqualsTryingEveryViewpoint) {
+  // A 24 x 16 m hall (many 2 m tiles) with crates; viewpoints along a path, a range band that leaves some
+  // samples in range of only far viewpoints and some of none.
+  sim::Scene scene = BoxRoom();
+  scene.primitives.clear();
+  scene.primitives.push_back(sim::MakeRoom("hall", Eigen::Vector3d(0, 0, 1.5), Eigen::Vector3d(24, 16, 3), 0));
+  RandomStream rng(7, "coverage_test");
+  for (int k = 0; k < 12; ++k) {
+    sim::Primitive crate;
+    crate.type = sim::PrimitiveType::kBox;
+    crate.name = "crate" + std::to_string(k);
+    crate.center_m = Eigen::Vector3d(-10 + 20 * rng.Uniform(), -6 + 12 * rng.Uniform(), 0.5);
+    crate.size_m = Eigen::Vector3d(1.0, 1.5, 1.0);
+    scene.primitives.push_back(crate);
+  }
+  const sim::TriangleMesh mesh = sim::BuildMesh(scene);
+  auto samples = SampleSurfaces(mesh, 0.2, Eigen::AlignedBox3d());
+  std::vector<Eigen::Vector3d> views;
+  for (double x = -9; x <= 3; x += 0.5) views.emplace_back(x, 0.3 * x, 1.2);
+  std::vector<double> fractions;
+  ASSERT_TRUE(MarkVisible(mesh, views, 1.0, 9.0, &samples, [&](double f) { fractions.push_back(f); }));
+  const std::vector<bool> expected = BruteForceVisible(mesh, samples, views, 1.0, 9.0);
+  size_t visible = 0, mismatches = 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    visible += samples[i].visible;
+    mismatches += samples[i].visible != expected[i];
+  }
+  EXPECT_EQ(mismatches, 0u) << "of " << samples.size() << " samples";
+  // Not a trivial answer either way: the range band and the crates hide a good share.
+  EXPECT_GT(visible, samples.size() / 5);
+  EXPECT_LT(visible, samples.size() * 4 / 5);
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
 }
 
 TEST(Coverage, DensityIsUniformForAGridAndNotForAHalfDenseMap) {

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cmath>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <thread>
 #include <tuple>
+#include <unordered_set>
 
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
@@ -26,6 +28,38 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr ToCloud(const std::vector<Eigen::Vector3f>& 
   for (const Eigen::Vector3f& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
   return cloud;
 }
+
+// The cubic cells (edge cell_m) holding a point, dilated by one cell in every direction.
+class CellGrid {
+ public:
+  CellGrid(const std::vector<Eigen::Vector3f>& points, double cell_m) : cell_m_(cell_m) {
+    std::unordered_set<int64_t> occupied;
+    for (const Eigen::Vector3f& p : points) occupied.insert(Key(Cell(p)));
+    for (int64_t key : occupied) {
+      const Eigen::Vector3i c = Unkey(key);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) cells_.insert(Key(c + Eigen::Vector3i(dx, dy, dz)));
+    }
+  }
+  bool Contains(const Eigen::Vector3f& p) const { return cells_.count(Key(Cell(p))) > 0; }
+
+ private:
+  static constexpr int64_t kBias = 1 << 20;  // cells in [-2^20, 2^20) per axis: +-1000 km at 1 m
+  Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
+    return (p.cast<double>() / cell_m_).array().floor().cast<int>().matrix();
+  }
+  static int64_t Key(const Eigen::Vector3i& c) {
+    return ((c.x() + kBias) << 42) | ((c.y() + kBias) << 21) | (c.z() + kBias);
+  }
+  static Eigen::Vector3i Unkey(int64_t k) {
+    const int64_t mask = (int64_t(1) << 21) - 1;
+    return Eigen::Vector3i(int((k >> 42) & mask) - int(kBias), int((k >> 21) & mask) - int(kBias),
+                           int(k & mask) - int(kBias));
+  }
+  double cell_m_;
+  std::unordered_set<int64_t> cells_;
+};
 
 // Grid points (cell centres of spacing s) of one triangle, in its own plane; the centroid when none fall inside.
 void SampleTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double s,
@@ -104,12 +138,16 @@ void MarkCovered(const std::vector<Eigen::Vector3f>& map_world, double distance_
                  std::vector<SurfaceSample>* samples) {
   for (SurfaceSample& s : *samples) s.covered = false;
   if (map_world.empty()) return;
+  // Most samples of a large scene lie far from every map point: they skip the tree. A point within distance_m
+  // of a sample lies in the sample's cell or a neighbour when cells are at least distance_m wide.
+  const CellGrid near_map(map_world, std::max(1.0, distance_m));
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;
   tree.setInputCloud(ToCloud(map_world));
   std::vector<int> index(1);
   std::vector<float> sq_dist(1);
   const double d2 = distance_m * distance_m;
   for (SurfaceSample& s : *samples) {
+    if (!near_map.Contains(s.p_world)) continue;
     const pcl::PointXYZ q(s.p_world.x(), s.p_world.y(), s.p_world.z());
     s.covered = tree.nearestKSearch(q, 1, index, sq_dist) == 1 && sq_dist[0] <= d2;
   }
@@ -177,7 +215,8 @@ Status MarkVisible(const sim::TriangleMesh& mesh, const std::vector<Eigen::Vecto
   std::unique_ptr<sim::EmbreeScene> embree;
   if (Status st = sim::EmbreeScene::Create(mesh, &embree); !st) return Status::Error("visibility: " + st.message);
   const std::vector<std::vector<size_t>> tiles = GroupByTile(*samples);
-  std::atomic<size_t> next_tile{0}, tiles_done{0};
+  std::atomic<size_t> next_tile{0};
+  size_t tiles_done = 0;  // guarded by progress_mutex
   std::mutex progress_mutex;
   // Each sample's flag is written by the one thread that owns its tile; Embree queries are const and
   // thread-safe. The result does not depend on the order (visible = some viewpoint sees it).
@@ -188,10 +227,9 @@ Status MarkVisible(const sim::TriangleMesh& mesh, const std::vector<Eigen::Vecto
         SurfaceSample& s = (*samples)[i];
         s.visible = SeenFromAny(*embree, s.p_world.cast<double>(), candidates, min_range_m, max_range_m);
       }
-      const size_t done = ++tiles_done;
-      if (progress) {
+      if (progress) {  // counted under the lock, so that reported fractions never go back
         std::lock_guard<std::mutex> lock(progress_mutex);
-        progress(double(done) / double(tiles.size()));
+        progress(double(++tiles_done) / double(tiles.size()));
       }
     }
   };

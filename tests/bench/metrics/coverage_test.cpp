@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -180,6 +181,29 @@ TEST(Coverage, TiledThreadedVisibilityEqualsTryingEveryViewpoint) {
   ASSERT_FALSE(fractions.empty());
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
   EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+}
+
+TEST(Coverage, CoveredEqualsTheNearestPointTestAcrossCellBorders) {
+  // A sparse map (80 points within 8 cm of the room's surfaces: most 1 m cells of the pre-filter empty, so
+  // samples across a cell border from their only covering point occur) against a brute-force check.
+  auto samples = SampleSurfaces(sim::BuildMesh(BoxRoom()), 0.05, Eigen::AlignedBox3d());
+  RandomStream rng(11, "covered_test");
+  std::vector<Eigen::Vector3f> map;
+  for (int k = 0; k < 80; ++k) {
+    const SurfaceSample& s = samples[size_t(rng.Uniform() * double(samples.size())) % samples.size()];
+    map.push_back(s.p_world + 0.08f * Eigen::Vector3f(float(rng.Uniform() - 0.5), float(rng.Uniform() - 0.5),
+                                                       float(rng.Uniform() - 0.5)));
+  }
+  MarkCovered(map, 0.05, &samples);
+  size_t covered = 0, mismatches = 0;
+  for (const SurfaceSample& s : samples) {
+    float best = std::numeric_limits<float>::infinity();
+    for (const Eigen::Vector3f& p : map) best = std::min(best, (p - s.p_world).squaredNorm());
+    covered += s.covered;
+    mismatches += s.covered != (best <= 0.05f * 0.05f);
+  }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_GT(covered, 80u);  // not trivially empty: each point covers a few samples
 }
 
 TEST(Coverage, DensityIsUniformForAGridAndNotForAHalfDenseMap) {

@@ -29,33 +29,37 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr ToCloud(const std::vector<Eigen::Vector3f>& 
   return cloud;
 }
 
-// The cubic cells (edge cell_m) holding a point, dilated by one cell in every direction.
+// The cubic cell (edge cell_m) holding p: floor(p / cell_m) per axis. One definition for the coverage
+// pre-filter, the visibility tiles and the density cells.
+using CellKey = std::tuple<long, long, long>;
+CellKey CellOf(const Eigen::Vector3f& p, double cell_m) {
+  return {std::lround(std::floor(p.x() / cell_m)), std::lround(std::floor(p.y() / cell_m)),
+          std::lround(std::floor(p.z() / cell_m))};
+}
+
+// The cells (edge cell_m) holding a point, dilated by one cell in every direction.
 class CellGrid {
  public:
   CellGrid(const std::vector<Eigen::Vector3f>& points, double cell_m) : cell_m_(cell_m) {
     std::unordered_set<int64_t> occupied;
-    for (const Eigen::Vector3f& p : points) occupied.insert(Key(Cell(p)));
+    for (const Eigen::Vector3f& p : points) occupied.insert(Pack(CellOf(p, cell_m)));
     for (int64_t key : occupied) {
-      const Eigen::Vector3i c = Unkey(key);
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) cells_.insert(Key(c + Eigen::Vector3i(dx, dy, dz)));
+      const auto [x, y, z] = Unpack(key);
+      for (long dx = -1; dx <= 1; ++dx)
+        for (long dy = -1; dy <= 1; ++dy)
+          for (long dz = -1; dz <= 1; ++dz) cells_.insert(Pack({x + dx, y + dy, z + dz}));
     }
   }
-  bool Contains(const Eigen::Vector3f& p) const { return cells_.count(Key(Cell(p))) > 0; }
+  bool Contains(const Eigen::Vector3f& p) const { return cells_.count(Pack(CellOf(p, cell_m_))) > 0; }
 
  private:
   static constexpr int64_t kBias = 1 << 20;  // cells in [-2^20, 2^20) per axis: +-1000 km at 1 m
-  Eigen::Vector3i Cell(const Eigen::Vector3f& p) const {
-    return (p.cast<double>() / cell_m_).array().floor().cast<int>().matrix();
+  static constexpr int64_t kMask = (int64_t(1) << 21) - 1;
+  static int64_t Pack(const CellKey& c) {
+    return ((std::get<0>(c) + kBias) << 42) | ((std::get<1>(c) + kBias) << 21) | (std::get<2>(c) + kBias);
   }
-  static int64_t Key(const Eigen::Vector3i& c) {
-    return ((c.x() + kBias) << 42) | ((c.y() + kBias) << 21) | (c.z() + kBias);
-  }
-  static Eigen::Vector3i Unkey(int64_t k) {
-    const int64_t mask = (int64_t(1) << 21) - 1;
-    return Eigen::Vector3i(int((k >> 42) & mask) - int(kBias), int((k >> 21) & mask) - int(kBias),
-                           int(k & mask) - int(kBias));
+  static CellKey Unpack(int64_t k) {
+    return {((k >> 42) & kMask) - kBias, ((k >> 21) & kMask) - kBias, (k & kMask) - kBias};
   }
   double cell_m_;
   std::unordered_set<int64_t> cells_;
@@ -157,17 +161,10 @@ namespace {
 
 constexpr double kVisibilityTileM = 2.0;  // samples are grouped in cubes of this edge for the viewpoint search
 
-using TileKey = std::tuple<long, long, long>;
-
 /// Samples grouped by tile (indices into the sample array), tiles in key order (deterministic).
 std::vector<std::vector<size_t>> GroupByTile(const std::vector<SurfaceSample>& samples) {
-  std::map<TileKey, std::vector<size_t>> tiles;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const Eigen::Vector3f& p = samples[i].p_world;
-    tiles[TileKey{std::lround(std::floor(p.x() / kVisibilityTileM)), std::lround(std::floor(p.y() / kVisibilityTileM)),
-                  std::lround(std::floor(p.z() / kVisibilityTileM))}]
-        .push_back(i);
-  }
+  std::map<CellKey, std::vector<size_t>> tiles;
+  for (size_t i = 0; i < samples.size(); ++i) tiles[CellOf(samples[i].p_world, kVisibilityTileM)].push_back(i);
   std::vector<std::vector<size_t>> out;
   out.reserve(tiles.size());
   for (auto& [key, members] : tiles) out.push_back(std::move(members));
@@ -270,18 +267,16 @@ double Quantile(std::vector<double> values, double q) {
 
 DensityResult ComputeDensity(const std::vector<SurfaceSample>& samples,
                              const std::vector<Eigen::Vector3f>& map_world, double distance_m, double cell_m) {
-  using Key = std::tuple<long, long, long>;
   struct Cell {
     double area_m2 = 0.0;
     size_t points = 0;
   };
   std::vector<Eigen::Vector3f> visible;
-  std::vector<Key> keys;
-  std::map<Key, Cell> cells;
+  std::vector<CellKey> keys;
+  std::map<CellKey, Cell> cells;
   for (const SurfaceSample& s : samples) {
     if (!s.visible) continue;
-    const Key k{std::lround(std::floor(s.p_world.x() / cell_m)), std::lround(std::floor(s.p_world.y() / cell_m)),
-                std::lround(std::floor(s.p_world.z() / cell_m))};
+    const CellKey k = CellOf(s.p_world, cell_m);
     visible.push_back(s.p_world);
     keys.push_back(k);
     cells[k].area_m2 += s.area_m2;

@@ -95,9 +95,12 @@ bool PointToPlaneResidual::Evaluate(double const* const* parameters, double* res
 }
 
 double PointToPlaneResidual::EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 1, 6>* J) const {
-  const Eigen::Vector3d Rp = T.linear() * p_scan_;
-  if (J != nullptr) *J << n_map_.transpose(), -n_map_.transpose() * Skew(Rp);
-  return n_map_.dot(Rp + T.translation()) + d_m_;
+  double r = 0.0;
+  if (J != nullptr)
+    Linearize(T.linear(), T.translation(), &r, J->data());  // a row vector: row- and column-major alike
+  else
+    Residual(T.linear(), T.translation(), &r);
+  return r;
 }
 
 PointToLineResidual::PointToLineResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map,
@@ -134,9 +137,15 @@ bool PointToLineResidual::Evaluate(double const* const* parameters, double* resi
 }
 
 Eigen::Vector2d PointToLineResidual::EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 2, 6>* J) const {
-  const Eigen::Vector3d Rp = T.linear() * p_scan_;
-  if (J != nullptr) *J << Bt_, -Bt_ * Skew(Rp);
-  return Bt_ * (Rp + T.translation() - a_map_);
+  Eigen::Vector2d r;
+  if (J == nullptr) {
+    Residual(T.linear(), T.translation(), r.data());
+    return r;
+  }
+  Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J_rows;  // Linearize's layout
+  Linearize(T.linear(), T.translation(), r.data(), J_rows.data());
+  *J = J_rows;
+  return r;
 }
 
 }  // namespace rotolidar

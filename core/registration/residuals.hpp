@@ -58,7 +58,8 @@ class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
   /// Becomes PointToPlaneResidual(p_scan, n_map, d_m) (same checks).
   void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-  /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [n^T, -n^T [R p]x].
+  /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [n^T, -n^T [R p]x]
+  /// (Linearize / Residual at T's rotation and translation).
   double EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 1, 6>* J) const;
   /// The residual at rotation R and translation t, into r[0] (the grouped solve's cost-only inner loop).
   void Residual(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double* r) const {
@@ -92,7 +93,8 @@ class PointToLineResidual final : public ceres::SizedCostFunction<2, 7> {
   /// Becomes PointToLineResidual(p_scan, a_map, u_map) (same checks, same basis B).
   void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& a_map, const Eigen::Vector3d& u_map);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
-  /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [B^T, -B^T [R p]x].
+  /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [B^T, -B^T [R p]x]
+  /// (Linearize / Residual at T's rotation and translation).
   Eigen::Vector2d EvaluateTangent(const Pose3& T, Eigen::Matrix<double, 2, 6>* J) const;
   /// The residual at rotation R and translation t, into r[0..1] (the grouped solve's cost-only inner loop).
   void Residual(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, double* r) const {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # rotolidar set-up: installs Debian packages (idempotently), configures, builds, then runs one job.
 #   bash .ci/setup.sh demo   -> build, then `rotolidar demo` on the built-in default scene
-#   bash .ci/setup.sh test   -> build, then the test suite (ctest)
+#   bash .ci/setup.sh test   -> build, then the test suite (ctest); extra arguments go to ctest (e.g. -L unit)
 #   bash .ci/setup.sh core   -> build core/ alone (ROTOLIDAR_CORE_ONLY=ON), run its tests, and prove that no
 #                               simulation library (MuJoCo, Embree, OSMesa) is linked
 #   bash .ci/setup.sh deps   -> only install the Debian packages
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 PACKAGES=(
   build-essential cmake pkg-config git
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libpcap-dev libyaml-cpp-dev libtbb-dev
-  libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev unzip
   libmujoco-dev libembree-dev libosmesa6-dev libgl-dev
 )
 
@@ -50,6 +50,28 @@ core_only() {
   echo "[setup] core-only build: no MuJoCo, Embree or OSMesa linked"
 }
 
+# Runs ctest (extra arguments pass through), then says how many tests were skipped and why. Tests that read
+# $ROTOLIDAR_DATA skip with a message when it is absent; under CI=true they fail instead.
+run_tests() {
+  local log rc=0
+  log=$(mktemp)
+  set +e
+  ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" "$@" 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  set -e
+  local skipped
+  skipped=$(grep -c '(Skipped)$' "$log" || true)
+  rm -f "$log"
+  if [ ! -d "$ROTOLIDAR_DATA" ]; then
+    echo "[setup] real data: $ROTOLIDAR_DATA does not exist; $skipped tests skipped (label realdata: they need" \
+         "ROTOLIDAR_DATA pointing at the real-data folder)"
+    if [ "${CI:-}" = "true" ]; then echo "[setup] CI=true: missing real data is an error"; rc=1; fi
+  elif [ "$skipped" -gt 0 ]; then
+    echo "[setup] $skipped tests skipped (see the list above)"
+  fi
+  return "$rc"
+}
+
 job=${1:-demo}
 install_deps
 export ROTOLIDAR_DATA=${ROTOLIDAR_DATA:-$(cd .. && pwd)/shared/data}
@@ -57,7 +79,6 @@ case "$job" in
   deps) ;;
   core) core_only ;;
   demo) build; shift || true; "$BUILD_DIR/bench/rotolidar" demo "$@" ;;
-  test) build
-        ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
+  test) build; shift || true; run_tests "$@" ;;
   *) echo "usage: bash .ci/setup.sh [demo|test|core|deps]" >&2; exit 2 ;;
 esac

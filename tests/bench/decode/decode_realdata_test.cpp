@@ -5,15 +5,15 @@
 #include <iostream>
 
 #include "bench/decode/decode.hpp"
+#include "tests/common/test_data.hpp"
 
 namespace rotolidar::bench {
 namespace {
 
 TEST(DecodeRealData, EinrideRecordingOneRevolution) {
-  const char* root = std::getenv("ROTOLIDAR_DATA");
-  if (!root) GTEST_SKIP() << "ROTOLIDAR_DATA is not set (point it at the shared data folder)";
+  ROTOLIDAR_REQUIRE_DATA(dir, "vlp16_einride");
   DecodeOptions options;
-  options.input_path = std::string(root) + "/vlp16_einride/recording.bin";
+  options.input_path = dir + "/recording.bin";
   options.raw = true;
   options.output_prefix = ::testing::TempDir() + "/vlp16_rev";
   options.revolution = 1;  // the first full revolution (scan 0 is the partial 103..360 deg)

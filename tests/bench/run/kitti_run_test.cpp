@@ -15,6 +15,7 @@
 
 #include "bench/run/kitti_run.hpp"
 #include "core/pipeline/scan_matcher.hpp"
+#include "tests/common/test_data.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -38,7 +39,7 @@ double RotationErrorDeg(const Pose3& a, const Pose3& b) {
 class Kitti00Run : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (DataRoot() == nullptr) GTEST_SKIP() << "ROTOLIDAR_DATA is not set: skipping the KITTI 00 runner tests";
+    ROTOLIDAR_REQUIRE_DATA(dir, "kitti00");
   }
 };
 

@@ -1,4 +1,4 @@
-// FeatureConfig validation and the curvature features on one real VLP-16 revolution (einride/vlp16-go).
+// The curvature features on one real VLP-16 revolution (einride/vlp16-go, $ROTOLIDAR_DATA/vlp16_einride).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +12,7 @@
 #include "core/io/scan_splitter.hpp"
 #include "core/io/vlp16.hpp"
 #include "core/preprocess/filters.hpp"
+#include "tests/common/test_data.hpp"
 #include "tests/core/features/feature_test_util.hpp"
 
 namespace rotolidar {
@@ -20,67 +21,28 @@ namespace {
 using test::CountPerCell;
 using test::SameCloud;
 
-TEST(FeatureConfig, ValidateNamesTheField) {
-  std::string error;
-  EXPECT_TRUE(FeatureConfig().Validate(&error)) << error;
-  struct Case {
-    const char* field;
-    void (*breaks)(FeatureConfig*);
-  };
-  const Case cases[] = {
-      {"features.sectors", [](FeatureConfig* c) { c->sectors = 0; }},
-      {"features.edges_per_sector", [](FeatureConfig* c) { c->edges_per_sector = -1; }},
-      {"features.planars_per_sector", [](FeatureConfig* c) { c->planars_per_sector = -1; }},
-      {"features.less_sharp_per_sector", [](FeatureConfig* c) { c->less_sharp_per_sector = 3; }},
-      {"features.neighbours", [](FeatureConfig* c) { c->neighbours = 0; }},
-      {"features.edge_threshold", [](FeatureConfig* c) { c->edge_threshold = 0; }},
-      {"features.planar_threshold", [](FeatureConfig* c) { c->planar_threshold = 0.1; }},
-      {"features.max_neighbour_step_deg", [](FeatureConfig* c) { c->max_neighbour_step_deg = 0; }},
-      {"features.occlusion_min_jump_m", [](FeatureConfig* c) { c->occlusion_min_jump_m = -1; }},
-      {"features.occlusion_jump_ratio", [](FeatureConfig* c) { c->occlusion_jump_ratio = -1; }},
-      {"features.beam_parallel_max_incidence_deg",
-       [](FeatureConfig* c) { c->beam_parallel_max_incidence_deg = 90; }},
-      {"features.range_sigma_m", [](FeatureConfig* c) { c->range_sigma_m = -0.01; }},
-      {"features.edge_min_snr", [](FeatureConfig* c) { c->edge_min_snr = -1; }},
-      {"features.planar_voxel_m", [](FeatureConfig* c) { c->planar_voxel_m = -1; }},
-      {"features.less_flat_voxel_m", [](FeatureConfig* c) { c->less_flat_voxel_m = -1; }},
-      {"features.threads", [](FeatureConfig* c) { c->threads = -1; }},
-  };
-  for (const Case& c : cases) {
-    FeatureConfig config;
-    c.breaks(&config);
-    error.clear();
-    EXPECT_FALSE(config.Validate(&error)) << c.field;
-    EXPECT_NE(error.find(c.field), std::string::npos) << error;
-  }
-}
-
-// ---- Real VLP-16 packets (einride/vlp16-go, $ROTOLIDAR_DATA/vlp16_einride): one indoor revolution, head static,
-// so lidar = base frame. Skipped when ROTOLIDAR_DATA is unset: this target stays free of data dependencies.
-
-std::vector<ScanPoint> RealScan(int index) {
-  const char* root = std::getenv("ROTOLIDAR_DATA");
+// One indoor revolution, head static, so lidar = base frame. A failed read is fatal (ASSERT).
+void RealScan(const std::string& dir, int index, std::vector<ScanPoint>* out) {
   std::vector<LidarPacket> packets;
-  const Status read = ReadRawVlp16Payloads(std::string(root) + "/vlp16_einride/recording.bin", &packets);
-  EXPECT_TRUE(read.ok) << read.message;
+  const Status read = ReadRawVlp16Payloads(dir + "/recording.bin", &packets);
+  ASSERT_TRUE(read.ok) << read.message;
   Vlp16Decoder decoder{LidarIntrinsics(), Vlp16DecoderConfig()};
   std::vector<LidarPoint> points;
   for (const LidarPacket& packet : packets) EXPECT_TRUE(decoder.Decode(packet, &points).ok);
   RevolutionSplitter splitter(0.0);
   std::vector<LidarScan> scans;
   splitter.Add(points, &scans);
-  EXPECT_GT(scans.size(), std::size_t(index));
-  if (scans.size() <= std::size_t(index)) return {};
+  ASSERT_GT(scans.size(), std::size_t(index));
   const LidarScan& scan = scans[index];
   std::vector<Eigen::Vector3d> p_base;
   for (const LidarPoint& lp : scan.points) p_base.emplace_back(lp.x_m, lp.y_m, lp.z_m);
-  return MakeScanPoints(scan, p_base);
+  *out = MakeScanPoints(scan, p_base);
 }
 
 TEST(FeaturesRealData, EinrideRevolution) {
-  if (!std::getenv("ROTOLIDAR_DATA"))
-    GTEST_SKIP() << "ROTOLIDAR_DATA is not set (point it at the shared data folder)";
-  const std::vector<ScanPoint> raw = RealScan(1);  // the first full revolution
+  ROTOLIDAR_REQUIRE_DATA(dir, "vlp16_einride");
+  std::vector<ScanPoint> raw;
+  ASSERT_NO_FATAL_FAILURE(RealScan(dir, 1, &raw));  // the first full revolution
   ASSERT_GT(raw.size(), 15000u);
   const PreprocessResult pre = Preprocess(raw, PreprocessConfig());
   EXPECT_EQ(pre.num_input, pre.points.size() + pre.removed_nonfinite + pre.removed_range + pre.removed_sor);

@@ -17,6 +17,7 @@
 
 #include "core/imu/preintegration.hpp"
 #include "core/types/geometry.hpp"
+#include "tests/common/test_data.hpp"
 
 namespace rotolidar {
 namespace {
@@ -180,9 +181,8 @@ TEST(EurocCsv, ParseErrorsNameFileAndLine) {
 }
 
 TEST(PreintegrationEuroc, PredictsHalfSecondWindowsOfV102) {
-  const char* root = std::getenv("ROTOLIDAR_DATA");
-  if (root == nullptr) GTEST_SKIP() << "ROTOLIDAR_DATA is not set: skipping the EuRoC V1_02 preintegration test";
-  const std::string dir = std::string(root) + "/euroc_v1_02/";
+  ROTOLIDAR_REQUIRE_DATA(data, "euroc_v1_02");
+  const std::string dir = data + "/";
   std::vector<Row> imu, gt;
   Status st = ReadEurocCsv(dir + "V1_02_medium_imu0_data.csv", 7, &imu);
   ASSERT_TRUE(st.ok) << st.message;

@@ -12,17 +12,12 @@
 #include "core/io/pcap.hpp"
 #include "core/io/scan_splitter.hpp"
 #include "core/io/vlp16.hpp"
+#include "tests/common/test_data.hpp"
 
 namespace rotolidar {
 namespace {
 
-std::string DataDir() {
-  const char* root = std::getenv("ROTOLIDAR_DATA");
-  return root ? std::string(root) + "/vlp16_einride" : std::string();
-}
-
-#define REQUIRE_DATA()                                                                                  \
-  if (DataDir().empty()) GTEST_SKIP() << "ROTOLIDAR_DATA is not set (point it at the shared data folder)"
+#define REQUIRE_DATA() ROTOLIDAR_REQUIRE_DATA(dir, "vlp16_einride")
 
 // Parses the reference file: "block azimuth flag d:r x32" lines and a "# Timestamp(...)=N ReturnMode=0xNN
 // ProductID=0xNN" line.
@@ -74,14 +69,14 @@ bool ParseExpected(const std::string& path, Vlp16RawPacket* out, std::string* er
 TEST(Vlp16RealData, PacketRawFieldsEqualReference) {
   REQUIRE_DATA();
   std::vector<LidarPacket> packets;
-  const Status s = ReadRawVlp16Payloads(DataDir() + "/packet.bin", &packets);
+  const Status s = ReadRawVlp16Payloads(dir + "/packet.bin", &packets);
   ASSERT_TRUE(s.ok) << s.message;
   ASSERT_EQ(packets.size(), 1u);
   Vlp16RawPacket parsed, expected;
   const Status p = ParseVlp16DataPacket(packets[0].payload.data(), packets[0].payload.size(), &parsed);
   ASSERT_TRUE(p.ok) << p.message;
   std::string error;
-  ASSERT_TRUE(ParseExpected(DataDir() + "/expected_packet_fields_from_vlp16-go_example_test.txt", &expected, &error))
+  ASSERT_TRUE(ParseExpected(dir + "/expected_packet_fields_from_vlp16-go_example_test.txt", &expected, &error))
       << error;
   for (int b = 0; b < 12; ++b) {
     EXPECT_EQ(parsed.blocks[b].flag, expected.blocks[b].flag) << "block " << b;
@@ -98,29 +93,29 @@ TEST(Vlp16RealData, PacketRawFieldsEqualReference) {
 
 // Decodes all 1000 packets with the range filter opened wide, so that the range assertion tests the data rather than
 // the filter.
-std::vector<LidarPoint> DecodeRecording(std::vector<uint32_t>* timestamps) {
+// A failed read is fatal (ASSERT): callers wrap this in ASSERT_NO_FATAL_FAILURE.
+void DecodeRecording(const std::string& dir, std::vector<uint32_t>* timestamps, std::vector<LidarPoint>* points) {
   std::vector<LidarPacket> packets;
-  const Status read = ReadRawVlp16Payloads(DataDir() + "/recording.bin", &packets);
-  EXPECT_TRUE(read.ok) << read.message;
-  EXPECT_EQ(packets.size(), 1000u);
+  const Status read = ReadRawVlp16Payloads(dir + "/recording.bin", &packets);
+  ASSERT_TRUE(read.ok) << read.message;
+  ASSERT_EQ(packets.size(), 1000u);
   Vlp16DecoderConfig config;
   config.min_range_m = 0.0;
   config.max_range_m = 1e6;
   Vlp16Decoder decoder(LidarIntrinsics(), config);
-  std::vector<LidarPoint> points;
   for (std::size_t i = 0; i < packets.size(); ++i) {
-    const Status s = decoder.Decode(packets[i], &points);
+    const Status s = decoder.Decode(packets[i], points);
     EXPECT_TRUE(s.ok) << "packet " << i << ": " << s.message;
     EXPECT_EQ(decoder.last_raw().return_mode, static_cast<uint8_t>(Vlp16ReturnMode::kStrongest));
     timestamps->push_back(decoder.last_raw().timestamp_us);
   }
-  return points;
 }
 
 TEST(Vlp16RealData, RecordingDecodesWithPlausibleRangesAndMonotonicTimes) {
   REQUIRE_DATA();
   std::vector<uint32_t> ts;
-  const std::vector<LidarPoint> points = DecodeRecording(&ts);
+  std::vector<LidarPoint> points;
+  ASSERT_NO_FATAL_FAILURE(DecodeRecording(dir, &ts, &points));
   // Packets come every 24 x 55.296 us = 1326.9 us: the integer stamps step by 1327 or 1328 (measured: exactly
   // those two values; 1326 would also be legal, so accept 1326..1328).
   for (std::size_t i = 1; i < ts.size(); ++i) {
@@ -128,7 +123,7 @@ TEST(Vlp16RealData, RecordingDecodesWithPlausibleRangesAndMonotonicTimes) {
     EXPECT_LE(ts[i] - ts[i - 1], 1328u) << i;
   }
   // 384,000 channels, of which 203,034 returned (measured; the rest are distance 0 = no return).
-  EXPECT_EQ(points.size(), 203034u);
+  ASSERT_EQ(points.size(), 203034u);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const LidarPoint& p = points[i];
     const double r = std::sqrt(p.x_m * p.x_m + p.y_m * p.y_m + p.z_m * p.z_m);
@@ -153,7 +148,8 @@ TEST(Vlp16RealData, RecordingDecodesWithPlausibleRangesAndMonotonicTimes) {
 TEST(Vlp16RealData, SplitsIntoThirteenRevolutions) {
   REQUIRE_DATA();
   std::vector<uint32_t> ts;
-  const std::vector<LidarPoint> points = DecodeRecording(&ts);
+  std::vector<LidarPoint> points;
+  ASSERT_NO_FATAL_FAILURE(DecodeRecording(dir, &ts, &points));
   RevolutionSplitter splitter(0.0);
   std::vector<LidarScan> scans;
   splitter.Add(points, &scans);

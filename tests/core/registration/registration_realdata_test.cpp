@@ -21,6 +21,7 @@
 
 #include "core/pipeline/scan_matcher.hpp"
 #include "core/registration/scan_to_map.hpp"
+#include "tests/common/test_data.hpp"
 
 namespace rotolidar {
 namespace {
@@ -71,8 +72,6 @@ FeatureSet PcaFeatures(const Cloud& raw, const PcaFeatureConfig& c) {
   f.less_sharp = f.edge;
   return f;
 }
-
-const char* DataRoot() { return std::getenv("ROTOLIDAR_DATA"); }
 
 /// KITTI velodyne .bin: float32 x y z reflectance per point.
 Cloud LoadKittiBin(const std::string& path) {
@@ -155,14 +154,16 @@ KittiFrames LoadKitti(const std::string& dir) {
 class Kitti00 : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    if (DataRoot() != nullptr) data_ = new KittiFrames(LoadKitti(std::string(DataRoot()) + "/kitti00/"));
+    std::string dir;
+    if (testdata::FindDataFolder("kitti00", &dir).empty()) data_ = new KittiFrames(LoadKitti(dir + "/"));
   }
   static void TearDownTestSuite() {
     delete data_;
     data_ = nullptr;
   }
   void SetUp() override {
-    if (data_ == nullptr) GTEST_SKIP() << "ROTOLIDAR_DATA is not set: skipping the KITTI 00 registration tests";
+    ROTOLIDAR_REQUIRE_DATA(dir, "kitti00");
+    ASSERT_NE(data_, nullptr);
     ASSERT_TRUE(data_->error.empty()) << data_->error;
   }
   static Pose3 ConstantVelocityGuess(const std::vector<Pose3>& est) {  // T_0_k from T_0_{k-1}, T_0_{k-2}
@@ -229,8 +230,8 @@ TEST_F(Kitti00, SequentialOdometryThroughTheLocalMapAgreesWithDirectRegistration
 }
 
 TEST(RegistrationRealData, GicpPairMatchesTheReferenceBothWays) {
-  if (DataRoot() == nullptr) GTEST_SKIP() << "ROTOLIDAR_DATA is not set: skipping the gicp_pair registration test";
-  const std::string dir = std::string(DataRoot()) + "/gicp_pair/";
+  ROTOLIDAR_REQUIRE_DATA(data, "gicp_pair");
+  const std::string dir = data + "/";
   Cloud target, source;
   ASSERT_EQ(pcl::io::loadPCDFile(dir + "251370668.pcd", target), 0) << dir << "251370668.pcd";
   ASSERT_EQ(pcl::io::loadPCDFile(dir + "251371071.pcd", source), 0) << dir << "251371071.pcd";

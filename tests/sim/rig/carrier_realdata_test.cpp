@@ -14,6 +14,7 @@
 
 #include "core/io/yaml_util.hpp"
 
+#include "tests/common/test_data.hpp"
 #include "tests/sim/rig/carrier_test_util.hpp"
 
 namespace rotolidar::sim {
@@ -23,12 +24,11 @@ using namespace carrier_test;
 
 // Real data (ROTOLIDAR_DATA): KITTI sequence 00 with its times file, 4541 frames over 470 s.
 TEST(KittiPath, RealSequence00MatchesEveryFrame) {
-  const char* data = std::getenv("ROTOLIDAR_DATA");
-  if (!data) GTEST_SKIP() << "ROTOLIDAR_DATA is not set: skipping the KITTI 00 real-data check";
+  ROTOLIDAR_REQUIRE_DATA(data, "");
   CarrierConfig config;
   config.type = CarrierType::kKitti;
-  config.kitti.poses_file = std::string(data) + "/kitti_poses/00.txt";
-  config.kitti.times_file = std::string(data) + "/evo/KITTI_00_gt_times.txt";
+  config.kitti.poses_file = data + "/kitti_poses/00.txt";
+  config.kitti.times_file = data + "/evo/KITTI_00_gt_times.txt";
   std::unique_ptr<BaseMotion> path;
   const Status st = MakeCarrierMotion(config, &path);
   ASSERT_TRUE(st.ok) << st.message;

@@ -1,6 +1,7 @@
 #pragma once
-// Scan-to-map registration with PCL's Generalized-ICP (plane-to-plane). This is M1-1's first core; the
-// feature-based Ceres registration of the seed (issue M1-5) replaces it. PCL stays inside the .cpp.
+// Scan-to-map registration with PCL's Generalized-ICP (plane-to-plane). The estimator registers with the seed's
+// feature-based Ceres registration (core/registration/); this GICP is an independent reference for tests and
+// real-data checks. PCL stays inside the .cpp.
 #include <memory>
 #include <vector>
 

@@ -27,7 +27,7 @@ struct LidarIntrinsics {
 };
 
 /// Kalibr's continuous-time IMU noise model (docs/noise_models.md). Defaults: BMI055 (the D435i's IMU) gyro,
-/// ICM-20948-class accelerometer; see ../shared/docs/sensor_facts.md.
+/// ICM-20948-class accelerometer (Bosch BMI055 and TDK ICM-20948 datasheets' noise densities).
 struct ImuNoise {
   double rate_hz = 200.0;
   double gyro_noise_density = 2.44e-4;   ///< [rad/s/sqrt(Hz)]

@@ -2,7 +2,7 @@
 """Generates scenes/urban_loop.yaml and scenes/meshes/urban_loop_ground.ply around a KITTI odometry trajectory.
 
 Input: a KITTI ground-truth poses file (12 numbers a line: the 3x4 matrix T_cam0start_cam0(i), row major), e.g.
-/work/shared/data/kitti_poses/07.txt (the 1101-frame loop, ~694 m). The poses file itself is never committed.
+$ROTOLIDAR_DATA/kitti_poses/07.txt (the 1101-frame loop, ~694 m). The poses file itself is never committed.
 
 Frame: the scene's world frame is the one KittiPath uses: base (x forward, y left, z up) at the first pose, i.e.
 p_world = (z_cam, -x_cam, -y_cam) of each cam0 position. KITTI's cam0 rides ~1.65 m above the road, so the
@@ -18,7 +18,7 @@ What is built (deterministic for a given poses file and --seed; Python's random.
   - the default car path: the trajectory resampled every 5 m.
 
 Usage (from the repository root):
-  python3 scenes/generators/make_urban_loop.py /work/shared/data/kitti_poses/07.txt
+  python3 scenes/generators/make_urban_loop.py $ROTOLIDAR_DATA/kitti_poses/07.txt
 """
 import argparse
 import bisect

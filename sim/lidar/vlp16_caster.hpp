@@ -1,5 +1,5 @@
 #pragma once
-// The simulated VLP-16 head: keeps the firing schedule (../shared/docs/sensor_facts.md), casts each laser's beam
+// The simulated VLP-16 head: keeps the firing schedule (VLP-16 user manual 63-9243, section 9.4), casts each laser's beam
 // into the EmbreeScene from the lidar pose at that laser's own firing time, and produces the firing sequences the
 // packet encoder turns into wire bytes, plus per-firing ground truth for the bench. Every model and the source of
 // its numbers: docs/lidar_model.md.

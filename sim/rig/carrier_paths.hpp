@@ -3,7 +3,7 @@
 // construction, At() thread-safe) giving the TARGET pose that the physics body tracks through a soft weld, so
 // every path is smooth: C2 position with bounded jerk, orientation with bounded angular acceleration.
 //
-//   scripted_loop  the M1-1 analytic loop (ScriptedBaseMotion), the default
+//   scripted_loop  an analytic loop around the origin (ScriptedBaseMotion): the demo's box-room walk
 //   handheld       a person walking waypoints at hand height: smooth turns, pauses, gait bounce, sway, wobble
 //   wheeled        a ground robot driving waypoints: fixed mount height, no roll/pitch, turns in place at pauses
 //   car            a car following a spline through a waypoint CSV, speed limited by lateral acceleration

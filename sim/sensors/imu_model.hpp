@@ -59,8 +59,6 @@ struct ImuErrorConfig {
   /// misalignment sigma exceeds 0.2, or |imu_clock_offset_s| exceeds 1 s.
   bool Validate(std::string* error) const;
 };
-/// The M1-1 name of ImuErrorConfig (its first two fields are the turn-on sigmas, as before).
-using ImuBiasConfig = ImuErrorConfig;
 
 /// Everything the sim needs to model one IMU: its noise (the TRUE values; calib.yaml carries RigCalib::imu)
 /// and its per-run errors.

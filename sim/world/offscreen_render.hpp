@@ -5,8 +5,8 @@
 //
 // How: an OSMesa context is made current, then MuJoCo's own rendering context (mjr_makeContext, which uploads
 // the model's textures) draws into its offscreen framebuffer; the frustum is set from the intrinsics after
-// mjv_updateScene. Never link libEGL into a process that uses this: MuJoCo would pick EGL and fail
-// (/work/shared/docs/toolchain.md). At most 8 lights are drawn (OpenGL's fixed pipeline): the headlight and
+// mjv_updateScene. Never link libEGL into a process that uses this: Debian's MuJoCo 2.2.2 then picks EGL for its
+// GL loading and fails without a display. At most 8 lights are drawn (OpenGL's fixed pipeline): the headlight and
 // the model's first 7.
 //
 // Thread safety: one renderer belongs to one thread at a time (Render makes its OSMesa context current on

@@ -1,4 +1,4 @@
-// The M1-5 core end to end on the seed's scenes: simulate a short handheld segment (the scene's default walk),
+// The LiDAR-inertial core end to end on the seed's scenes: simulate a short handheld segment (the scene's walk),
 // run the LiDAR-inertial estimator on the recording (bench RunSlam), and bound the ATE (SE(3) Umeyama) against
 // the sim's truth/base.tum. Short segments keep this binary well under 3 minutes on a 2-core machine.
 #include <cstdio>

@@ -42,7 +42,7 @@ TEST(ImuModel, StaticTrueSampleIsGravityUpInImuFrame) {
 // bound 4 sigma. The raw mean also carries the walk's time average, sigma_walk * sqrt(T / 3) = 5.5e-4.
 TEST(ImuModel, StaticAccelMeanReadsGravityUpWithinNoise) {
   const ImuNoise noise;
-  ImuModel imu(noise, Pose3::Identity(), 2024, ImuBiasConfig{0.0, 0.0});
+  ImuModel imu(noise, Pose3::Identity(), 2024, ImuErrorConfig{0.0, 0.0});
   const double T = 10.0, dt = 1.0 / noise.rate_hz;
   const int n = static_cast<int>(std::lround(T * noise.rate_hz));
   Eigen::Vector3d mean_raw = Eigen::Vector3d::Zero(), mean_debiased = Eigen::Vector3d::Zero();
@@ -253,7 +253,7 @@ TEST(ImuModel, ValidationNamesTheField) {
   noise.accel_random_walk = -1;
   EXPECT_FALSE(ValidateImuNoise(noise, &error));
   EXPECT_NE(error.find("accel_random_walk"), std::string::npos) << error;
-  EXPECT_FALSE((ImuBiasConfig{-1.0, 0.0}.Validate(&error)));
+  EXPECT_FALSE((ImuErrorConfig{-1.0, 0.0}.Validate(&error)));
   EXPECT_NE(error.find("gyro_turn_on_sigma_radps"), std::string::npos) << error;
   ImuErrorConfig e;
   e.accel_misalignment_sigma_rad = 0.5;

@@ -111,7 +111,7 @@ TEST(Vlp16Caster, AzimuthsAreReproducedByDecoderInterpolation) {
   for (size_t k = 0; k + 1 < seqs.size(); ++k) {
     const double d_az = (seqs[k + 1].azimuth_centideg - seqs[k].azimuth_centideg + 36000) % 36000;
     for (int i = 0; i < 16; ++i) {
-      // The driver's per-firing azimuth (sensor_facts.md), then the shared ray geometry.
+      // The ROS velodyne driver's per-firing azimuth interpolation, then the shared ray geometry.
       const double az_rad = (seqs[k].azimuth_centideg + d_az * i * 2.304 / 55.296) * 0.01 * kDeg;
       const double range_m = seqs[k].distance_2mm[i] * 0.002;
       if (range_m == 0.0) continue;

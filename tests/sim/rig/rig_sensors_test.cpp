@@ -1,4 +1,4 @@
-// The rig twin end to end at the sensor level (issue M1-2's checks): MuJoCo physics + stepper drive + IMU model,
+// The rig twin end to end at the sensor level (the rig model's acceptance checks): MuJoCo physics + stepper drive + IMU model,
 // as sim_runner wires them, compared with the physics' own truth.
 #include <cmath>
 #include <filesystem>

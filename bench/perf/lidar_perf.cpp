@@ -52,17 +52,15 @@ class Stopwatch {
 struct KinematicRig {
   RigCalib calib;
   std::unique_ptr<sim::BaseMotion> carrier;
-  std::unique_ptr<sim::ConstantSpeedRotor> rotor;
+  std::unique_ptr<sim::ProfileRotor> rotor;
   Pose3 T_world_lidar(Seconds t) const { return carrier->At(t).T_world_base * calib.T_base_lidar(rotor->AngleAt(t)); }
 };
 
 Status MakeKinematicRig(const sim::SimConfig& config, KinematicRig* rig) {
   rig->calib = config.TrueCalib();
   if (Status s = sim::MakeCarrierMotion(config.carrier, &rig->carrier); !s) return s;
-  sim::MotorConfig motor;
-  motor.speed_radps = config.motor.profile.speed_radps;
-  motor.theta0_rad = config.motor.profile.theta0_rad;
-  rig->rotor = std::make_unique<sim::ConstantSpeedRotor>(motor);
+  rig->rotor = std::make_unique<sim::ProfileRotor>(
+      sim::ConstantProfile(config.motor.profile.speed_radps, config.motor.profile.theta0_rad));
   return Status::Ok();
 }
 

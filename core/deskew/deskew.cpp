@@ -5,30 +5,6 @@
 
 namespace rotolidar {
 
-namespace {
-
-/// Rotation along the geodesic a -> b (log_ab = Log(R_a^T R_b)) and translation linearly, at fraction s.
-Pose3 Blend(const Pose3& a, const Pose3& b, double s, const Eigen::Vector3d& log_ab) {
-  Pose3 out = Pose3::Identity();
-  out.linear() = a.linear() * ExpSO3(s * log_ab);
-  out.translation() = (1.0 - s) * a.translation() + s * b.translation();
-  return out;
-}
-
-}  // namespace
-
-Pose3 MotionTable::At(Seconds t, bool* outside) const {
-  ROTOLIDAR_CHECK(!t_s.empty() && t_s.size() == T_start_t.size(), "MotionTable: empty or mismatched sizes");
-  bool out_of_span = false;
-  const size_t k = deskew_detail::Interval(t_s, t, 0, &out_of_span);
-  if (outside) *outside = out_of_span;
-  if (k == 0) return T_start_t.front();
-  if (k == t_s.size()) return T_start_t.back();
-  const Pose3& a = T_start_t[k - 1];
-  const Pose3& b = T_start_t[k];
-  return Blend(a, b, (t - t_s[k - 1]) / (t_s[k] - t_s[k - 1]), LogSO3(a.linear().transpose() * b.linear()));
-}
-
 // Strapdown integration in the imu frame at t0: R, p, v of the imu frame at t relative to t0, gravity and the
 // start velocity in the t0 frame. Midpoint rule as in core/imu/preintegration.cpp.
 Status ImuMotionTable(const std::vector<ImuSample>& imu, Seconds t0_s, Seconds t1_s, const ImuMotionModel& model,
@@ -112,18 +88,21 @@ MotionInterpolator::MotionInterpolator(const MotionTable& table) : table_(table)
   }
 }
 
-size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
-                    const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start) {
-  ROTOLIDAR_CHECK(t_s.size() == p_base.size(), "DeskewPoints: times and points differ in size");
-  p_start->resize(p_base.size());
-  MotionInterpolator interpolate(table);
-  size_t outside_count = 0;
-  for (size_t i = 0; i < p_base.size(); ++i) {
-    bool outside = false;
-    (*p_start)[i] = interpolate.Apply(t_s[i], p_base[i], &outside);
-    outside_count += outside ? 1 : 0;
+DeskewCounts DeskewScan(const RotorAngleInterpolator& rotor, const MotionTable& table, const LidarScan& scan,
+                        std::vector<ScanPoint>* out) {
+  RotaryTransform rotary(rotor);
+  MotionInterpolator motion(table);
+  out->resize(scan.points.size());
+  DeskewCounts counts;
+  for (size_t i = 0; i < scan.points.size(); ++i) {
+    const LidarPoint& lp = scan.points[i];
+    bool fell_back = false, outside = false;
+    const Eigen::Vector3d p_base = rotary.Apply(lp, &fell_back);  // in the base frame at its own time
+    (*out)[i] = ToScanPoint(lp, motion.Apply(lp.t_s, p_base, &outside));
+    counts.rotor_fallback += fell_back ? 1 : 0;
+    counts.motion_extrapolated += outside ? 1 : 0;
   }
-  return outside_count;
+  return counts;
 }
 
 }  // namespace rotolidar

@@ -2,9 +2,9 @@
 // Motion compensation ("deskew") of one scan: every point, measured in the base frame at its own firing time t,
 // is moved into the base frame at the scan's start time t0 (seed Sec. 3.2):
 //   p_base(t0) = T_base(t0)_base(t) * p_base(t)
-// The rotor's rotation is NOT part of this: LidarToBase (core/pipeline/rotary.hpp) already placed each point in
-// the base frame at its own time with the encoder angle. What remains is the carrier's motion, given as a
-// MotionTable: T_base(t0)_base(t) sampled at increasing times and interpolated in between.
+// The rotor's rotation comes first: RotaryTransform (core/deskew/rotary.hpp) places each point in the base frame
+// at its own time with the encoder angle. What remains is the carrier's motion, given as a MotionTable:
+// T_base(t0)_base(t) sampled at increasing times and interpolated in between. DeskewScan does both in one pass.
 //
 // Tables come from
 //   - ImuMotionTable: IMU readings integrated from t0 with the state's velocity, gravity and biases (rotation
@@ -18,20 +18,20 @@
 
 #include <Eigen/Core>
 
+#include "core/deskew/rotary.hpp"
 #include "core/types/geometry.hpp"
 #include "core/types/messages.hpp"
+#include "core/types/scan_point.hpp"
 #include "core/util/log.hpp"
 
 namespace rotolidar {
 
-/// T_base(t0)_base(t) at increasing times t_s[0] = t0 < t_s[1] < ...; sizes equal, at least one entry.
+/// T_base(t0)_base(t) at increasing times t_s[0] = t0 < t_s[1] < ...; sizes equal, at least one entry. Between
+/// entries the pose interpolates with translation linear and rotation along the geodesic; outside
+/// [t_s.front(), t_s.back()] the nearest end entry holds (MotionInterpolator).
 struct MotionTable {
   std::vector<Seconds> t_s;
   std::vector<Pose3> T_start_t;
-
-  /// Pose at t: translation linear and rotation geodesic between the bracketing entries. Outside
-  /// [t_s.front(), t_s.back()] the nearest end entry is returned and *outside (if given) is set true.
-  Pose3 At(Seconds t, bool* outside = nullptr) const;
 };
 
 /// The state the IMU integration starts from, all in the imu frame at t0.
@@ -61,9 +61,9 @@ MotionTable ConstantTwistTable(const Pose3& T_start_end, Seconds t0_s, Seconds t
 /// The identity over [t0_s, t1_s] (no motion known).
 MotionTable IdentityTable(Seconds t0_s, Seconds t1_s);
 
-/// MotionTable::At(t) * p for a stream of points, with the same values up to double rounding and no trigonometry
-/// per point: each interval's relative rotation log w is taken once, and Exp(s w) p is applied with Rodrigues'
-/// formula on the vector (Taylor series of sin(x)/x and (1 - cos x)/x^2 below 0.1 rad). The previous point's
+/// The table's pose at t applied to points, T_base(t0)_base(t) * p, with no trigonometry per point: each
+/// interval's relative rotation log w = Log(R_a^T R_b) is taken once, and R_a Exp(s w) p is applied with
+/// Rodrigues' formula on the vector (Taylor series of sin(x)/x and (1 - cos x)/x^2 below 0.1 rad). The previous point's
 /// interval is tried first (points come in firing order; any order is correct). Holds a reference to `table`,
 /// which must outlive it. Non-finite inputs give non-finite outputs.
 class MotionInterpolator {
@@ -84,13 +84,21 @@ class MotionInterpolator {
   size_t k_ = 1;              ///< interval of the previous time
 };
 
-/// Deskews points: (*p_start)[i] = table.At(t_s[i]) * p_base[i] (sizes must match: ROTOLIDAR_CHECK), computed
-/// with MotionInterpolator. Returns how many points lay outside the table's span (they used its nearest end).
-/// Non-finite inputs give non-finite outputs.
-size_t DeskewPoints(const MotionTable& table, const std::vector<Seconds>& t_s,
-                    const std::vector<Eigen::Vector3d>& p_base, std::vector<Eigen::Vector3d>* p_start);
+/// What DeskewScan could not do exactly: points outside the encoder's span (uniform-rotation fallback) and
+/// outside the motion table's span (its nearest end used).
+struct DeskewCounts {
+  size_t rotor_fallback = 0;
+  size_t motion_extrapolated = 0;
+};
 
-// ---- inline so that per-point loops (Estimator::Deskew, DeskewPoints) inline the interpolation ----
+/// One revolution from the lidar frame at each point's firing time to the base frame at the scan's start:
+///   (*out)[i] = ToScanPoint(scan.points[i], table(t_i) * T_base_lidar(theta(t_i)) * p_lidar_i)
+/// with RotaryTransform and MotionInterpolator in one pass. *out is resized to the scan (its capacity is reused);
+/// order matches the input. Non-finite inputs give non-finite outputs.
+DeskewCounts DeskewScan(const RotorAngleInterpolator& rotor, const MotionTable& table, const LidarScan& scan,
+                        std::vector<ScanPoint>* out);
+
+// ---- inline so that the per-point loop of DeskewScan inlines the interpolation ----
 
 namespace deskew_detail {
 

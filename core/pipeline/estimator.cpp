@@ -120,28 +120,16 @@ void Estimator::ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const P
   DropOldData(t_s);
 }
 
-// Rotary transform (encoder angle at each point's time), then the carrier's motion from the prediction's table:
-// LidarToBase, DeskewPoints and MakeScanPoints fused into one pass over the points (same values).
+// Rotary transform (encoder angle at each point's time), then the carrier's motion from the prediction's table.
 std::vector<ScanPoint> Estimator::Deskew(const LidarScan& scan, const Prediction& prediction, ScanReport* report) {
   const Stopwatch watch;
-  RotaryTransform rotary(calib_, rotor_);
-  MotionInterpolator motion(prediction.motion);
   // The previous scan's preprocessed points are no longer needed (UpdateMap has run): their buffer is reused,
   // so only points beyond its size are value-initialised (a fresh 1 MB vector was a quarter of this stage).
   std::vector<ScanPoint> points = std::move(preprocessed_);
   preprocessed_.clear();
-  points.resize(scan.points.size());
-  size_t fallback = 0, extrapolated = 0;
-  for (size_t i = 0; i < scan.points.size(); ++i) {
-    const LidarPoint& lp = scan.points[i];
-    bool fell_back = false, outside = false;
-    const Eigen::Vector3d p_base = rotary.Apply(lp, &fell_back);  // in the base frame at its own time
-    points[i] = ToScanPoint(lp, motion.Apply(lp.t_s, p_base, &outside));
-    fallback += fell_back ? 1 : 0;
-    extrapolated += outside ? 1 : 0;
-  }
-  report->num_rotor_fallback = fallback;
-  report->num_motion_extrapolated = extrapolated;
+  const DeskewCounts counts = DeskewScan(rotor_, prediction.motion, scan, &points);
+  report->num_rotor_fallback = counts.rotor_fallback;
+  report->num_motion_extrapolated = counts.motion_extrapolated;
   report->imu_deskew = prediction.imu_motion;
   if (config_.keep_deskewed) {
     report->deskew_source = scan.points;

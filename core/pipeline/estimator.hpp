@@ -21,7 +21,7 @@
 #include "core/io/scan_splitter.hpp"
 #include "core/io/vlp16.hpp"
 #include "core/pipeline/estimator_config.hpp"
-#include "core/pipeline/rotary.hpp"
+#include "core/deskew/rotary.hpp"
 #include "core/pipeline/voxel_map.hpp"
 #include "core/types/trajectory.hpp"
 

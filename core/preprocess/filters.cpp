@@ -94,14 +94,6 @@ std::vector<uint8_t> KeepBelowThreshold(const std::vector<double>& stat, double 
 
 }  // namespace
 
-std::vector<ScanPoint> MakeScanPoints(const LidarScan& scan, const std::vector<Eigen::Vector3d>& p_base_start) {
-  ROTOLIDAR_CHECK(scan.points.size() == p_base_start.size(),
-                  "scan has " << scan.points.size() << " points, positions " << p_base_start.size());
-  std::vector<ScanPoint> out(scan.points.size());
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = ToScanPoint(scan.points[i], p_base_start[i]);
-  return out;
-}
-
 bool PreprocessConfig::Validate(std::string* error) const {
   auto fail = [&](const std::string& field, const std::string& rule, double got) {
     if (error) {

@@ -7,22 +7,6 @@
 
 namespace rotolidar::sim {
 
-bool MotorConfig::Validate(std::string* error) const {
-  auto fail = [error](const std::string& m) {
-    if (error) *error = "MotorConfig: " + m;
-    return false;
-  };
-  if (!std::isfinite(speed_radps) || std::abs(speed_radps) > 200.0)
-    return fail("speed_radps must be finite with |speed_radps| <= 200 rad/s");
-  if (!std::isfinite(theta0_rad)) return fail("theta0_rad must be finite");
-  return true;
-}
-
-ConstantSpeedRotor::ConstantSpeedRotor(const MotorConfig& config) : config_(config) {
-  std::string error;
-  ROTOLIDAR_CHECK(config_.Validate(&error), error);
-}
-
 bool EncoderConfig::Validate(std::string* error) const {
   auto fail = [error](const std::string& m) {
     if (error) *error = "EncoderConfig: " + m;

@@ -3,7 +3,7 @@
 //
 // Rotor angle theta [rad] is the rotation of the rotor frame about the motor z axis (core/types/calib.hpp:
 // T_base_rotor(theta) = T_base_motor * RotZ(theta)). RotorMotion is an interface for rotors known as a function
-// of time (ConstantSpeedRotor here, ProfileRotor in sim/rig/motor_profile.hpp); a rotor integrated by physics is
+// of time (ProfileRotor in sim/rig/motor_profile.hpp); a rotor integrated by physics is
 // driven through sim/rig/rotor_drive.hpp and sampled by EncoderStream. See docs/motor_model.md.
 #include <cstdint>
 #include <deque>
@@ -28,23 +28,9 @@ class RotorMotion {
   virtual double SpeedAt(Seconds t) const = 0;
 };
 
-struct MotorConfig {
-  double speed_radps = 2.6;  ///< constant rotor speed [rad/s]; may be negative (clockwise); |w| <= 200 rad/s
-  double theta0_rad = 0.0;   ///< rotor angle at t = 0
-  bool Validate(std::string* error) const;
-};
-
-/// theta(t) = theta0 + speed * t.
-class ConstantSpeedRotor final : public RotorMotion {
- public:
-  explicit ConstantSpeedRotor(const MotorConfig& config);  ///< config must Validate (ROTOLIDAR_CHECK)
-  double AngleAt(Seconds t) const override { return config_.theta0_rad + config_.speed_radps * t; }
-  double SpeedAt(Seconds) const override { return config_.speed_radps; }
-  const MotorConfig& config() const { return config_; }
-
- private:
-  MotorConfig config_;
-};
+/// The largest rotor speed any config accepts [rad/s]: far above any stepper-driven rotor (a NEMA-17 pulls out
+/// long before), low enough that a 1 kHz encoder still sees less than half a turn per sample (1000 * pi rad/s).
+constexpr double kMaxRotorSpeedRadps = 200.0;
 
 /// An absolute single-turn shaft encoder (e.g. AS5600 12-bit, AS5048 14-bit).
 struct EncoderConfig {

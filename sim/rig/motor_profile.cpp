@@ -8,7 +8,6 @@
 namespace rotolidar::sim {
 namespace {
 
-constexpr double kMaxSpeedRadps = 200.0;  // as MotorConfig: far above any stepper-driven rotor
 
 /// A move from rest along +: accelerate at a for t1, cruise at a*t1 for tc (may be infinite), decelerate at a for
 /// t1, then rest. Evaluated at tau >= 0 after the move starts; theta is the distance covered.
@@ -84,8 +83,8 @@ bool MotorProfileConfig::Validate(std::string* error) const {
     return false;
   };
   if (std::string(ToString(type)) == "unknown") return fail("type is not a known profile type");
-  if (!std::isfinite(speed_radps) || std::abs(speed_radps) > kMaxSpeedRadps)
-    return fail("speed_radps must be finite with |speed_radps| <= 200 rad/s");
+  if (!std::isfinite(speed_radps) || std::abs(speed_radps) > kMaxRotorSpeedRadps)
+    return fail("speed_radps must be finite with |speed_radps| <= " + std::to_string(int(kMaxRotorSpeedRadps)) + " rad/s");
   if (!std::isfinite(accel_radps2) || accel_radps2 <= 0) return fail("accel_radps2 must be finite and > 0");
   if (std::isnan(stop_at_s) || stop_at_s < 0) return fail("stop_at_s must be >= 0 (infinity: never stop)");
   if (!std::isfinite(theta0_rad)) return fail("theta0_rad must be finite");
@@ -94,8 +93,9 @@ bool MotorProfileConfig::Validate(std::string* error) const {
     return fail("nodding_amplitude_rad must be finite and > 0");
   if (!std::isfinite(nodding_frequency_hz) || nodding_frequency_hz <= 0)
     return fail("nodding_frequency_hz must be finite and > 0");
-  if (type == MotorProfileType::kNodding && PeakSpeed() > kMaxSpeedRadps)
-    return fail("nodding_amplitude_rad * 2 pi * nodding_frequency_hz must be <= 200 rad/s");
+  if (type == MotorProfileType::kNodding && PeakSpeed() > kMaxRotorSpeedRadps)
+    return fail("nodding_amplitude_rad * 2 pi * nodding_frequency_hz must be <= " +
+                std::to_string(int(kMaxRotorSpeedRadps)) + " rad/s");
   if (!std::isfinite(move_angle_rad) || move_angle_rad == 0) return fail("move_angle_rad must be finite and != 0");
   if (!std::isfinite(dwell_s) || dwell_s < 0) return fail("dwell_s must be finite and >= 0");
   if (type == MotorProfileType::kStopAndGo && speed_radps == 0)
@@ -119,11 +119,11 @@ double MotorProfileConfig::PeakSpeed() const {
   return 0.0;
 }
 
-MotorProfileConfig ConstantProfile(const MotorConfig& motor) {
+MotorProfileConfig ConstantProfile(double speed_radps, double theta0_rad) {
   MotorProfileConfig c;
   c.type = MotorProfileType::kConstant;
-  c.speed_radps = motor.speed_radps;
-  c.theta0_rad = motor.theta0_rad;
+  c.speed_radps = speed_radps;
+  c.theta0_rad = theta0_rad;
   return c;
 }
 

@@ -50,8 +50,8 @@ struct MotorProfileConfig {
   double PeakSpeed() const;
 };
 
-/// The constant-speed profile equivalent to a MotorConfig (type constant, same speed and theta0).
-MotorProfileConfig ConstantProfile(const MotorConfig& motor);
+/// The constant-speed profile theta(t) = theta0_rad + speed_radps * t (type constant).
+MotorProfileConfig ConstantProfile(double speed_radps, double theta0_rad = 0.0);
 
 /// The reference at one instant.
 struct MotorReference {

@@ -78,8 +78,8 @@ bool PidConfig::Validate(std::string* error) const {
   if (!Finite(integral_limit_rad) || integral_limit_rad < 0) return fail("integral_limit_rad must be finite, >= 0");
   if (!Finite(max_correction_speed_radps) || max_correction_speed_radps <= 0)
     return fail("max_correction_speed_radps must be finite, > 0");
-  if (!Finite(max_step_rate_radps) || max_step_rate_radps <= 0 || max_step_rate_radps > 200)
-    return fail("max_step_rate_radps must be in (0, 200]");
+  if (!Finite(max_step_rate_radps) || max_step_rate_radps <= 0 || max_step_rate_radps > kMaxRotorSpeedRadps)
+    return fail("max_step_rate_radps must be in (0, " + std::to_string(int(kMaxRotorSpeedRadps)) + "]");
   return true;
 }
 

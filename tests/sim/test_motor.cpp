@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/util/log.hpp"
+#include "sim/rig/motor_profile.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -19,16 +20,6 @@ double ErrorCounts(const EncoderConfig& c, double theta_true, uint32_t count) {
   calib.encoder = c.ToCalib();
   const double e = std::remainder(theta_true - calib.EncoderAngle(count), kTwoPi);
   return e / kTwoPi * c.counts_per_rev;
-}
-
-TEST(ConstantSpeedRotor, AngleIsLinearInTime) {
-  const ConstantSpeedRotor rotor(MotorConfig{2.6, 0.3});
-  EXPECT_DOUBLE_EQ(rotor.AngleAt(0.0), 0.3);
-  EXPECT_DOUBLE_EQ(rotor.AngleAt(10.0), 0.3 + 26.0);
-  EXPECT_DOUBLE_EQ(rotor.SpeedAt(5.0), 2.6);
-  std::string error;
-  EXPECT_FALSE((MotorConfig{std::nan(""), 0.0}.Validate(&error)));
-  EXPECT_NE(error.find("speed_radps"), std::string::npos) << error;
 }
 
 TEST(EncoderConfig, PresetsAndValidation) {
@@ -57,7 +48,7 @@ TEST(EncoderModel, NoiseFreeErrorIsWithinHalfACount) {
       c.noise_sigma_counts = 0.0;
       c.latency_s = 2e-3;
       c.zero_offset_rad = 0.7;
-      const ConstantSpeedRotor rotor(MotorConfig{speed, 1.0});
+      const ProfileRotor rotor(ConstantProfile(speed, 1.0));
       EncoderModel enc(c, 42);
       const auto samples = enc.SampleRange(rotor, 0.0, 70.0);
       ASSERT_EQ(samples.size(), 70001u);
@@ -77,7 +68,7 @@ TEST(EncoderModel, NoiseFreeErrorIsWithinHalfACount) {
 TEST(EncoderModel, NoisyErrorMatchesQuantisationPlusNoise) {
   EncoderConfig c;
   c.noise_sigma_counts = 0.5;
-  const ConstantSpeedRotor rotor(MotorConfig{2.6, 0.0});
+  const ProfileRotor rotor(ConstantProfile(2.6, 0.0));
   EncoderModel enc(c, 7);
   const auto samples = enc.SampleRange(rotor, 0.0, 99.999);
   double sum = 0, sum2 = 0;
@@ -110,7 +101,7 @@ TEST(EncoderModel, QuantiseWrapsIntoOneTurn) {
 TEST(EncoderModel, SameSeedSameSamplesDifferentSeedDifferent) {
   EncoderConfig c;
   c.noise_sigma_counts = 1.0;
-  const ConstantSpeedRotor rotor(MotorConfig{});
+  const ProfileRotor rotor(ConstantProfile(2.6));
   EncoderModel a(c, 123), b(c, 123), d(c, 124);
   const auto sa = a.SampleRange(rotor, 0.0, 1.0), sb = b.SampleRange(rotor, 0.0, 1.0),
              sd = d.SampleRange(rotor, 0.0, 1.0);
@@ -132,7 +123,7 @@ TEST(EncoderStream, MatchesEncoderModelOnTheSameRotor) {
   c.noise_sigma_counts = 0.8;
   c.latency_s = 3.3e-3;
   c.zero_offset_rad = 0.9;
-  const ConstantSpeedRotor rotor(MotorConfig{-4.1, 2.0});
+  const ProfileRotor rotor(ConstantProfile(-4.1, 2.0));
   EncoderModel model(c, 99);
   EncoderStream stream(c, 99);
   std::vector<EncoderSample> streamed;

@@ -34,9 +34,8 @@ void RealScan(const std::string& dir, int index, std::vector<ScanPoint>* out) {
   splitter.Add(points, &scans);
   ASSERT_GT(scans.size(), std::size_t(index));
   const LidarScan& scan = scans[index];
-  std::vector<Eigen::Vector3d> p_base;
-  for (const LidarPoint& lp : scan.points) p_base.emplace_back(lp.x_m, lp.y_m, lp.z_m);
-  *out = MakeScanPoints(scan, p_base);
+  out->clear();  // the head was static: lidar = base, no deskew
+  for (const LidarPoint& lp : scan.points) out->push_back(ToScanPoint(lp, Eigen::Vector3d(lp.x_m, lp.y_m, lp.z_m)));
 }
 
 TEST(FeaturesRealData, EinrideRevolution) {

@@ -117,15 +117,13 @@ TEST(MotorProfile, StopAndGoDwellsThenMovesTheSetAngle) {
   EXPECT_NEAR(tri.Reference(0.7 + 2 * std::sqrt(0.1 / 5.2)).theta_rad, 0.2, 1e-12);
 }
 
-TEST(MotorProfile, ConstantMatchesConstantSpeedRotorAndProfileRotorMatchesReference) {
-  const MotorConfig motor{-3.1, 0.25};
-  const ConstantSpeedRotor rotor(motor);
-  const ProfileRotor profile_rotor(ConstantProfile(motor));
+TEST(MotorProfile, ConstantIsLinearInTimeAndProfileRotorMatchesReference) {
+  const ProfileRotor profile_rotor(ConstantProfile(-3.1, 0.25));
   MotorProfileConfig nod = Config(MotorProfileType::kNodding);
   const ProfileRotor nodding(nod);
   for (double t = 0; t < 10; t += 0.37) {
-    EXPECT_DOUBLE_EQ(profile_rotor.AngleAt(t), rotor.AngleAt(t));
-    EXPECT_DOUBLE_EQ(profile_rotor.SpeedAt(t), rotor.SpeedAt(t));
+    EXPECT_DOUBLE_EQ(profile_rotor.AngleAt(t), 0.25 - 3.1 * t);
+    EXPECT_DOUBLE_EQ(profile_rotor.SpeedAt(t), -3.1);
     EXPECT_EQ(nodding.AngleAt(t), nodding.profile().Reference(t).theta_rad);
     EXPECT_EQ(nodding.SpeedAt(t), nodding.profile().Reference(t).omega_radps);
   }

@@ -164,9 +164,10 @@ KittiFrames LoadKitti(const std::string& dir) {
     k.error = s.message;
     return k;
   }
-  const std::pair<const char*, std::vector<Pose3>*> refs[] = {{"orbslam2_stereo_00_frames_0-10_cam0.txt", &k.orb},
-                                                          {"sptam_stereo_00_frames_0-10_cam0.txt", &k.sptam},
-                                                          {"gt_poses_00_frames_0-10_cam0.txt", &k.official}};
+  const std::pair<const char*, std::vector<Pose3>*> refs[] = {
+      {"orbslam2_stereo_00_frames_0-10_cam0.txt", &k.orb},
+      {"sptam_stereo_00_frames_0-10_cam0.txt", &k.sptam},
+      {"gt_poses_00_frames_0-10_cam0.txt", &k.official}};
   for (const auto& [file, ref] : refs)
     if (k.error = LoadReference(dir + file, calib.T_cam0_velo, ref); !k.error.empty()) return k;
   for (size_t i = 0; i < kKittiFrames; ++i) {

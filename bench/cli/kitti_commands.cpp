@@ -57,7 +57,7 @@ int CmdSlamKitti(int argc, char** argv) {
   p.Add("start", "0", "-", "first frame id");
   p.Add("calib", "", "-", "calib.txt (default DIR/calib.txt)");
   p.Add("times", "", "-", "times.txt (default DIR/times.txt; none: nominal 10 Hz)");
-  p.Add("poses", "", "-", "ground-truth poses (default DIR/poses.txt or DIR/../../poses/<DIR name>.txt)");
+  p.Add("poses", "", "-", "reference poses, e.g. ground truth (default DIR/poses.txt or DIR/../../poses/<DIR name>.txt)");
   p.Add("config", "", "-", "estimator config YAML (keys of slam_config.yaml) over the KITTI defaults");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   o.paths = {p.Get("kitti"), p.Get("calib"), p.Get("times"), p.Get("poses")};
@@ -74,7 +74,7 @@ int CmdSlamKitti(int argc, char** argv) {
                 r.frames_other_line_count, o.scan.expected_lines, r.elevation_inversions);
   if (r.nominal_times) std::printf("note: no times file: nominal 10 Hz frame times\n");
   if (r.has_ground_truth) {
-    std::printf("vs ground truth (cam0 convention, rebased to frame %d):\n", r.frame_ids.front());
+    std::printf("vs %s (cam0 convention, rebased to frame %d):\n", r.poses_path.c_str(), r.frame_ids.front());
     PrintStats("APE translation (no align)", r.ape, "m");
     PrintStats("APE translation (SE(3))", r.ape_se3, "m");
     PrintStats("RPE translation (1 frame)", r.rpe_translation, "m");

@@ -81,6 +81,7 @@ void Evaluate(const KittiSequence& seq, KittiRunResult* r) {
   for (size_t n = 0; n < r->frame_ids.size(); ++n)
     r->ground_truth_cam0.push_back({r->trajectory_cam0[n].t_s, T_first_inv * seq.poses[size_t(r->frame_ids[n])]});
   r->has_ground_truth = true;
+  r->poses_path = seq.poses_path;
   EvalOptions o;
   o.align = Alignment::kNone;
   r->ape = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);

@@ -50,7 +50,8 @@ struct KittiRunResult {
   double wall_time_s = 0.0;          ///< estimator time only (excludes reading bins) [s]
   double median_scan_ms = 0.0;
   bool nominal_times = false;        ///< the sequence had no times file
-  bool has_ground_truth = false;
+  bool has_ground_truth = false;     ///< a poses file was found or given (--poses: any reference trajectory)
+  std::string poses_path;            ///< that file (when has_ground_truth)
   Trajectory ground_truth_cam0;      ///< GT rebased to the first frame used, frame times (when present)
   /// With ground truth (cam0 convention, no association: pose i = frame i):
   EvalResult ape;                    ///< translation [m], no alignment (both start at the identity)

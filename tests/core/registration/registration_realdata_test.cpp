@@ -1,13 +1,17 @@
-// Scan-to-map registration on real LiDAR data ($ROTOLIDAR_DATA, skipped when unset):
-//  - KITTI 00 frames 0..5 (HDL-64E bins of kitti00/): frames 1..5 registered to frame 0, checked against PCL's
-//    GICP (an independent implementation, through core's ScanMatcher) and against our own sequential odometry
-//    through a growing LocalMap. The shipped KITTI ground truth is printed but NOT asserted: these bins do not move
-//    like it (both our registration and PCL GICP, even started AT the ground truth, find 0.69 m for 0->1 where
-//    the truth says 0.86 m, and 3.58 m vs 4.29 m for 0->5; see docs/registration.md).
+// Scan-to-map registration on real LiDAR data ($ROTOLIDAR_DATA, skipped when absent):
+//  - KITTI 00 frames 0..10 (HDL-64E bins of kitti00/): every consecutive pair k -> k+1 registered (frame k+1 into
+//    a map of frame k) and compared with two independent stereo SLAM results on the same frames, ORB-SLAM2 and
+//    S-PTAM, converted to the LiDAR frame (T_velo = Tr^-1 * P_k^-1 * P_k+1 * Tr), and with PCL's GICP (through
+//    core's ScanMatcher). KITTI's official ground truth is wrong for frames 0..~13 of sequence 00 (a constant
+//    0.86 m per frame while the car accelerates from ~0.68 m; docs/registration.md): it is printed, and the test
+//    asserts that our 0->1 step is far closer to the stereo references than to it. Frames 0..5 also run as
+//    sequential odometry through a growing LocalMap, checked against direct registration to frame 0.
 //  - the fast_gicp / small_gicp scan pair against their reference T_target_source (5 cm / 1 deg, both ways).
 // Neither set carries ring indices, so features are chosen here by local PCA shape (planarity / linearity of
 // each voxel-downsampled point's neighbourhood), independent of core/features.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <string>
@@ -19,6 +23,7 @@
 #include <pcl/kdtree/kdtree_flann.h>
 #include <Eigen/Eigenvalues>
 
+#include "core/io/kitti.hpp"
 #include "core/pipeline/scan_matcher.hpp"
 #include "core/registration/scan_to_map.hpp"
 #include "tests/common/test_data.hpp"
@@ -130,21 +135,49 @@ std::vector<Eigen::Vector3d> GicpInput(const Cloud& raw, double min_range_m, dou
   return VoxelDownsample(points, voxel_m);
 }
 
+constexpr size_t kKittiFrames = 11;  ///< kitti00 holds velodyne/000000.bin .. 000010.bin
+
 struct KittiFrames {
   std::vector<FeatureSet> features;                      ///< PCA features per frame (LiDAR frame of that scan)
   std::vector<std::vector<Eigen::Vector3d>> gicp_input;  ///< 0.3 m voxel clouds for PCL GICP
-  std::vector<Pose3> gt;                                 ///< shipped T_velo0_velok (printed only)
+  /// Reference steps T_velo(k)_velo(k+1), k = 0..9, of ORB-SLAM2, S-PTAM and the official ground truth.
+  std::vector<Pose3> orb, sptam, official;
   std::string error;                                     ///< non-empty when a file is missing or short
 };
 
+/// LiDAR-frame steps of a cam0 poses file of frames 0..10: T_velo(k)_velo(k+1) = Tr^-1 * P_k^-1 * P_k+1 * Tr, with
+/// P_k = T_cam0(0)_cam0(k) and Tr = T_cam0_velo (calib_00.txt). Returns "" or why it failed.
+std::string LoadReference(const std::string& path, const Pose3& T_cam0_velo, std::vector<Pose3>* steps) {
+  std::vector<Pose3> cam0;
+  if (const Status s = ReadKittiPoses(path, &cam0); !s) return s.message;
+  if (cam0.size() != kKittiFrames)
+    return path + ": expected " + std::to_string(kKittiFrames) + " poses, got " + std::to_string(cam0.size());
+  for (size_t k = 0; k + 1 < cam0.size(); ++k)
+    steps->push_back(Cam0ToVeloPose(T_cam0_velo, cam0[k].inverse() * cam0[k + 1]));
+  return "";
+}
+
 KittiFrames LoadKitti(const std::string& dir) {
   KittiFrames k;
-  k.gt = LoadPoses(dir + "gt_velo_poses_00_frames_0-5.txt");
-  if (k.gt.size() != 6) k.error = dir + "gt_velo_poses_00_frames_0-5.txt: expected 6 poses";
-  for (int i = 0; i <= 5 && k.error.empty(); ++i) {
-    const std::string path = dir + "velodyne/00000" + std::to_string(i) + ".bin";
-    const Cloud cloud = LoadKittiBin(path);
-    if (cloud.size() < 100000) k.error = path + ": expected > 100000 points";
+  KittiCalib calib;
+  if (const Status s = ReadKittiCalib(dir + "calib_00.txt", &calib); !s) {
+    k.error = s.message;
+    return k;
+  }
+  const std::pair<const char*, std::vector<Pose3>*> refs[] = {
+      {"orbslam2_stereo_00_frames_0-10_cam0.txt", &k.orb},
+      {"sptam_stereo_00_frames_0-10_cam0.txt", &k.sptam},
+      {"gt_poses_00_frames_0-10_cam0.txt", &k.official}};
+  for (const auto& [file, ref] : refs)
+    if (k.error = LoadReference(dir + file, calib.T_cam0_velo, ref); !k.error.empty()) return k;
+  for (size_t i = 0; i < kKittiFrames; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "velodyne/%06zu.bin", i);
+    const Cloud cloud = LoadKittiBin(dir + name);
+    if (cloud.size() < 100000) {
+      k.error = dir + name + ": expected > 100000 points";
+      return k;
+    }
     k.features.push_back(PcaFeatures(cloud, PcaFeatureConfig()));
     k.gicp_input.push_back(GicpInput(cloud, PcaFeatureConfig().min_range_m, 0.3));
   }
@@ -174,33 +207,77 @@ class Kitti00 : public ::testing::Test {
 };
 KittiFrames* Kitti00::data_ = nullptr;
 
-TEST_F(Kitti00, FramesOneToFiveRegisterToFrameZeroLikePclGicp) {
-  const LocalMap map = SingleKeyframeMap(data_->features[0]);
-  ScanMatcherConfig gicp_config;
-  gicp_config.max_correspondence_m = 1.0;
-  gicp_config.max_iterations = 100;
-  gicp_config.transformation_epsilon = 1e-10;
-  ScanMatcher gicp(gicp_config);
-  gicp.SetTarget(data_->gicp_input[0]);
-  std::vector<Pose3> est = {Pose3::Identity()};
-  for (size_t k = 1; k <= 5; ++k) {
-    const Pose3 guess = ConstantVelocityGuess(est);  // identity for frame 1: ~0.7 m off
-    const ScanToMapResult r = Register(data_->features[k], map, guess, ScanToMapConfig());
-    ASSERT_TRUE(r.converged) << "frame " << k << ": " << r.message;
-    est.push_back(r.T_map_scan);
-    const RegistrationResult g = gicp.Align(data_->gicp_input[k], guess);
-    const double dt = TranslationError(r.T_map_scan, g.T_target_source);
-    const double dr = RotationErrorDeg(r.T_map_scan, g.T_target_source);
-    const Pose3& gt = data_->gt[k];
-    std::printf("KITTI 0->%zu: vs PCL GICP %.4f m %.4f deg | vs shipped gt %.4f m %.4f deg | it %d edge %d "
-                "planar %d rmse %.4f m min_lambda %.3f\n",
-                k, dt, dr, TranslationError(r.T_map_scan, gt), RotationErrorDeg(r.T_map_scan, gt), r.iterations,
-                r.edge_inliers, r.planar_inliers, r.rmse_m, r.degeneracy.eigenvalues(0));
-    // Measured <= 7 mm / 0.035 deg against GICP; the brief's 5 cm / 0.2 deg would hide a real regression.
-    EXPECT_LT(dt, 0.02) << "frame " << k;
-    EXPECT_LT(dr, 0.1) << "frame " << k;
-    EXPECT_FALSE(r.degeneracy.degenerate) << "frame " << k;  // an urban street observes all six directions
+struct StepError {
+  double t_m = 0.0, r_deg = 0.0;
+};
+StepError Diff(const Pose3& a, const Pose3& b) { return {TranslationError(a, b), RotationErrorDeg(a, b)}; }
+
+// Bounds against the stereo references, which are estimates too: ORB-SLAM2 and S-PTAM disagree with each other by
+// 0.9-3.7 cm (RMS 2.7 cm) and 0.05-0.24 deg per step on these frames. Per step (either reference): 4.5 cm and
+// 0.3 deg, just above that disagreement (measured: <= 2.8 cm / 0.15 deg from ORB-SLAM2, <= 4.0 cm / 0.25 deg from
+// S-PTAM). Over the ten steps: our RMS distance to each reference must stay below the references' RMS distance to
+// each other (measured 1.9 and 2.1 cm vs 2.7 cm), i.e. we are no farther from either than they are from each
+// other. A lost or half-converged step (off by a good part of the ~0.75 m step) fails both by far.
+constexpr double kMaxStereoStepM = 0.045;
+constexpr double kMaxStereoStepDeg = 0.3;
+
+double Rms(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x * x;
+  return v.empty() ? 0.0 : std::sqrt(s / double(v.size()));
+}
+
+ScanMatcherConfig KittiGicpConfig() {
+  ScanMatcherConfig c;
+  c.max_correspondence_m = 1.0;
+  c.max_iterations = 100;
+  c.transformation_epsilon = 1e-10;
+  return c;
+}
+
+TEST_F(Kitti00, ConsecutivePairsAgreeWithBothStereoReferences) {
+  const KittiFrames& d = *data_;
+  ScanMatcher gicp(KittiGicpConfig());
+  std::vector<double> orb_m, sptam_m, refs_m;  // per step translation errors [m]
+  Pose3 guess = Pose3::Identity();              // 0->1: ~0.7 m off; then the previous step (constant velocity)
+  for (size_t k = 0; k + 1 < kKittiFrames; ++k) {
+    const ScanToMapResult r = Register(d.features[k + 1], SingleKeyframeMap(d.features[k]), guess, {});
+    ASSERT_TRUE(r.converged) << k << "->" << k + 1 << ": " << r.message;
+    gicp.SetTarget(d.gicp_input[k]);
+    const RegistrationResult g = gicp.Align(d.gicp_input[k + 1], guess);
+    ASSERT_TRUE(g.converged) << "PCL GICP " << k << "->" << k + 1;
+    const Pose3& ours = r.T_map_scan;  // T_velo(k)_velo(k+1)
+    const StepError orb = Diff(ours, d.orb[k]), sptam = Diff(ours, d.sptam[k]), refs = Diff(d.orb[k], d.sptam[k]);
+    const StepError official = Diff(ours, d.official[k]), pcl = Diff(ours, g.T_target_source);
+    std::printf("KITTI %zu->%zu: ours %.4f m | vs ORB-SLAM2 %.2f cm %.3f deg | vs S-PTAM %.2f cm %.3f deg | "
+                "ORB vs S-PTAM %.2f cm %.3f deg | vs official %.2f cm %.3f deg (official %.4f m) | "
+                "vs PCL GICP %.2f cm %.3f deg\n",
+                k, k + 1, ours.translation().norm(), 100 * orb.t_m, orb.r_deg, 100 * sptam.t_m, sptam.r_deg,
+                100 * refs.t_m, refs.r_deg, 100 * official.t_m, official.r_deg, d.official[k].translation().norm(),
+                100 * pcl.t_m, pcl.r_deg);
+    EXPECT_LT(orb.t_m, kMaxStereoStepM) << k;
+    EXPECT_LT(sptam.t_m, kMaxStereoStepM) << k;
+    EXPECT_LT(orb.r_deg, kMaxStereoStepDeg) << k;
+    EXPECT_LT(sptam.r_deg, kMaxStereoStepDeg) << k;
+    // Two LiDAR registrations (our features + Ceres; PCL GICP on 0.3 m voxels) agree more closely than the two
+    // stereo references: measured <= 1.2 cm / 0.05 deg.
+    EXPECT_LT(pcl.t_m, 0.02) << k;
+    EXPECT_LT(pcl.r_deg, 0.1) << k;
+    EXPECT_FALSE(r.degeneracy.degenerate) << k;  // an urban street observes all six directions
+    if (k == 0) {
+      // The official truth is wrong for frames 0..~13 of sequence 00 (a constant 0.86 m per frame): at 0->1 our
+      // step is many times closer to both stereo references than to it (measured 17.6 cm vs <= 2.4 cm).
+      EXPECT_GT(official.t_m, 4 * std::max(orb.t_m, sptam.t_m));
+    }
+    orb_m.push_back(orb.t_m);
+    sptam_m.push_back(sptam.t_m);
+    refs_m.push_back(refs.t_m);
+    guess = ours;
   }
+  std::printf("KITTI RMS over 10 steps: ours vs ORB-SLAM2 %.2f cm, vs S-PTAM %.2f cm; ORB vs S-PTAM %.2f cm\n",
+              100 * Rms(orb_m), 100 * Rms(sptam_m), 100 * Rms(refs_m));
+  EXPECT_LT(Rms(orb_m), Rms(refs_m));
+  EXPECT_LT(Rms(sptam_m), Rms(refs_m));
 }
 
 TEST_F(Kitti00, SequentialOdometryThroughTheLocalMapAgreesWithDirectRegistration) {

@@ -137,6 +137,7 @@ RigCalib SimConfig::TrueCalib() const {
   FillRigGeometry(rig_model, &c);
   c.lidar = lidar_intrinsics;
   c.lidar.range_sigma_m = lidar.range_noise_sigma_m;  // the caster's noise, as a rig owner would measure it
+  c.lidar.rpm = lidar.rpm;                            // the head's configured speed (its jitter is not known)
   c.imu = imu.noise;
   c.encoder = motor.encoder.ToCalib();
   c.motor_speed_radps = motor.profile.speed_radps;

@@ -61,7 +61,9 @@ struct SlidingWindowConfig {
   double initial_gravity_sigma_rad = 0.01;
 
   // Ceres (Levenberg-Marquardt, dense: a window is ~150 tangent dimensions).
-  int max_iterations = 10;             ///< per Optimize()
+  /// Per Optimize(). Each scan adds one state to a window already at its optimum, so a few steps converge: 10
+  /// vs 3 changed no ATE by more than 1 mm on the lab / box-room runs and cost 1 ms per scan.
+  int max_iterations = 3;
   /// LM damps with diag(J^T J) / radius. The bias random walk puts ~1e10 on bias diagonals whose net information
   /// is ~1e2, so Ceres' default radius (1e4) shrinks bias steps ~1e4-fold and needs ~10 iterations to grow back
   /// (measured: 11 iterations vs 2 on a two-state window). A large radius starts as Gauss-Newton (the window is
@@ -72,7 +74,9 @@ struct SlidingWindowConfig {
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-10;
   int num_threads = 1;
-  ceres::LinearSolverType linear_solver = ceres::DENSE_NORMAL_CHOLESKY;
+  /// The window's Jacobian (~350 x 150) is block-sparse: dense normal equations cost ~1 ms per scan more
+  /// (fuse 1.9 -> 0.8 ms; same lab / box-room ATE to 0.1 mm).
+  ceres::LinearSolverType linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
 
   /// Robust loss on the LiDAR factors only (outlier registrations); the scale is on the whitened residual
   /// norm: 4.1 = sqrt(16.8), the 99 % quantile of chi^2 with 6 dof, so consistent measurements are unaffected.

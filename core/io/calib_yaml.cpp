@@ -12,7 +12,8 @@ using yaml::CheckKeys;
 using yaml::Get;
 
 void ParseLidar(const std::string& f, const YAML::Node& n, LidarIntrinsics* l) {
-  CheckKeys(f, n, {"model", "elevation_deg", "vertical_offset_m", "min_range_m", "max_range_m", "range_sigma_m"},
+  CheckKeys(f, n, {"model", "elevation_deg", "vertical_offset_m", "min_range_m", "max_range_m", "range_sigma_m",
+                "rpm"},
             "lidar");
   std::string model = "VLP-16";
   Get(f, n, "model", &model);
@@ -28,6 +29,7 @@ void ParseLidar(const std::string& f, const YAML::Node& n, LidarIntrinsics* l) {
   Get(f, n, "min_range_m", &l->min_range_m);
   Get(f, n, "max_range_m", &l->max_range_m);
   Get(f, n, "range_sigma_m", &l->range_sigma_m);
+  Get(f, n, "rpm", &l->rpm);
 }
 
 void ParseImu(const std::string& f, const YAML::Node& n, ImuNoise* imu) {
@@ -118,7 +120,8 @@ Status SaveCalibYaml(const std::string& path, const RigCalib& c) {
       << "vertical_offset_m" << YAML::Value << YAML::Flow
       << std::vector<double>(c.lidar.vertical_offset_m.begin(), c.lidar.vertical_offset_m.end()) << YAML::Key
       << "min_range_m" << YAML::Value << c.lidar.min_range_m << YAML::Key << "max_range_m" << YAML::Value
-      << c.lidar.max_range_m << YAML::Key << "range_sigma_m" << YAML::Value << c.lidar.range_sigma_m << YAML::EndMap;
+      << c.lidar.max_range_m << YAML::Key << "range_sigma_m" << YAML::Value << c.lidar.range_sigma_m
+      << YAML::Key << "rpm" << YAML::Value << c.lidar.rpm << YAML::EndMap;
   out << YAML::Key << "imu" << YAML::Value << YAML::BeginMap << YAML::Key << "rate_hz" << YAML::Value
       << c.imu.rate_hz << YAML::Key << "gyro_noise_density" << YAML::Value << c.imu.gyro_noise_density << YAML::Key
       << "gyro_random_walk" << YAML::Value << c.imu.gyro_random_walk << YAML::Key << "accel_noise_density"

@@ -24,14 +24,13 @@ Vlp16DecoderConfig DecoderConfigFor(const RigCalib& calib) {
 
 Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
     : calib_(calib),
-      config_(config),
+      config_(ResolveFromCalib(config, calib)),
       decoder_(calib_.lidar, DecoderConfigFor(calib_)),
       splitter_(config.cut_azimuth_deg),
       rotor_(calib_),
       local_map_(config.local_map),
       dense_map_(config.output_map_voxel_m, config.output_map_points_per_voxel) {
   std::string why;
-  if (config_.features.range_sigma_m == kRangeSigmaFromCalib) config_.features.range_sigma_m = calib_.lidar.range_sigma_m;
   ROTOLIDAR_CHECK(calib_.Validate(&why), why);
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
 }

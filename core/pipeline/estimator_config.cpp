@@ -1,36 +1,26 @@
 #include "core/pipeline/estimator_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rotolidar {
 
-FeatureConfig EstimatorFeatureDefaults() {
-  FeatureConfig c;
-  c.planars_per_sector = 20;
-  c.planar_voxel_m = 0.25;
-  c.less_flat_voxel_m = 0.3;
-  c.edge_min_snr = 5.0;
-  c.range_sigma_m = kRangeSigmaFromCalib;
-  return c;
+KeyframePolicy RotaryKeyframePolicy(const RigCalib& calib, const LocalMapConfig& local_map) {
+  const double per_scan_rad = std::abs(calib.motor_speed_radps) * 60.0 / calib.lidar.rpm;
+  KeyframePolicy p;
+  if (!(per_scan_rad >= 1e-6)) return {0, 0};
+  constexpr double kFanRad = 30.0 * M_PI / 180.0;  // VLP-16 elevations -15..+15 deg
+  p.every_scans = std::max(1, int(std::floor(kFanRad / per_scan_rad)));
+  p.initial_keyframes = int(std::min<double>(std::floor(2.0 * M_PI / per_scan_rad), local_map.max_keyframes));
+  return p;
 }
 
-LocalMapConfig EstimatorLocalMapDefaults() {
-  LocalMapConfig c;
-  c.planar_voxel_m = 0.2;
-  c.max_keyframes = 40;
-  return c;
-}
-
-ScanToMapConfig EstimatorRegistrationDefaults() {
-  ScanToMapConfig c;
-  c.neighbour_reuse_m = 0.05;
-  return c;
-}
-
-SlidingWindowConfig EstimatorWindowDefaults() {
-  SlidingWindowConfig c;
-  c.max_iterations = 3;
-  c.linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
+EstimatorConfig ResolveFromCalib(const EstimatorConfig& config, const RigCalib& calib) {
+  EstimatorConfig c = config;
+  if (c.features.range_sigma_m == kRangeSigmaFromCalib) c.features.range_sigma_m = calib.lidar.range_sigma_m;
+  const KeyframePolicy policy = RotaryKeyframePolicy(calib, c.local_map);
+  if (c.keyframe_every_scans == kDeriveFromCalib) c.keyframe_every_scans = policy.every_scans;
+  if (c.initial_keyframes == kDeriveFromCalib) c.initial_keyframes = policy.initial_keyframes;
   return c;
 }
 
@@ -47,8 +37,10 @@ bool EstimatorConfig::Validate(std::string* error) const {
     return false;
   if (!(lidar_point_sigma_m > 0) || !std::isfinite(lidar_point_sigma_m))
     return fail("lidar_point_sigma_m must be > 0");
-  if (keyframe_every_scans < 1) return fail("keyframe_every_scans must be >= 1");
-  if (initial_keyframes < 0) return fail("initial_keyframes must be >= 0");
+  if (keyframe_every_scans < 0 && keyframe_every_scans != kDeriveFromCalib)
+    return fail("keyframe_every_scans must be >= 0 (or -1: derived from calib)");
+  if (initial_keyframes < 0 && initial_keyframes != kDeriveFromCalib)
+    return fail("initial_keyframes must be >= 0 (or -1: derived from calib)");
   if (imu_init_scans < 3) return fail("imu_init_scans must be >= 3");
   if (imu_init_scans < imu_init.moving_min_poses)
     return fail("imu_init_scans must be >= imu_init.moving_min_poses");

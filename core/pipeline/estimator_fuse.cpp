@@ -208,7 +208,8 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
 void Estimator::UpdateMap(const FeatureSet& features, const Pose3& T_world_base, ScanReport* report) {
   const Stopwatch watch;
   const bool young = int(local_map_.num_keyframes()) < config_.initial_keyframes;
-  if (young || local_map_.NeedsKeyframe(T_world_base) || ++scans_since_keyframe_ >= config_.keyframe_every_scans) {
+  const bool forced = config_.keyframe_every_scans > 0 && ++scans_since_keyframe_ >= config_.keyframe_every_scans;
+  if (young || local_map_.NeedsKeyframe(T_world_base) || forced) {
     local_map_.AddKeyframe(features, T_world_base);
     scans_since_keyframe_ = 0;
     report->keyframe = true;

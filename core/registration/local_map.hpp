@@ -33,10 +33,10 @@ namespace rotolidar {
 struct LocalMapConfig {
   double keyframe_distance_m = 1.0;  ///< new keyframe after this much translation from the newest one [m]
   double keyframe_angle_rad = 0.2;   ///< ... or this much rotation [rad] (~11 deg)
-  int max_keyframes = 30;            ///< sliding window by count
+  int max_keyframes = 40;            ///< sliding window by count (40 scans of a rotary rig: 2+ rotor turns)
   double max_distance_m = 80.0;      ///< keyframes farther than this from the newest keyframe are dropped [m]
   double edge_voxel_m = 0.2;         ///< voxel size of the map's edge cloud [m]
-  double planar_voxel_m = 0.4;       ///< voxel size of the map's planar cloud [m]
+  double planar_voxel_m = 0.2;       ///< voxel size of the map's planar cloud [m] (a rotary fan needs a denser map)
   bool Validate(std::string* error) const;  ///< false with the offending field named in *error
 };
 

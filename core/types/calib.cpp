@@ -30,6 +30,7 @@ bool RigCalib::Validate(std::string* error) const {
     return Fail(error, "lidar: need 0 <= min_range_m < max_range_m");
   if (!(lidar.range_sigma_m >= 0) || !std::isfinite(lidar.range_sigma_m))
     return Fail(error, "lidar.range_sigma_m: must be finite and >= 0");
+  if (!(lidar.rpm >= 300 && lidar.rpm <= 1200)) return Fail(error, "lidar.rpm: must be in [300, 1200]");
   if (imu.rate_hz <= 0) return Fail(error, "imu.rate_hz: must be > 0");
   if (imu.gyro_noise_density < 0 || imu.accel_noise_density < 0 || imu.gyro_random_walk < 0 ||
       imu.accel_random_walk < 0)

@@ -24,6 +24,9 @@ struct LidarIntrinsics {
   /// (features.range_sigma_m). 0.01 m: a real VLP-16 on matte surfaces (the manual's "+-3 cm typical" is an
   /// accuracy bound, not a sigma); the sim writes its caster's sigma here.
   double range_sigma_m = 0.01;
+  /// Head rotation speed as configured [rev/min]: 300..1200 (the VLP-16 sets it in steps of 60; factory default
+  /// 600 = 10 Hz). One scan (revolution) lasts 60 / rpm seconds.
+  double rpm = 600.0;
 };
 
 /// Kalibr's continuous-time IMU noise model (docs/noise_models.md). Defaults: BMI055 (the D435i's IMU) gyro,

@@ -11,7 +11,7 @@
 // Central ray of laser i in the lidar frame: origin Vlp16RayOrigin(offset_i) + r * Vlp16RayDirection(elev_i, a)
 // (shared with the decoder in core/io/vlp16.hpp). Pose: T_world_lidar at each firing time, exactly
 // (pose_per_firing) or interpolated between exact poses at most 55.296 us apart (the sequence starts around it;
-// the default, measured against the exact poses in tests/sim/test_vlp16_caster.cpp).
+// the default, measured against the exact poses in tests/sim/lidar/vlp16_caster_test.cpp).
 //
 // Beam and echoes (vlp16_echoes.hpp): beam_rings = 0 casts the central ray only; > 0 samples the divergent beam
 // with sub-rays, so a spot straddling an edge returns a mixed (power-weighted) range or two echoes >= 1 m apart.

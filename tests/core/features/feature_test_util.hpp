@@ -8,6 +8,17 @@
 
 namespace rotolidar::test {
 
+/// The seed's selection rule (Sec. 3.1: 4 edge + 4 planar points per sector, every selected point kept) with
+/// A-LOAM's noise gate and map-side voxel: what these tests check, independent of the estimator's tuned defaults.
+inline FeatureConfig SeedFeatureConfig() {
+  FeatureConfig c;
+  c.planars_per_sector = 4;
+  c.planar_voxel_m = 0.0;
+  c.less_flat_voxel_m = 0.2;
+  c.edge_min_snr = 3.0;
+  return c;
+}
+
 /// (ring, sector) -> count of points with one of the given labels, sectors of 360 / `sectors` degrees.
 inline std::map<std::pair<int, int>, int> CountPerCell(const std::vector<ScanPoint>& pts, const FeatureResult& r,
                                                        const std::vector<FeatureLabel>& which, int sectors) {

@@ -19,6 +19,7 @@ namespace rotolidar {
 namespace {
 
 using test::CountPerCell;
+using test::SeedFeatureConfig;
 using test::SameCloud;
 
 // One indoor revolution, head static, so lidar = base frame. A failed read is fatal (ASSERT).
@@ -48,7 +49,7 @@ TEST(FeaturesRealData, EinrideRevolution) {
   // Measured: 1601 of 15,365 returns inside 0.8 m (the indoor scene's clutter), SOR then 124 (0.9 %; 245 with the
   // exact K = 20 search).
   EXPECT_LT(pre.removed_sor, pre.points.size() / 30);
-  FeatureConfig config;
+  FeatureConfig config = SeedFeatureConfig();
   config.threads = 1;
   const FeatureResult one = ExtractFeatures(pre.points, 0.0, config);
   config.threads = 4;

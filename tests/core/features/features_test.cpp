@@ -19,6 +19,7 @@ namespace rotolidar {
 namespace {
 
 using test::CountPerCell;
+using test::SeedFeatureConfig;
 using test::SameCloud;
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
@@ -174,7 +175,7 @@ TEST(RingCurvature, PrefixSumsEqualTheDirectSum) {
 TEST(ExtractFeatures, EdgesAtRoomCornersPlanarOnWalls) {
   const Scene scene = TallRoom();
   const std::vector<ScanPoint> pts = CastScan(scene);
-  const FeatureResult r = ExtractFeatures(pts, 0.0, FeatureConfig());
+  const FeatureResult r = ExtractFeatures(pts, 0.0, SeedFeatureConfig());
   ASSERT_GT(r.features.edge.size(), 0u);
   ASSERT_GT(r.features.planar.size(), 0u);
   double worst_edge = 0.0, closest_planar = kInf;
@@ -213,7 +214,7 @@ TEST(ExtractFeatures, NoiseGateKeepsFalseEdgesAtTheTailRate) {
     for (const auto& p : r.features.edge)
       ++*(DistanceToNearestCorner(scene.room, p.getVector3fMap()) < 0.1 ? at_corners : elsewhere);
   };
-  FeatureConfig gated;
+  FeatureConfig gated = SeedFeatureConfig();
   gated.range_sigma_m = 0.01;
   int at_corners = 0, elsewhere = 0;
   count(gated, &at_corners, &elsewhere);
@@ -221,7 +222,7 @@ TEST(ExtractFeatures, NoiseGateKeepsFalseEdgesAtTheTailRate) {
   // (measured 69; the quota and suppression cap some).
   EXPECT_GE(at_corners, 62);
   EXPECT_LT(elsewhere, 120);
-  FeatureConfig ungated;
+  FeatureConfig ungated = SeedFeatureConfig();
   ungated.range_sigma_m = 0.0;  // the seed's fixed threshold alone: noise at 3-8 m crosses it everywhere
   int ungated_corners = 0, ungated_elsewhere = 0;
   count(ungated, &ungated_corners, &ungated_elsewhere);
@@ -246,7 +247,7 @@ bool IsFeature(FeatureLabel l) {
 TEST(ExtractFeatures, RejectsOccludedSideOfDepthJumps) {
   const Scene scene = PillarRoom();
   const std::vector<ScanPoint> pts = CastScan(scene);
-  const FeatureResult r = ExtractFeatures(pts, 0.0, FeatureConfig());
+  const FeatureResult r = ExtractFeatures(pts, 0.0, SeedFeatureConfig());
   // The shadow's border on the far wall is at |y| = 0.8 m (8 m x 0.2 / 2). Per ring and side, the N + 1 = 6 far-wall
   // points nearest to it (their windows reach across the jump) are rejected (LOAM), the 7th is a wall point again.
   for (int ring = 0; ring < 16; ++ring)
@@ -266,7 +267,7 @@ TEST(ExtractFeatures, RejectsOccludedSideOfDepthJumps) {
   for (int ring = 0; ring < 16; ++ring)  // both pillar edges found on every ring
     for (const float y : {-0.2f, 0.2f}) EXPECT_TRUE(EdgeNear(pts, r, ring, {2.f, y}, 0.03f)) << ring << ": " << y;
   // Without the rule the far side of the jump looks sharp (one-sided window) and is picked as an edge.
-  FeatureConfig no_rule;
+  FeatureConfig no_rule = SeedFeatureConfig();
   no_rule.reject_occluded = false;
   const FeatureResult bad = ExtractFeatures(pts, 0.0, no_rule);
   int false_edges = 0;
@@ -284,7 +285,7 @@ TEST(ExtractFeatures, RejectsBeamParallelSurfaces) {
   Scene scene;
   scene.room = {{-2.0, -1.0, -40.0}, {60.0, 1.5, 40.0}};
   const std::vector<ScanPoint> pts = CastScan(scene);
-  const FeatureResult r = ExtractFeatures(pts, 0.0, FeatureConfig());
+  const FeatureResult r = ExtractFeatures(pts, 0.0, SeedFeatureConfig());
   int steep_rejected = 0, steep = 0, shallow_rejected = 0, shallow = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const Eigen::Vector3f& p = pts[i].p_base;
@@ -309,7 +310,7 @@ TEST(ExtractFeatures, PerSectorCountsNeverExceedConfig) {
   Scene scene = PillarRoom();
   scene.noise_sigma_m = 0.02;
   const std::vector<ScanPoint> pts = CastScan(scene, 5);
-  FeatureConfig config;
+  FeatureConfig config = SeedFeatureConfig();
   config.sectors = 8, config.edges_per_sector = 2, config.planars_per_sector = 3, config.less_sharp_per_sector = 5;
   config.range_sigma_m = 0.0;  // noise edges everywhere: every quota saturates
   const FeatureResult r = ExtractFeatures(pts, 0.0, config);
@@ -338,7 +339,7 @@ TEST(ExtractFeatures, PlanarVoxelKeepsOnePointPerOccupiedVoxel) {
   Scene scene = PillarRoom();
   scene.noise_sigma_m = 0.01;
   const std::vector<ScanPoint> pts = CastScan(scene, 9);
-  FeatureConfig config;
+  FeatureConfig config = SeedFeatureConfig();
   const FeatureResult full = ExtractFeatures(pts, 0.0, config);
   const double v = 1.0;  // [m]: measured 769 planar points in 456 voxels
   config.planar_voxel_m = v;
@@ -367,7 +368,7 @@ TEST(ExtractFeatures, IdenticalForAnyThreadCount) {
   Scene scene = PillarRoom();
   scene.noise_sigma_m = 0.01;
   const std::vector<ScanPoint> pts = CastScan(scene, 9);
-  FeatureConfig config;
+  FeatureConfig config = SeedFeatureConfig();
   config.threads = 1;
   const FeatureResult one = ExtractFeatures(pts, 2.5, config);
   ASSERT_GT(one.features.edge.size(), 0u);
@@ -387,7 +388,7 @@ TEST(ExtractFeatures, InvalidPointsAreLabelledNotUsed) {
   std::vector<ScanPoint> pts = CastScan(TallRoom());
   pts[100].range_m = 0.f;
   pts[200].p_base.x() = std::numeric_limits<float>::quiet_NaN();
-  const FeatureResult r = ExtractFeatures(pts, 0.0, FeatureConfig());
+  const FeatureResult r = ExtractFeatures(pts, 0.0, SeedFeatureConfig());
   EXPECT_EQ(r.labels[100], FeatureLabel::kInvalid);
   EXPECT_EQ(r.labels[200], FeatureLabel::kInvalid);
   EXPECT_EQ(r.stats.num_invalid, 2u);

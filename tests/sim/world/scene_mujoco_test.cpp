@@ -9,7 +9,7 @@
 #include "sim/world/offscreen_render.hpp"
 #include "sim/world/scene_dynamic.hpp"
 #include "sim/world/scene_mujoco.hpp"
-#include "tests/sim/world_fixtures.hpp"
+#include "tests/sim/world/world_fixtures.hpp"
 
 namespace rotolidar::sim {
 namespace {

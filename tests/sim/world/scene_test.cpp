@@ -8,7 +8,7 @@
 #include "sim/world/mesh_io.hpp"
 #include "sim/world/scene.hpp"
 #include "sim/world/scene_dynamic.hpp"
-#include "tests/sim/world_fixtures.hpp"
+#include "tests/sim/world/world_fixtures.hpp"
 
 namespace rotolidar::sim {
 namespace {

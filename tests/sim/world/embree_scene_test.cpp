@@ -7,7 +7,7 @@
 #include "core/util/rng.hpp"
 #include "sim/world/scene_dynamic.hpp"
 #include "sim/world/embree_scene.hpp"
-#include "tests/sim/world_fixtures.hpp"
+#include "tests/sim/world/world_fixtures.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -7,7 +7,9 @@
 
 #include "core/util/rng.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
-#include "tests/sim/world_fixtures.hpp"
+#include "sim/sim_config.hpp"
+#include "sim/world/embree_scene.hpp"
+#include "sim/world/scene.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -17,9 +19,12 @@ constexpr int kSequencesPerSecond = 18084;  // 1 / 55.296 us
 const EmbreeScene& BoxRoom() {
   static const std::unique_ptr<EmbreeScene> es = [] {
     Scene scene;
-    const Status s = LoadScene(testing::BoxRoomPath(), &scene);
+    Status s = LoadScene(ResolveScenePath("box_room"), &scene);
     ROTOLIDAR_CHECK(s.ok, s.message);
-    return testing::MakeEmbree(scene);
+    std::unique_ptr<EmbreeScene> embree;
+    s = EmbreeScene::Create(scene, &embree);
+    ROTOLIDAR_CHECK(s.ok, s.message);
+    return embree;
   }();
   return *es;
 }

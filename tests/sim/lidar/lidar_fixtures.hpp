@@ -1,5 +1,5 @@
 #pragma once
-// Small helpers shared by the VLP-16 caster tests (tests/sim/test_vlp16_*.cpp).
+// Small helpers shared by the VLP-16 caster tests (tests/sim/lidar/vlp16_*_test.cpp).
 #include <cmath>
 
 #include "core/types/geometry.hpp"

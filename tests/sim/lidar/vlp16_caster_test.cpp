@@ -9,8 +9,8 @@
 
 #include "sim/lidar/position_source.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
-#include "tests/sim/lidar_fixtures.hpp"
-#include "tests/sim/world_fixtures.hpp"
+#include "tests/sim/lidar/lidar_fixtures.hpp"
+#include "tests/sim/world/world_fixtures.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -33,6 +33,37 @@ std::vector<size_t> SelectFrames(const KittiSequence& seq, const KittiRunOptions
   return picked;
 }
 
+/// Bin i of the sequence as ScanPoints: lines split by its per-point times when the sequence has them, else by
+/// azimuth (KittiScanPoints). Errors name the file.
+Status ScanPointsOf(const KittiSequence& seq, size_t i, Seconds t_s, const KittiScanConfig& config,
+                    std::vector<ScanPoint>* points, KittiScanStats* stats) {
+  std::vector<KittiPoint> bin;
+  if (Status s = ReadKittiBin(seq.bin_paths[i], &bin); !s) return s;
+  Status s;
+  if (seq.point_time_paths.empty()) {
+    s = KittiScanPoints(bin, t_s, config, points, stats);
+  } else {
+    std::vector<float> times;
+    if (Status read = ReadKittiPointTimes(seq.point_time_paths[i], &times); !read) return read;
+    if (times.size() != bin.size())
+      return Status::Error(seq.point_time_paths[i] + ": " + std::to_string(times.size()) + " point times for the " +
+                           std::to_string(bin.size()) + " points of " + seq.bin_paths[i]);
+    s = KittiScanPoints(bin, times, t_s, config, points, stats);
+  }
+  return s ? s : Status::Error(seq.bin_paths[i] + ": " + s.message);
+}
+
+/// The scan lines every frame should have: the option, else sequence_info.txt's, else 0 (the first frame's).
+void ResolveExpectedLines(const KittiSequence& seq, const KittiRunOptions& o, KittiRunResult* r) {
+  if (o.scan.expected_lines > 0) {
+    r->expected_lines = o.scan.expected_lines;
+    r->expected_lines_source = "option";
+  } else if (seq.info.scan_lines > 0) {
+    r->expected_lines = seq.info.scan_lines;
+    r->expected_lines_source = seq.info_path;
+  }
+}
+
 /// Feeds the picked frames to a fresh estimator; fills the per-frame parts of *r and the dense map [velo(first)].
 Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
                  KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
@@ -44,14 +75,15 @@ Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, co
     const size_t i = picked[n];
     const int id = seq.frame_ids[i];
     const Seconds t_s = seq.times[size_t(id)];
-    std::vector<KittiPoint> bin;
-    if (Status s = ReadKittiBin(seq.bin_paths[i], &bin); !s) return s;
     std::vector<ScanPoint> points;
     KittiScanStats stats;
-    if (Status s = KittiScanPoints(bin, t_s, o.scan, &points, &stats); !s)
-      return Status::Error(seq.bin_paths[i] + ": " + s.message);
+    if (Status s = ScanPointsOf(seq, i, t_s, o.scan, &points, &stats); !s) return s;
+    if (r->expected_lines == 0) {
+      r->expected_lines = int(stats.num_lines);
+      r->expected_lines_source = "first frame";
+    }
     r->scan_lines.push_back(stats.num_lines);
-    r->frames_other_line_count += stats.num_lines != size_t(o.scan.expected_lines) ? 1 : 0;
+    r->frames_other_line_count += stats.num_lines != size_t(r->expected_lines) ? 1 : 0;
     r->elevation_inversions += stats.elevation_inversions;
     const auto t0 = std::chrono::steady_clock::now();
     r->scans.push_back(estimator.ProcessDeskewedScan(t_s, std::move(points)));
@@ -127,7 +159,10 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
   j["times"] = seq.nominal_times ? "nominal 10 Hz" : seq.times_path;
   j["frames"] = r.frame_ids.size();
   j["first_frame"] = r.frame_ids.front();
-  j["scan_lines"] = {{"frames_other_count", r.frames_other_line_count},
+  j["scan_lines"] = {{"expected", r.expected_lines},
+                     {"expected_from", r.expected_lines_source},
+                     {"split_by", seq.point_time_paths.empty() ? "azimuth" : "point times"},
+                     {"frames_other_count", r.frames_other_line_count},
                      {"elevation_inversions", r.elevation_inversions}};
   j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
   if (r.has_ground_truth) {
@@ -206,6 +241,8 @@ Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
 
   KittiRunResult r;
   r.nominal_times = seq.nominal_times;
+  r.point_times = !seq.point_time_paths.empty();
+  ResolveExpectedLines(seq, options, &r);
   std::vector<Eigen::Vector3d> map;
   if (Status s = RunFrames(seq, picked, options, &r, &map, progress); !s) return s;
   for (const StampedPose& p : r.trajectory_velo)

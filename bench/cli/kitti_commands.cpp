@@ -71,8 +71,9 @@ int CmdSlamKitti(int argc, char** argv) {
   if (Status s = RunKitti(o, &r, MakeProgressPrinter("slam")); !s) return Fail(s);
   std::printf("%zu frames (%d..%d), median %.1f ms per frame, map %zu points; outputs in %s\n", r.frame_ids.size(),
               r.frame_ids.front(), r.frame_ids.back(), r.median_scan_ms, r.map_points, o.out_dir.c_str());
-  std::printf("scan lines: %d expected (from %s), split by %s\n", r.expected_lines, r.expected_lines_source.c_str(),
-              r.point_times ? "the per-point times (velodyne_times/)" : "azimuth");
+  std::printf("scan lines: %d expected (from %s), split by %s; range noise %.3g m (from %s)\n", r.expected_lines,
+              r.expected_lines_source.c_str(), r.point_times ? "the per-point times (velodyne_times/)" : "azimuth",
+              r.range_sigma_m, r.range_sigma_source.c_str());
   if (r.frames_other_line_count > 0 || r.elevation_inversions > 0)
     std::printf("warning: %zu frames without %d scan lines, %zu elevation inversions (rings may be off)\n",
                 r.frames_other_line_count, r.expected_lines, r.elevation_inversions);

@@ -209,10 +209,11 @@ Status WritePosesFromTruth(const Trajectory& base, const KittiDatasetLayout& lay
 }
 
 /// What sequence_info.txt states about the export.
-KittiSequenceInfo ExportInfo(const KittiExportOptions& o, Vlp16ReturnMode mode) {
+KittiSequenceInfo ExportInfo(const KittiExportOptions& o, const RigCalib& calib, Vlp16ReturnMode mode) {
   KittiSequenceInfo info;
   info.sensor = "VLP-16 on a rotor (rotolidar rig)";
   info.scan_lines = 16;
+  info.range_sigma_m = calib.lidar.range_sigma_m;  // calib.yaml's: the features' noise gate needs it
   info.point_order = "rings top first (ring 15 .. 0 by the lasers' elevation), each ring in firing order";
   info.point_times = "velodyne_times/%06d.bin: float32 [s] after the frame's times.txt entry, one per point in the "
                      "bin's order";
@@ -287,7 +288,7 @@ Status ExportKitti(const KittiExportOptions& options, KittiExportResult* result,
   if (Status w = WriteKittiTimeList(layout.TimesPath(), r.times); !w) return w;
   if (Status w = WriteKittiCalib(layout.CalibPath(), r.calib); !w) return w;
   r.info_path = layout.InfoPath();
-  if (Status w = WriteKittiSequenceInfo(r.info_path, ExportInfo(options, RecordingReturnMode(rec))); !w) return w;
+  if (Status w = WriteKittiSequenceInfo(r.info_path, ExportInfo(options, rec.calib, RecordingReturnMode(rec))); !w) return w;
   if (has_truth)
     if (Status w = WritePosesFromTruth(truth.base, layout, &r); !w) return w;
   *result = std::move(r);

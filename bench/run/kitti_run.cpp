@@ -53,8 +53,15 @@ Status ScanPointsOf(const KittiSequence& seq, size_t i, Seconds t_s, const Kitti
   return s ? s : Status::Error(seq.bin_paths[i] + ": " + s.message);
 }
 
-/// The scan lines every frame should have: the option, else sequence_info.txt's, else 0 (the first frame's).
-void ResolveExpectedLines(const KittiSequence& seq, const KittiRunOptions& o, KittiRunResult* r) {
+/// The sensor's range noise (the config's, else sequence_info.txt's, else the KITTI default) and the scan lines
+/// every frame should have (the option, else sequence_info.txt's, else 0: the first frame's).
+void ResolveSensor(const KittiSequence& seq, const KittiRunOptions& o, KittiRunResult* r) {
+  r->range_sigma_m = seq.info.range_sigma_m > 0.0 ? seq.info.range_sigma_m : kKittiDefaultRangeSigmaM;
+  r->range_sigma_source = seq.info.range_sigma_m > 0.0 ? seq.info_path : "default";
+  if (o.estimator.features.range_sigma_m != kRangeSigmaFromCalib) {
+    r->range_sigma_m = o.estimator.features.range_sigma_m;
+    r->range_sigma_source = "config";
+  }
   if (o.scan.expected_lines > 0) {
     r->expected_lines = o.scan.expected_lines;
     r->expected_lines_source = "option";
@@ -68,7 +75,9 @@ void ResolveExpectedLines(const KittiSequence& seq, const KittiRunOptions& o, Ki
 Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
                  KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
                  const std::function<void(double)>& progress) {
-  Estimator estimator(RigCalib(), o.estimator);  // base = velodyne: no rotor, no IMU, identity extrinsics
+  RigCalib calib;  // base = velodyne: no rotor, no IMU, identity extrinsics; the sensor's range noise
+  calib.lidar.range_sigma_m = r->range_sigma_m;
+  Estimator estimator(calib, o.estimator);
   double estimator_s = 0.0;
   size_t next_report = picked.size() / 10;
   for (size_t n = 0; n < picked.size(); ++n) {
@@ -164,6 +173,7 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
                      {"split_by", seq.point_time_paths.empty() ? "azimuth" : "point times"},
                      {"frames_other_count", r.frames_other_line_count},
                      {"elevation_inversions", r.elevation_inversions}};
+  j["range_sigma_m"] = {{"value", r.range_sigma_m}, {"from", r.range_sigma_source}};
   j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
   if (r.has_ground_truth) {
     j["ground_truth"] = seq.poses_path;
@@ -207,7 +217,8 @@ EstimatorConfig KittiEstimatorConfig() {
   EstimatorConfig c;
   c.preprocess.min_range_m = 2.0;
   c.preprocess.max_range_m = 80.0;
-  c.features.range_sigma_m = 0.01;  // KITTI has no calib.yaml: the real-sensor value (docs/features.md)
+  // features.range_sigma_m stays kRangeSigmaFromCalib: the run's calibration holds sequence_info.txt's
+  // range_sigma_m, else kKittiDefaultRangeSigmaM.
   return c;
 }
 
@@ -242,7 +253,7 @@ Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
   KittiRunResult r;
   r.nominal_times = seq.nominal_times;
   r.point_times = !seq.point_time_paths.empty();
-  ResolveExpectedLines(seq, options, &r);
+  ResolveSensor(seq, options, &r);
   std::vector<Eigen::Vector3d> map;
   if (Status s = RunFrames(seq, picked, options, &r, &map, progress); !s) return s;
   for (const StampedPose& p : r.trajectory_velo)

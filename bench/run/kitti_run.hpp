@@ -27,8 +27,13 @@
 namespace rotolidar::bench {
 
 /// The estimator defaults with KITTI's HDL-64E car data in mind: the range gate drops the car itself (< 2 m)
-/// and keeps what a 64-beam sensor sees well (< 80 m). Everything else is EstimatorConfig's default.
+/// and keeps what a 64-beam sensor sees well (< 80 m). Everything else is EstimatorConfig's default, so
+/// features.range_sigma_m comes from the run's calibration: sequence_info.txt's range_sigma_m, else
+/// kKittiDefaultRangeSigmaM.
 EstimatorConfig KittiEstimatorConfig();
+/// Range noise [m] (1 sigma) of a sequence that does not state one: a real sensor's on matte surfaces (KITTI has
+/// no calib.yaml; docs/features.md).
+inline constexpr double kKittiDefaultRangeSigmaM = 0.01;
 
 struct KittiRunOptions {
   KittiSequencePaths paths;          ///< the sequence folder and optional calib / times / poses files
@@ -49,6 +54,8 @@ struct KittiRunResult {
   int expected_lines = 0;            ///< the count every frame should have (see the top of this file)
   std::string expected_lines_source; ///< "option", the sequence_info.txt path, or "first frame"
   bool point_times = false;          ///< lines split by velodyne_times/ (else by azimuth)
+  double range_sigma_m = 0.0;        ///< the features' range noise used [m]
+  std::string range_sigma_source;    ///< "config", the sequence_info.txt path, or "default
   size_t frames_other_line_count = 0;  ///< frames whose line count != expected_lines
   size_t elevation_inversions = 0;     ///< summed over frames (0: every line split follows the beam order)
   size_t map_points = 0;

@@ -53,11 +53,13 @@ Status ReadKittiPointTimes(const std::string& path, std::vector<float>* times_s)
 Status WriteKittiPointTimes(const std::string& path, const std::vector<float>& times_s);
 
 /// sequence_info.txt: what a producer states about its sequence. One "key: value" a line, '#' starts a comment
-/// line; keys are those below, each at most once; an unknown key, a repeated key or a scan_lines outside 1..256
-/// is an error naming file:line. Text values are kept as written (trimmed).
+/// line; keys are those below, each at most once; an unknown key, a repeated key, a scan_lines outside 1..256 or
+/// a range_sigma_m that is not a finite number > 0 is an error naming file:line. Text values are kept as written
+/// (trimmed).
 struct KittiSequenceInfo {
   std::string sensor;       ///< e.g. "VLP-16"
   int scan_lines = 0;       ///< the sensor's scan lines (lasers) = rings per bin; 0 = not stated
+  double range_sigma_m = 0.0;  ///< the sensor's range noise, 1 sigma [m]; 0 = not stated
   std::string point_order;  ///< how a bin orders its points
   std::string point_times;  ///< where the per-point times are, and their unit and origin
   std::string frame;        ///< what the "velodyne" frame of a bin is
@@ -66,7 +68,7 @@ struct KittiSequenceInfo {
   std::string source;       ///< what the sequence was made from
 };
 Status ReadKittiSequenceInfo(const std::string& path, KittiSequenceInfo* info);
-/// Writes the set fields (empty strings and scan_lines 0 are left out) under a '#' header comment; a value with a
+/// Writes the set fields (empty strings and zero numbers are left out) under a '#' header comment; a value with a
 /// line break is an error.
 Status WriteKittiSequenceInfo(const std::string& path, const KittiSequenceInfo& info);
 

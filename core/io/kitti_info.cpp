@@ -80,11 +80,16 @@ Status ReadKittiSequenceInfo(const std::string& path, KittiSequenceInfo* info) {
       if (Status s = ParseScanLines(path, line, value, &out.scan_lines); !s) return s;
       continue;
     }
+    if (key == "range_sigma_m") {
+      if (!ParseNumber(value, &out.range_sigma_m) || !(out.range_sigma_m > 0.0))
+        return Status::Error(Where(path, line) + "range_sigma_m = '" + value + "': expected a number > 0 [m]");
+      continue;
+    }
     std::string* field = nullptr;
     for (auto& [name, target] : TextFields(&out)) field = key == name ? target : field;
     if (field == nullptr)
-      return Status::Error(Where(path, line) + "unknown key '" + key + "' (sensor scan_lines point_order " +
-                           "point_times frame deskew returns source)");
+      return Status::Error(Where(path, line) + "unknown key '" + key + "' (sensor scan_lines range_sigma_m " +
+                           "point_order point_times frame deskew returns source)");
     *field = value;
   }
   *info = std::move(out);
@@ -100,6 +105,7 @@ Status WriteKittiSequenceInfo(const std::string& path, const KittiSequenceInfo& 
       return Status::Error(path + ": " + name + ": a value must be one line");
   if (!copy.sensor.empty()) text += "sensor: " + copy.sensor + "\n";
   if (copy.scan_lines > 0) text += "scan_lines: " + std::to_string(copy.scan_lines) + "\n";
+  if (copy.range_sigma_m > 0.0) text += "range_sigma_m: " + FormatNumber(copy.range_sigma_m) + "\n";
   for (size_t k = 1; k < fields.size(); ++k)
     if (!fields[k].second->empty()) text += std::string(fields[k].first) + ": " + *fields[k].second + "\n";
   return WriteText(path, text);

@@ -215,7 +215,9 @@ TEST(Decode, DualDuplicatesAreOneRowAndCounted) {
   for (int k = 0; k < 12 * 20; ++k) {
     s.t_s = k * kVlp16SequencePeriodS;
     s.azimuth_centideg = static_cast<uint16_t>((k * 20) % 36000);
-    if (auto p = encoder.Add(s)) ASSERT_TRUE(writer.Write(*p).ok);
+    if (auto p = encoder.Add(s)) {
+      ASSERT_TRUE(writer.Write(*p).ok);
+    }
   }
   ASSERT_TRUE(writer.Close().ok);
   const std::size_t firings = 12 * 20;

@@ -33,7 +33,7 @@ class KittiExport : public ::testing::Test {
     sim::SimConfig config = sim::DefaultSimConfig();
     config.scene = "lab";
     config.duration_s = 2.0;
-    config.camera.enabled = false;  // the export needs only the camera's calibration
+    config.camera.enabled = false;  // the export needs only the camera's calibration (same numbers, 6x faster)
     sim::SimSummary summary;
     sim_status_ = new Status(sim::RunSimulation(config, *dir_ + "/recording", &summary));
   }
@@ -185,11 +185,11 @@ TEST_F(KittiExport, TruthAndEstimatorDeskewAgreePointByPoint) {
   const double median = errors[errors.size() / 2], p99 = errors[errors.size() * 99 / 100];
   std::printf("truth vs estimator deskew over %zu points: median %.4f m, p99 %.4f m, max %.4f m\n", errors.size(),
               median, p99, errors.back());
-  // Measured (seed 1, lab, 2 s): median 3.3 cm, p99 9.9 cm, max 10.9 cm; per frame the median grows steadily from
-  // 1.8 cm (frame 0) to 5.4 cm (frame 17): the core's encoder/IMU deskew against the exact one. Bounds ~1.5x:
-  // a frame convention slip (wrong scan-start frame, lidar instead of base, a revolution off) gives decimetres.
-  EXPECT_LT(median, 0.05);
-  EXPECT_LT(p99, 0.15);
+  // Measured (seed 1, lab, 2 s): median 1.0 cm, p99 5.4 cm, max 7.8 cm; per frame the median falls from 1.8 cm
+  // (frame 0) to 0.4 cm (frame 17): the core's encoder/IMU deskew against the exact one. Bounds 1.5-2x: a frame
+  // convention slip (wrong scan-start frame, lidar instead of base, a revolution off) gives decimetres.
+  EXPECT_LT(median, 0.02);
+  EXPECT_LT(p99, 0.08);
 }
 
 // The default export (estimator deskew) read back by `slam --kitti`: sequence_info.txt gives 16 lines, the
@@ -210,6 +210,9 @@ TEST_F(KittiExport, SlamKittiReadsTheExportBack) {
   KittiRunOptions run;
   run.paths.dir = exported.sequence_dir;
   run.out_dir = *dir_ + "/kitti_roundtrip_run";
+  // The rig's range gate (EstimatorConfig's 0.8 m) instead of KITTI's 2 m, which drops the car there and most of
+  // this 7 m deep lab here (measured with 2 m: APE max 0.45 m; the docs say to pass it with --config).
+  run.estimator.preprocess.min_range_m = EstimatorConfig().preprocess.min_range_m;
   KittiRunResult r;
   const Status ran = RunKitti(run, &r);
   ASSERT_TRUE(ran) << ran.message;
@@ -220,6 +223,7 @@ TEST_F(KittiExport, SlamKittiReadsTheExportBack) {
   for (size_t lines : r.scan_lines) EXPECT_EQ(lines, 16u);
   EXPECT_EQ(r.frames_other_line_count, 0u);
   EXPECT_EQ(r.elevation_inversions, 0u);
+  EXPECT_EQ(r.range_sigma_source, exported.info_path);  // the sim's range noise, from calib.yaml via the export
   ASSERT_TRUE(r.has_ground_truth);
   ASSERT_TRUE(r.ape.status) << r.ape.status.message;
   ASSERT_TRUE(r.rpe_translation.status) << r.rpe_translation.status.message;
@@ -229,9 +233,15 @@ TEST_F(KittiExport, SlamKittiReadsTheExportBack) {
               "truth travelled %.3f m\n",
               r.frame_ids.size(), r.ape.stats.max, r.ape.stats.rmse, r.rpe_translation.stats.rmse,
               r.rpe_rotation.stats.rmse, travelled_m);
-  EXPECT_GT(travelled_m, 0.05);  // the rig moved: an identity trajectory would not pass the bounds below
-  // BOUNDS: set after measuring.
-  EXPECT_LT(r.ape.stats.max, 0.05);
+  // Measured (seed 1, lab, 2 s, 18 frames): truth travelled 1.16 m; APE max 0.092 m, rmse 0.047 m; RPE rmse
+  // 0.036 m / 0.65 deg per frame. That is LiDAR-only odometry from a cold start on 30 deg VLP-16 fans (no IMU, no
+  // encoder): the truth-deskewed export of the same recording gives APE max 0.081 m, so the deskew is not what
+  // limits it (the rig's own estimator, with IMU and encoder, is at ~1 cm). Bounds ~1.6x: an identity trajectory
+  // would give 1.16 m, KITTI's 2 m range gate 0.45 m, a frame slip (lidar for base, Tr not conjugated) decimetres.
+  EXPECT_GT(travelled_m, 0.5);
+  EXPECT_LT(r.ape.stats.max, 0.15);
+  EXPECT_LT(r.ape.stats.rmse, 0.08);
+  EXPECT_LT(r.rpe_translation.stats.rmse, 0.06);
   EXPECT_LT(r.rpe_rotation.stats.rmse, 1.0);
 }
 

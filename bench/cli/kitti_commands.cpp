@@ -59,19 +59,24 @@ int CmdSlamKitti(int argc, char** argv) {
   p.Add("times", "", "-", "times.txt (default DIR/times.txt; none: nominal 10 Hz)");
   p.Add("poses", "", "-", "reference poses, e.g. ground truth (default DIR/poses.txt or DIR/../../poses/<DIR name>.txt)");
   p.Add("config", "", "-", "estimator config YAML (keys of slam_config.yaml) over the KITTI defaults");
+  p.Add("lines", "0", "-", "scan lines per frame (0: DIR/sequence_info.txt's scan_lines, else the first frame's)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   o.paths = {p.Get("kitti"), p.Get("calib"), p.Get("times"), p.Get("poses")};
   o.out_dir = p.Get("out");
   if (Status s = GetCount(p, "frames", &o.max_frames); !s) return Fail(s);
   if (Status s = GetCount(p, "start", &o.start_frame); !s) return Fail(s);
+  if (Status s = GetCount(p, "lines", &o.scan.expected_lines); !s) return Fail(s);
   if (Status s = LoadEstimatorConfig(p.Get("config"), &o.estimator); !s) return Fail(s);
   KittiRunResult r;
   if (Status s = RunKitti(o, &r, MakeProgressPrinter("slam")); !s) return Fail(s);
   std::printf("%zu frames (%d..%d), median %.1f ms per frame, map %zu points; outputs in %s\n", r.frame_ids.size(),
               r.frame_ids.front(), r.frame_ids.back(), r.median_scan_ms, r.map_points, o.out_dir.c_str());
+  std::printf("scan lines: %d expected (from %s), split by %s; range noise %.3g m (from %s)\n", r.expected_lines,
+              r.expected_lines_source.c_str(), r.point_times ? "the per-point times (velodyne_times/)" : "azimuth",
+              r.range_sigma_m, r.range_sigma_source.c_str());
   if (r.frames_other_line_count > 0 || r.elevation_inversions > 0)
     std::printf("warning: %zu frames without %d scan lines, %zu elevation inversions (rings may be off)\n",
-                r.frames_other_line_count, o.scan.expected_lines, r.elevation_inversions);
+                r.frames_other_line_count, r.expected_lines, r.elevation_inversions);
   if (r.nominal_times) std::printf("note: no times file: nominal 10 Hz frame times\n");
   if (r.has_ground_truth) {
     std::printf("vs %s (cam0 convention, rebased to frame %d):\n", r.poses_path.c_str(), r.frame_ids.front());
@@ -86,13 +91,13 @@ int CmdSlamKitti(int argc, char** argv) {
 int CmdExport(int argc, char** argv) {
   KittiExportOptions o;
   OptionParser p("export", "Write a recording as a KITTI odometry sequence: one velodyne bin per VLP-16 revolution "
-                           "(deskewed into the base frame at the revolution start), times.txt, calib.txt and, "
-                           "with truth, poses (docs/kitti.md).");
+                           "(deskewed into the base frame at the revolution start) with per-point times, times.txt, "
+                           "calib.txt, sequence_info.txt and, with truth, poses (docs/kitti.md).");
   p.AddPositional("RECORDING", "recording folder (docs/recording_format.md)");
   p.Add("kitti", "", "-", "output dataset root: sequences/<seq>/..., poses/<seq>.txt (required)");
   p.Add("sequence", o.sequence, "-", "sequence name");
   p.Add("return", "strongest", "-", "dual-return recordings: strongest|last");
-  p.Add("deskew", "auto", "-", "auto (truth if truth/ exists) | truth | estimator");
+  p.Add("deskew", "estimator", "-", "estimator (the core's own deskew) | truth (simulated recordings only: exact)");
   p.Add("config", "", "-", "estimator config YAML (estimator deskew only)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   if (p.Get("kitti").empty()) {
@@ -106,13 +111,15 @@ int CmdExport(int argc, char** argv) {
   else if (p.Get("return") == "last") o.return_filter = Vlp16ReturnFilter::kLast;
   else return Fail(Status::Error("--return: strongest or last (got '" + p.Get("return") + "')"));
   if (!ParseKittiDeskewSource(p.Get("deskew"), &o.deskew))
-    return Fail(Status::Error("--deskew: auto, truth or estimator (got '" + p.Get("deskew") + "')"));
+    return Fail(Status::Error("--deskew: estimator or truth (got '" + p.Get("deskew") + "'" +
+                              (p.Get("deskew") == "auto" ? ": 'auto' picked the simulation's truth by itself" : "") +
+                              ")"));
   if (Status s = LoadEstimatorConfig(p.Get("config"), &o.estimator); !s) return Fail(s);
   KittiExportResult r;
   if (Status s = ExportKitti(o, &r, MakeProgressPrinter("export")); !s) return Fail(s);
-  std::printf("wrote %s: %zu frames, %zu points (%zu skipped), deskewed with %s%s\n", r.sequence_dir.c_str(),
-              r.frames, r.points, r.points_skipped, r.deskewed_with_truth ? "the truth" : "the estimator",
-              r.wrote_poses ? ", poses from the truth" : ", no poses (no truth)");
+  std::printf("wrote %s: %zu frames, %zu points (%zu skipped), poses %s\n", r.sequence_dir.c_str(), r.frames,
+              r.points, r.points_skipped, r.wrote_poses ? "from the truth" : "none (no truth)");
+  std::printf("deskew: %s (stated in %s)\n", KittiDeskewDescription(r.deskew).c_str(), r.info_path.c_str());
   return 0;
 }
 

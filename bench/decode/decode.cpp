@@ -34,6 +34,12 @@ class PacketStream {
     return true;
   }
   std::size_t skipped() const { return raw_ ? 0 : reader_.skipped(); }
+  /// Why the input held no VLP-16 data packet (none was read): what the pcap held instead, or an empty raw file.
+  Status NoDataError(const std::string& path) const {
+    if (!raw_) return reader_.NoVlp16DataError();
+    return Status::Error(path + ": empty file: no " + std::to_string(kVlp16PacketBytes) + "-byte payloads");
+  }
+  bool saw_data() const { return raw_ ? !packets_.empty() : reader_.traffic().vlp16_data > 0; }
 
  private:
   bool raw_ = false;
@@ -108,7 +114,8 @@ Status WriteResolvedOptions(const DecodeOptions& o) {
       << "\nreturn_filter: " << FilterName(o.return_filter) << "\nmin_range_m: " << o.min_range_m
       << "\nmax_range_m: " << o.max_range_m << "\nlidar_clock_offset_s: " << o.lidar_clock_offset_s
       << "\nepoch_unix_s: " << o.epoch_unix_s << "\ncut_azimuth_deg: " << o.cut_azimuth_deg
-      << "\nrevolution: " << o.revolution << "\nstrict: " << (o.strict ? "true" : "false") << "\n";
+      << "\nrevolution: " << o.revolution << "\nstrict: " << (o.strict ? "true" : "false")
+      << "\nkeep_duplicate_dual_returns: " << (o.keep_duplicate_dual_returns ? "true" : "false") << "\n";
   return out ? Status::Ok() : Status::Error(path + ": cannot write");
 }
 
@@ -119,6 +126,21 @@ void TakeScan(const LidarScan& scan, const DecodeOptions& o, DecodeSummary* summ
     for (const LidarPoint& p : scan.points) writer->Write(p);
   }
   ++summary->scans;
+}
+
+/// The error of a run that wrote no point, naming the cause.
+Status NoPointsError(const DecodeOptions& o, const PacketStream& stream, const DecodeSummary& s) {
+  const std::string malformed =
+      s.malformed == 0 ? "" : "; " + std::to_string(s.malformed) + " malformed (first: " + s.first_error + ")";
+  if (s.points == 0 && !stream.saw_data()) return stream.NoDataError(o.input_path);
+  if (s.points == 0 && s.packets == 0)
+    return Status::Error(o.input_path + ": no decodable VLP-16 data packet" + malformed);
+  if (s.points == 0)
+    return Status::Error(o.input_path + ": " + std::to_string(s.packets) + " data packets gave 0 points inside " +
+                         "the range limits [" + std::to_string(o.min_range_m) + ", " + std::to_string(o.max_range_m) +
+                         "] m with return filter " + FilterName(o.return_filter) + malformed);
+  return Status::Error(o.input_path + ": revolution " + std::to_string(o.revolution) + " not found: the input has " +
+                       std::to_string(s.scans) + " scans (0 .. " + std::to_string(s.scans - 1) + ")");
 }
 
 }  // namespace
@@ -145,6 +167,7 @@ Status RunDecode(const DecodeOptions& o, DecodeSummary* summary) {
   config.max_range_m = o.max_range_m;
   config.return_filter = o.return_filter;
   config.lidar_clock_offset_s = o.lidar_clock_offset_s;
+  config.keep_duplicate_dual_returns = o.keep_duplicate_dual_returns;
   if (!config.Validate(&error)) return Status::Error(error);
   PacketStream stream;
   if (Status s = stream.Open(o); !s) return s;
@@ -185,7 +208,9 @@ Status RunDecode(const DecodeOptions& o, DecodeSummary* summary) {
   summary->full_revolutions = splitter.crossings() > 1 ? splitter.crossings() - 1 : 0;
   summary->skipped_frames = stream.skipped();
   summary->points_written = writer.count();
+  summary->merged_dual_duplicates = decoder.merged_dual_duplicates();
   if (Status s = writer.Finish(); !s) return s;
+  if (summary->points_written == 0) return NoPointsError(o, stream, *summary);
   return WriteResolvedOptions(o);
 }
 
@@ -201,6 +226,8 @@ void PrintDecodeSummary(const DecodeSummary& s, std::ostream& os) {
   os << "packets           " << s.packets << "\nposition packets  " << s.position_packets
      << "\nskipped frames    " << s.skipped_frames << "\nmalformed         " << s.malformed
      << (s.first_error.empty() ? "" : " (first: " + s.first_error + ")") << "\npoints            " << s.points
+     << "\ndual duplicates   " << s.merged_dual_duplicates
+     << " (points that stand for an echo both strongest and last: return 2)"
      << "\npoints written    " << s.points_written << "\nscans             " << s.scans
      << "\nfull revolutions  " << s.full_revolutions << "\ntime span         " << s.t_first_s << " .. "
      << s.t_last_s << " s (" << (s.t_last_s - s.t_first_s) << " s)\n";

@@ -22,6 +22,9 @@ struct DecodeOptions {
   double cut_azimuth_deg = 0.0;       ///< revolutions start where the azimuth crosses this [deg]
   int revolution = -1;  ///< write only this scan (0 = the first, usually partial, scan); -1 = every point
   bool strict = false;  ///< stop at the first malformed packet/record instead of counting it
+  /// Dual-return input: keep both copies of an echo that is both the strongest and the last (default: one point,
+  /// return 2; Vlp16DecoderConfig::keep_duplicate_dual_returns).
+  bool keep_duplicate_dual_returns = false;
   bool Validate(std::string* error) const;
 };
 
@@ -32,6 +35,7 @@ struct DecodeSummary {
   std::size_t malformed = 0;         ///< packets/records rejected (first message in first_error)
   std::string first_error;
   std::size_t points = 0;            ///< points decoded (after range and return filters)
+  std::size_t merged_dual_duplicates = 0;  ///< dual mode: points that stand for two identical returns (return 2)
   std::size_t points_written = 0;    ///< rows in the CSV/PLY (all points, or those of `revolution`)
   std::size_t scans = 0;             ///< pieces the splitter produced, partial first and last included
   std::size_t full_revolutions = 0;  ///< scans bounded by a cut crossing on both sides
@@ -40,11 +44,14 @@ struct DecodeSummary {
 
 /// Decodes `options.input_path` and writes the outputs. Fails (message names the file) on invalid options,
 /// unreadable input, unwritable outputs, or with strict = true on the first malformed packet (which is otherwise
-/// counted in summary->malformed and skipped).
+/// counted in summary->malformed and skipped). A run that yields no point fails too, saying why: a pcap without
+/// VLP-16 data packets names the UDP ports and payload sizes it holds (PcapReader::NoVlp16DataError); an empty
+/// raw file, packets that were all malformed, points all outside the range/return filters and a `revolution`
+/// past the last scan each have their own message. *summary is filled in every case.
 /// CSV header: x,y,z,intensity,ring,azimuth,return,time_s (metres in the lidar frame, reflectivity 0..255, ring
-/// 0..15 by elevation, azimuth [deg], return 0 = strongest / 1 = last, rig time [s]). PLY: binary little-endian,
-/// one vertex per row with the same properties (float x y z intensity, uchar ring, float azimuth, uchar return,
-/// double time_s).
+/// 0..15 by elevation, azimuth [deg], return 0 = strongest / 1 = last / 2 = both (dual mode: the strongest was
+/// the last), rig time [s]). PLY: binary little-endian, one vertex per row with the same properties (float x y z
+/// intensity, uchar ring, float azimuth, uchar return, double time_s).
 Status RunDecode(const DecodeOptions& options, DecodeSummary* summary);
 
 /// "all" | "strongest" | "last".

@@ -28,19 +28,41 @@ Vlp16ReturnMode RecordingReturnMode(const Recording& rec) {
   return Vlp16ReturnMode::kStrongest;
 }
 
-/// Keeps every point of a single-return recording; of a dual-return one, the chosen echo.
+/// Keeps every point of a single-return recording; of a dual-return one, the chosen echo (an echo that was both
+/// the strongest and the last, kReturnStrongestAndLast, is either).
 bool KeepReturn(Vlp16ReturnMode mode, Vlp16ReturnFilter filter, uint8_t return_type) {
-  if (mode != Vlp16ReturnMode::kDual) return true;
-  return return_type == (filter == Vlp16ReturnFilter::kLast ? 1 : 0);
+  return mode != Vlp16ReturnMode::kDual || Vlp16ReturnSelected(filter, return_type);
 }
 
-/// Writes bins as frames arrive (ids 0, 1, ...) and collects their times.
+/// One exported point before the bin is put in ring order: its record, ring and firing time.
+struct ExportPoint {
+  KittiPoint point;
+  uint8_t ring = 0;
+  Seconds t_s = 0.0;
+};
+
+ExportPoint MakeExportPoint(const Eigen::Vector3f& p_base, const LidarPoint& src) {
+  return {{p_base.x(), p_base.y(), p_base.z(), src.intensity / 255.f}, src.ring, src.t_s};
+}
+
+/// Writes frames as they arrive (ids 0, 1, ...): the bin in ring order, top ring first, each ring in firing order
+/// (so a reader finds a ring's end where the time falls back), and its per-point times; collects frame times.
 class BinSink {
  public:
   BinSink(const KittiDatasetLayout& layout, KittiExportResult* result) : layout_(layout), result_(result) {}
-  Status Add(Seconds t_s, const std::vector<KittiPoint>& points) {
-    if (Status s = WriteKittiBin(layout_.BinPath(int(result_->frames)), points); !s) return s;
-    result_->times.push_back(t_s);
+  Status Add(Seconds t_frame_s, std::vector<ExportPoint> points) {
+    std::stable_sort(points.begin(), points.end(),
+                     [](const ExportPoint& a, const ExportPoint& b) { return a.ring > b.ring; });
+    std::vector<KittiPoint> bin(points.size());
+    std::vector<float> times(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      bin[i] = points[i].point;
+      times[i] = float(points[i].t_s - t_frame_s);
+    }
+    const int id = int(result_->frames);
+    if (Status s = WriteKittiBin(layout_.BinPath(id), bin); !s) return s;
+    if (Status s = WriteKittiPointTimes(layout_.PointTimesPath(id), times); !s) return s;
+    result_->times.push_back(t_frame_s);
     result_->points += points.size();
     ++result_->frames;
     return Status::Ok();
@@ -52,9 +74,9 @@ class BinSink {
 };
 
 /// Every point at its firing time through the true T_world_lidar, into the true base frame at the scan start.
-std::vector<KittiPoint> DeskewWithTruth(const LidarScan& scan, const Trajectory& base, const Trajectory& lidar,
-                                        size_t* skipped) {
-  std::vector<KittiPoint> out;
+std::vector<ExportPoint> DeskewWithTruth(const LidarScan& scan, const Trajectory& base, const Trajectory& lidar,
+                                         size_t* skipped) {
+  std::vector<ExportPoint> out;
   Pose3 T_world_base0;
   if (!PoseAt(base, scan.t_start_s, &T_world_base0)) {
     *skipped += scan.points.size();
@@ -69,7 +91,7 @@ std::vector<KittiPoint> DeskewWithTruth(const LidarScan& scan, const Trajectory&
       continue;
     }
     const Eigen::Vector3d q = T_base0_world * (T_world_lidar * Eigen::Vector3d(p.x_m, p.y_m, p.z_m));
-    out.push_back({float(q.x()), float(q.y()), float(q.z()), p.intensity / 255.f});
+    out.push_back(MakeExportPoint(q.cast<float>(), p));
   }
   return out;
 }
@@ -121,7 +143,7 @@ Status ExportWithEstimator(const Recording& rec, const KittiExportOptions& o, Bi
   std::optional<ScanReport> held;
   size_t held_index = 0, next_index = 0;
   auto write_held = [&]() -> Status {
-    std::vector<KittiPoint> bin;
+    std::vector<ExportPoint> bin;
     for (size_t k = 0; k < held->deskewed_base.size(); ++k) {
       const Eigen::Vector3f& q = held->deskewed_base[k];
       const LidarPoint& src = held->deskew_source[k];
@@ -130,9 +152,9 @@ Status ExportWithEstimator(const Recording& rec, const KittiExportOptions& o, Bi
         ++r->points_skipped;
         continue;
       }
-      bin.push_back({q.x(), q.y(), q.z(), src.intensity / 255.f});
+      bin.push_back(MakeExportPoint(q, src));
     }
-    return sink->Add(held->t_start_s, bin);
+    return sink->Add(held->t_start_s, std::move(bin));
   };
   auto take = [&](std::vector<ScanReport> reports) -> Status {
     for (ScanReport& report : reports) {
@@ -186,14 +208,37 @@ Status WritePosesFromTruth(const Trajectory& base, const KittiDatasetLayout& lay
   return WriteKittiPoses(layout.PosesPath(), r->poses);
 }
 
+/// What sequence_info.txt states about the export.
+KittiSequenceInfo ExportInfo(const KittiExportOptions& o, const RigCalib& calib, Vlp16ReturnMode mode) {
+  KittiSequenceInfo info;
+  info.sensor = "VLP-16 on a rotor (rotolidar rig)";
+  info.scan_lines = 16;
+  info.range_sigma_m = calib.lidar.range_sigma_m;  // calib.yaml's: the features' noise gate needs it
+  info.point_order = "rings top first (ring 15 .. 0 by the lasers' elevation), each ring in firing order";
+  info.point_times = "velodyne_times/%06d.bin: float32 [s] after the frame's times.txt entry, one per point in the "
+                     "bin's order";
+  info.frame = "velodyne = the rig's base frame at the frame time (the revolution's first return), not the sensor";
+  info.deskew = KittiDeskewDescription(o.deskew);
+  info.returns = mode != Vlp16ReturnMode::kDual ? std::string("single-return recording: every return")
+                 : o.return_filter == Vlp16ReturnFilter::kLast ? std::string("dual-return recording: last")
+                                                               : std::string("dual-return recording: strongest");
+  info.source = "rotolidar export of recording " + o.recording_dir;
+  return info;
+}
+
 }  // namespace
 
 bool ParseKittiDeskewSource(const std::string& name, KittiDeskewSource* out) {
-  if (name == "auto") *out = KittiDeskewSource::kAuto;
-  else if (name == "truth") *out = KittiDeskewSource::kTruth;
+  if (name == "truth") *out = KittiDeskewSource::kTruth;
   else if (name == "estimator") *out = KittiDeskewSource::kEstimator;
   else return false;
   return true;
+}
+
+std::string KittiDeskewDescription(KittiDeskewSource source) {
+  return source == KittiDeskewSource::kTruth
+             ? "truth (the simulation's ground truth: exact rotor angle and carrier motion, which no real rig has)"
+             : "estimator (the core's own rotary transform from the encoder and motion compensation: an estimate)";
 }
 
 bool KittiExportOptions::Validate(std::string* error) const {
@@ -228,12 +273,13 @@ Status ExportKitti(const KittiExportOptions& options, KittiExportResult* result,
   KittiDatasetLayout layout;
   layout.root = options.out_dir;
   layout.name = options.sequence;
-  if (Status s = CreateKittiDatasetFolders(layout); !s) return s;
+  if (Status s = CreateKittiDatasetFolders(layout, /*point_times=*/true); !s) return s;
 
   KittiExportResult r;
   r.sequence_dir = layout.SequenceDir();
   r.calib = RigAsKittiCalib(rec.calib);
-  r.deskewed_with_truth = has_truth && options.deskew != KittiDeskewSource::kEstimator;
+  r.deskew = options.deskew;
+  r.deskewed_with_truth = options.deskew == KittiDeskewSource::kTruth;
   BinSink sink(layout, &r);
   Status s = r.deskewed_with_truth ? ExportWithTruth(rec, truth, options, &sink, &r, progress)
                                    : ExportWithEstimator(rec, options, &sink, &r, progress);
@@ -241,6 +287,8 @@ Status ExportKitti(const KittiExportOptions& options, KittiExportResult* result,
   if (r.frames == 0) return Status::Error(options.recording_dir + ": no complete LiDAR revolution to export");
   if (Status w = WriteKittiTimeList(layout.TimesPath(), r.times); !w) return w;
   if (Status w = WriteKittiCalib(layout.CalibPath(), r.calib); !w) return w;
+  r.info_path = layout.InfoPath();
+  if (Status w = WriteKittiSequenceInfo(r.info_path, ExportInfo(options, rec.calib, RecordingReturnMode(rec))); !w) return w;
   if (has_truth)
     if (Status w = WritePosesFromTruth(truth.base, layout, &r); !w) return w;
   *result = std::move(r);

@@ -6,14 +6,17 @@
 // first and last revolutions are dropped). KITTI bins hold a motion-compensated cloud in the sensor frame at the
 // frame time; for a rotary rig the sensor moves on the base, so here "velodyne" = the BASE frame at the
 // revolution's first point (the frame time): each point is placed at its own firing time and moved into it.
-//   deskew from truth (recording has truth/): p_base0 = T_world_base(t0)^-1 * T_world_lidar(t) * p_lidar, both
-//     interpolated from truth/base.tum and truth/lidar.tum (exact: rotor angle and carrier motion are both true);
-//   deskew by the estimator (no truth/, or asked for): the Estimator's own rotary transform (encoder) and motion
-//     compensation (EstimatorConfig::keep_deskewed), i.e. what the core itself believes.
-// Files (KittiDatasetLayout): OUT/sequences/<name>/velodyne/%06d.bin (frame ids from 0), times.txt (rig clock
-// [s] of each frame), calib.txt (P0..P3 = K [I | 0] of the rig's camera, Tr = T_cam_base: cam0 IS the rig's
-// camera), and with truth OUT/poses/<name>.txt = Tr * T_base(0)_base(k) * Tr^-1 (KITTI's cam0 convention relative
-// to the first frame). Reflectance = VLP-16 reflectivity / 255.
+//   deskew by the estimator (the default): the Estimator's own rotary transform (encoder) and motion
+//     compensation (EstimatorConfig::keep_deskewed), i.e. what the core itself believes;
+//   deskew from truth (only when asked for; needs truth/): p_base0 = T_world_base(t0)^-1 * T_world_lidar(t) *
+//     p_lidar, both interpolated from truth/base.tum and truth/lidar.tum (exact: rotor angle and carrier motion
+//     are both true, so another odometry run on it gets an input no real rig gives).
+// Files (KittiDatasetLayout): OUT/sequences/<name>/velodyne/%06d.bin (frame ids from 0; points ring by ring, top
+// ring first, each ring in firing order), velodyne_times/%06d.bin (per point, same order: float32 [s] after the
+// frame time), times.txt (rig clock [s] of each frame = its first return), calib.txt (P0..P3 = K [I | 0] of the
+// rig's camera, Tr = T_cam_base: cam0 IS the rig's camera), sequence_info.txt (sensor, scan_lines 16, point
+// order, frame, which deskew, which echo, the source), and with truth OUT/poses/<name>.txt = Tr * T_base(0)_base(k)
+// * Tr^-1 (KITTI's cam0 convention relative to the first frame). Reflectance = VLP-16 reflectivity / 255.
 #include <functional>
 #include <string>
 #include <vector>
@@ -24,9 +27,11 @@
 
 namespace rotolidar::bench {
 
-enum class KittiDeskewSource { kAuto, kTruth, kEstimator };
-/// "auto", "truth", "estimator" -> source; false otherwise.
+enum class KittiDeskewSource { kEstimator, kTruth };
+/// "estimator", "truth" -> source; false otherwise.
 bool ParseKittiDeskewSource(const std::string& name, KittiDeskewSource* out);
+/// One line saying which deskew and what it means, as sequence_info.txt and the CLI state it.
+std::string KittiDeskewDescription(KittiDeskewSource source);
 
 struct KittiExportOptions {
   std::string recording_dir;
@@ -34,7 +39,7 @@ struct KittiExportOptions {
   std::string sequence = "00";   ///< sequence folder name
   /// Which echo a dual-return recording contributes (kStrongest or kLast); single-return recordings keep theirs.
   Vlp16ReturnFilter return_filter = Vlp16ReturnFilter::kStrongest;
-  KittiDeskewSource deskew = KittiDeskewSource::kAuto;  ///< kAuto: truth when truth/ exists, else the estimator
+  KittiDeskewSource deskew = KittiDeskewSource::kEstimator;  ///< kTruth must be asked for (needs truth/)
   EstimatorConfig estimator;     ///< the estimator deskew only (keep_deskewed is forced on)
   bool Validate(std::string* error) const;  ///< false naming the field
 };
@@ -45,8 +50,10 @@ struct KittiExportResult {
   size_t points = 0;                 ///< written over all bins
   size_t points_skipped = 0;         ///< no deskew possible (outside the truth's span, or NaN from the estimator)
   size_t bad_packets = 0;            ///< undecodable packets (skipped, counted)
-  bool deskewed_with_truth = false;
+  KittiDeskewSource deskew = KittiDeskewSource::kEstimator;  ///< as used (= the option)
+  bool deskewed_with_truth = false;  ///< deskew == kTruth
   bool wrote_poses = false;
+  std::string info_path;             ///< sequence_info.txt (says which deskew was used)
   std::vector<Seconds> times;        ///< as written to times.txt
   std::vector<Pose3> poses;          ///< as written to poses/<name>.txt (empty without truth)
   KittiCalib calib;                  ///< as written to calib.txt

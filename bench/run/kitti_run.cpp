@@ -33,25 +33,66 @@ std::vector<size_t> SelectFrames(const KittiSequence& seq, const KittiRunOptions
   return picked;
 }
 
+/// Bin i of the sequence as ScanPoints: lines split by its per-point times when the sequence has them, else by
+/// azimuth (KittiScanPoints). Errors name the file.
+Status ScanPointsOf(const KittiSequence& seq, size_t i, Seconds t_s, const KittiScanConfig& config,
+                    std::vector<ScanPoint>* points, KittiScanStats* stats) {
+  std::vector<KittiPoint> bin;
+  if (Status s = ReadKittiBin(seq.bin_paths[i], &bin); !s) return s;
+  Status s;
+  if (seq.point_time_paths.empty()) {
+    s = KittiScanPoints(bin, t_s, config, points, stats);
+  } else {
+    std::vector<float> times;
+    if (Status read = ReadKittiPointTimes(seq.point_time_paths[i], &times); !read) return read;
+    if (times.size() != bin.size())
+      return Status::Error(seq.point_time_paths[i] + ": " + std::to_string(times.size()) + " point times for the " +
+                           std::to_string(bin.size()) + " points of " + seq.bin_paths[i]);
+    s = KittiScanPoints(bin, times, t_s, config, points, stats);
+  }
+  return s ? s : Status::Error(seq.bin_paths[i] + ": " + s.message);
+}
+
+/// The sensor's range noise (the config's, else sequence_info.txt's, else the KITTI default) and the scan lines
+/// every frame should have (the option, else sequence_info.txt's, else 0: the first frame's).
+void ResolveSensor(const KittiSequence& seq, const KittiRunOptions& o, KittiRunResult* r) {
+  r->range_sigma_m = seq.info.range_sigma_m > 0.0 ? seq.info.range_sigma_m : kKittiDefaultRangeSigmaM;
+  r->range_sigma_source = seq.info.range_sigma_m > 0.0 ? seq.info_path : "default";
+  if (o.estimator.features.range_sigma_m != kRangeSigmaFromCalib) {
+    r->range_sigma_m = o.estimator.features.range_sigma_m;
+    r->range_sigma_source = "config";
+  }
+  if (o.scan.expected_lines > 0) {
+    r->expected_lines = o.scan.expected_lines;
+    r->expected_lines_source = "option";
+  } else if (seq.info.scan_lines > 0) {
+    r->expected_lines = seq.info.scan_lines;
+    r->expected_lines_source = seq.info_path;
+  }
+}
+
 /// Feeds the picked frames to a fresh estimator; fills the per-frame parts of *r and the dense map [velo(first)].
 Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
                  KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
                  const std::function<void(double)>& progress) {
-  Estimator estimator(RigCalib(), o.estimator);  // base = velodyne: no rotor, no IMU, identity extrinsics
+  RigCalib calib;  // base = velodyne: no rotor, no IMU, identity extrinsics; the sensor's range noise
+  calib.lidar.range_sigma_m = r->range_sigma_m;
+  Estimator estimator(calib, o.estimator);
   double estimator_s = 0.0;
   size_t next_report = picked.size() / 10;
   for (size_t n = 0; n < picked.size(); ++n) {
     const size_t i = picked[n];
     const int id = seq.frame_ids[i];
     const Seconds t_s = seq.times[size_t(id)];
-    std::vector<KittiPoint> bin;
-    if (Status s = ReadKittiBin(seq.bin_paths[i], &bin); !s) return s;
     std::vector<ScanPoint> points;
     KittiScanStats stats;
-    if (Status s = KittiScanPoints(bin, t_s, o.scan, &points, &stats); !s)
-      return Status::Error(seq.bin_paths[i] + ": " + s.message);
+    if (Status s = ScanPointsOf(seq, i, t_s, o.scan, &points, &stats); !s) return s;
+    if (r->expected_lines == 0) {
+      r->expected_lines = int(stats.num_lines);
+      r->expected_lines_source = "first frame";
+    }
     r->scan_lines.push_back(stats.num_lines);
-    r->frames_other_line_count += stats.num_lines != size_t(o.scan.expected_lines) ? 1 : 0;
+    r->frames_other_line_count += stats.num_lines != size_t(r->expected_lines) ? 1 : 0;
     r->elevation_inversions += stats.elevation_inversions;
     const auto t0 = std::chrono::steady_clock::now();
     r->scans.push_back(estimator.ProcessDeskewedScan(t_s, std::move(points)));
@@ -128,8 +169,12 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
   j["times"] = seq.nominal_times ? "nominal 10 Hz" : seq.times_path;
   j["frames"] = r.frame_ids.size();
   j["first_frame"] = r.frame_ids.front();
-  j["scan_lines"] = {{"frames_other_count", r.frames_other_line_count},
+  j["scan_lines"] = {{"expected", r.expected_lines},
+                     {"expected_from", r.expected_lines_source},
+                     {"split_by", seq.point_time_paths.empty() ? "azimuth" : "point times"},
+                     {"frames_other_count", r.frames_other_line_count},
                      {"elevation_inversions", r.elevation_inversions}};
+  j["range_sigma_m"] = {{"value", r.range_sigma_m}, {"from", r.range_sigma_source}};
   j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
   if (r.has_ground_truth) {
     j["ground_truth"] = seq.poses_path;
@@ -173,7 +218,8 @@ EstimatorConfig KittiEstimatorConfig() {
   EstimatorConfig c;
   c.preprocess.min_range_m = 2.0;
   c.preprocess.max_range_m = 80.0;
-  c.features.range_sigma_m = 0.01;  // KITTI has no calib.yaml: the real-sensor value (docs/features.md)
+  // features.range_sigma_m stays kRangeSigmaFromCalib: the run's calibration holds sequence_info.txt's
+  // range_sigma_m, else kKittiDefaultRangeSigmaM.
   return c;
 }
 
@@ -207,6 +253,8 @@ Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
 
   KittiRunResult r;
   r.nominal_times = seq.nominal_times;
+  r.point_times = !seq.point_time_paths.empty();
+  ResolveSensor(seq, options, &r);
   std::vector<Eigen::Vector3d> map;
   if (Status s = RunFrames(seq, picked, options, &r, &map, progress); !s) return s;
   for (const StampedPose& p : r.trajectory_velo)

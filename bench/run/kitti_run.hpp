@@ -2,8 +2,10 @@
 // `rotolidar slam --kitti DIR`: runs the core LiDAR-only on a KITTI odometry sequence (docs/kitti.md).
 //
 // KITTI's bins are motion-compensated clouds in the Velodyne frame of their frame, so base = velodyne: each bin
-// becomes ScanPoints (KittiScanPoints: rings from the scan-line order) fed to Estimator::ProcessDeskewedScan at the
-// frame's time (no IMU, no rotary transform, no deskew). The estimator's world is the Velodyne frame of the first
+// becomes ScanPoints (KittiScanPoints: rings from the scan-line order, split by the per-point times of
+// velodyne_times/ when the sequence has them, else by azimuth) fed to Estimator::ProcessDeskewedScan at the
+// frame's time (no IMU, no rotary transform, no deskew). The scan lines expected per frame: KittiScanConfig::
+// expected_lines when set, else sequence_info.txt's scan_lines, else the first frame's count. The estimator's world is the Velodyne frame of the first
 // frame used. Outputs in out_dir:
 //   trajectory.kitti    KITTI convention: T_cam0(first)_cam0(k) = Tr * T_velo(first)_velo(k) * Tr^-1, one line per
 //                       frame used (the first line is the identity)
@@ -25,8 +27,13 @@
 namespace rotolidar::bench {
 
 /// The estimator defaults with KITTI's HDL-64E car data in mind: the range gate drops the car itself (< 2 m)
-/// and keeps what a 64-beam sensor sees well (< 80 m). Everything else is EstimatorConfig's default.
+/// and keeps what a 64-beam sensor sees well (< 80 m). Everything else is EstimatorConfig's default, so
+/// features.range_sigma_m comes from the run's calibration: sequence_info.txt's range_sigma_m, else
+/// kKittiDefaultRangeSigmaM.
 EstimatorConfig KittiEstimatorConfig();
+/// Range noise [m] (1 sigma) of a sequence that does not state one: a real sensor's on matte surfaces (KITTI has
+/// no calib.yaml; docs/features.md).
+inline constexpr double kKittiDefaultRangeSigmaM = 0.01;
 
 struct KittiRunOptions {
   KittiSequencePaths paths;          ///< the sequence folder and optional calib / times / poses files
@@ -44,7 +51,12 @@ struct KittiRunResult {
   Trajectory trajectory_cam0;        ///< KITTI convention (see above), same times
   std::vector<ScanReport> scans;     ///< one per frame used
   std::vector<size_t> scan_lines;    ///< scan lines (rings) found per frame
-  size_t frames_other_line_count = 0;  ///< frames whose line count != KittiScanConfig::expected_lines
+  int expected_lines = 0;            ///< the count every frame should have (see the top of this file)
+  std::string expected_lines_source; ///< "option", the sequence_info.txt path, or "first frame"
+  bool point_times = false;          ///< lines split by velodyne_times/ (else by azimuth)
+  double range_sigma_m = 0.0;        ///< the features' range noise used [m]
+  std::string range_sigma_source;    ///< "config", the sequence_info.txt path, or "default
+  size_t frames_other_line_count = 0;  ///< frames whose line count != expected_lines
   size_t elevation_inversions = 0;     ///< summed over frames (0: every line split follows the beam order)
   size_t map_points = 0;
   double wall_time_s = 0.0;          ///< estimator time only (excludes reading bins) [s]

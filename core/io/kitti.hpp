@@ -13,8 +13,14 @@
 // field. Numbers are written in the shortest form that reads back to the identical double (std::to_chars), so a
 // write -> read round trip reproduces every value bit for bit. Readers leave their output untouched on failure.
 //
-// KittiScanPoints() turns one HDL-64E bin into the estimator's ScanPoints (rings from the bin's point order; see
-// its comment and docs/kitti.md). Nothing here throws or keeps state; all functions are thread-safe.
+// Two companion files that KITTI itself does not have (both optional; `rotolidar export --kitti` writes them):
+//   <dataset>/sequences/<NN>/velodyne_times/%06d.bin  frame k: float32 little-endian per point, in the bin's
+//                                               order: the point's time [s] after line k of times.txt
+//   <dataset>/sequences/<NN>/sequence_info.txt  "key: value" lines (KittiSequenceInfo): the sensor, its scan line
+//                                               count, how the points are ordered, how they were deskewed
+//
+// KittiScanPoints() turns one bin into the estimator's ScanPoints (rings from the bin's point order; see its
+// comment and docs/kitti.md). Nothing here throws or keeps state; all functions are thread-safe.
 #include <array>
 #include <string>
 #include <vector>
@@ -39,6 +45,32 @@ struct KittiPoint {
 Status ReadKittiBin(const std::string& path, std::vector<KittiPoint>* points);
 /// Writes `points` as a .bin (overwritten). Fails naming the file when it cannot be written.
 Status WriteKittiBin(const std::string& path, const std::vector<KittiPoint>& points);
+
+/// Reads / writes a per-point time file (velodyne_times/%06d.bin): float32 little-endian, seconds after the
+/// frame's time. The reader fails naming the file when its size is not a multiple of 4 bytes (giving the offset
+/// of the trailing partial value); non-finite values are kept as stored.
+Status ReadKittiPointTimes(const std::string& path, std::vector<float>* times_s);
+Status WriteKittiPointTimes(const std::string& path, const std::vector<float>& times_s);
+
+/// sequence_info.txt: what a producer states about its sequence. One "key: value" a line, '#' starts a comment
+/// line; keys are those below, each at most once; an unknown key, a repeated key, a scan_lines outside 1..256 or
+/// a range_sigma_m that is not a finite number > 0 is an error naming file:line. Text values are kept as written
+/// (trimmed).
+struct KittiSequenceInfo {
+  std::string sensor;       ///< e.g. "VLP-16"
+  int scan_lines = 0;       ///< the sensor's scan lines (lasers) = rings per bin; 0 = not stated
+  double range_sigma_m = 0.0;  ///< the sensor's range noise, 1 sigma [m]; 0 = not stated
+  std::string point_order;  ///< how a bin orders its points
+  std::string point_times;  ///< where the per-point times are, and their unit and origin
+  std::string frame;        ///< what the "velodyne" frame of a bin is
+  std::string deskew;       ///< how the points were motion-compensated
+  std::string returns;      ///< which echoes of a multi-return sensor are in the bins
+  std::string source;       ///< what the sequence was made from
+};
+Status ReadKittiSequenceInfo(const std::string& path, KittiSequenceInfo* info);
+/// Writes the set fields (empty strings and zero numbers are left out) under a '#' header comment; a value with a
+/// line break is an error.
+Status WriteKittiSequenceInfo(const std::string& path, const KittiSequenceInfo& info);
 
 using Matrix34d = Eigen::Matrix<double, 3, 4>;
 
@@ -90,10 +122,15 @@ struct KittiSequence {
   std::string times_path;               ///< empty when nominal
   std::vector<Pose3> poses;             ///< by frame id, KITTI convention (cam0); empty when there is no file
   std::string poses_path;               ///< empty when none
+  /// Per-point time files, same order as bin_paths, when the sequence has a velodyne_times/ folder; else empty.
+  std::vector<std::string> point_time_paths;
+  KittiSequenceInfo info;               ///< from sequence_info.txt; default (nothing stated) without one
+  std::string info_path;                ///< empty when there is no sequence_info.txt
 };
 
 /// Lists velodyne/*.bin (a .bin whose name is not a frame number is an error; other files are ignored), reads
-/// calib, times and poses.
+/// calib, times, poses and sequence_info.txt (optional). With a velodyne_times/ folder every bin needs its time
+/// file there (a missing one is an error naming it).
 /// A times or poses file with fewer lines than the largest frame id + 1 is an error (more lines are fine: the
 /// bins may be a subset of the sequence). An explicitly given file that does not exist is an error.
 Status OpenKittiSequence(const KittiSequencePaths& paths, KittiSequence* sequence);
@@ -105,32 +142,41 @@ struct KittiDatasetLayout {
   std::string name = "00";
   std::string SequenceDir() const { return root + "/sequences/" + name; }
   std::string BinPath(int frame_id) const;  ///< <sequence>/velodyne/%06d.bin
+  std::string PointTimesPath(int frame_id) const;  ///< <sequence>/velodyne_times/%06d.bin
+  std::string InfoPath() const { return SequenceDir() + "/sequence_info.txt"; }
   std::string TimesPath() const { return SequenceDir() + "/times.txt"; }
   std::string CalibPath() const { return SequenceDir() + "/calib.txt"; }
   std::string PosesPath() const { return root + "/poses/" + name + ".txt"; }
 };
-Status CreateKittiDatasetFolders(const KittiDatasetLayout& layout);
+/// Creates velodyne/ and poses/, and with point_times velodyne_times/ (then every bin needs its time file).
+Status CreateKittiDatasetFolders(const KittiDatasetLayout& layout, bool point_times = false);
 
 // ---------------------------------------------------------------------------------------------------------------
 /// How a bin becomes ScanPoints (docs/kitti.md).
 struct KittiScanConfig {
-  /// A drop of the counter-clockwise azimuth atan2(y, x) in [0, 360) larger than this between consecutive points
-  /// of the bin starts a new scan line (the bins store the HDL-64E's 64 lines one after the other, each sweeping
-  /// 0 -> 360 deg; within a line the azimuth steps back by at most ~7 deg, measured on KITTI 00) [deg].
+  /// Bins without per-point times: a drop of the counter-clockwise azimuth atan2(y, x) in [0, 360) larger than
+  /// this between consecutive points of the bin starts a new scan line (the bins store the HDL-64E's 64 lines one
+  /// after the other, each sweeping 0 -> 360 deg; within a line the azimuth steps back by at most ~7 deg,
+  /// measured on KITTI 00) [deg].
   double line_break_deg = 180.0;
-  int expected_lines = 64;       ///< HDL-64E; a bin with another count is reported (KittiScanStats), not rejected
-  double scan_period_s = 0.1;    ///< 10 Hz: per-point t_s = t_frame + period * azimuth / 360 (ordering only) [s]
+  /// Scan lines a bin should have; a bin with another count is reported (KittiScanStats), not rejected. 0 = the
+  /// sequence's: sequence_info.txt's scan_lines, else the count found in the first frame used (bench/run).
+  int expected_lines = 0;
+  /// The head's revolution period [s] (10 Hz). Without per-point times: t_s = t_frame + period * azimuth / 360
+  /// (ordering only); with them: azimuth = 360 * time / period (the head's sweep since the frame time).
+  double scan_period_s = 0.1;
   bool Validate(std::string* error) const;
 };
 
 struct KittiScanStats {
   size_t num_input = 0;
-  size_t num_nonfinite = 0;        ///< dropped
+  size_t num_nonfinite = 0;        ///< dropped (a non-finite coordinate, reflectance or point time)
   size_t num_lines = 0;            ///< scan lines found = rings assigned
-  /// Consecutive lines whose median elevation rises although lines must descend (top beam first): 0 when the
-  /// line split is the HDL-64E's laser order.
+  bool lines_from_times = false;   ///< lines split where the per-point time falls back (else: the azimuth)
+  /// Azimuth split only: consecutive lines whose median elevation rises although lines must descend (top beam
+  /// first): 0 when the line split is the HDL-64E's laser order. Not checked (0) for a split by time.
   size_t elevation_inversions = 0;
-  std::vector<float> line_median_elevation_deg;  ///< by line, in stored order (top first)
+  std::vector<float> line_median_elevation_deg;  ///< by line, in stored order (top first), in the bin's frame
 };
 
 /// Converts one bin into ScanPoints of the frame at t_frame_s. p_base = the point (base = Velodyne frame);
@@ -141,5 +187,15 @@ struct KittiScanStats {
 /// ring) or the config is invalid; *stats may be null.
 Status KittiScanPoints(const std::vector<KittiPoint>& bin, Seconds t_frame_s, const KittiScanConfig& config,
                        std::vector<ScanPoint>* points, KittiScanStats* stats = nullptr);
+
+/// The same for a bin with per-point times (velodyne_times/: point_times_s[i] = point i's time after
+/// t_frame_s [s]), stored line by line, each line in firing order: a line ends where the time falls back. Then
+/// t_s = t_frame_s + point time, azimuth_deg = 360 * point time / scan_period_s (mod 360: the head's sweep since
+/// the frame time at the nominal rate; the sensor's own azimuth is not in the files) and the median-elevation
+/// check is skipped (the line order is the producer's; a rotary rig's bins are in its base frame, where a line's
+/// elevation has no order). Fails when the sizes differ, more than 256 lines are found or the config is invalid.
+Status KittiScanPoints(const std::vector<KittiPoint>& bin, const std::vector<float>& point_times_s,
+                       Seconds t_frame_s, const KittiScanConfig& config, std::vector<ScanPoint>* points,
+                       KittiScanStats* stats = nullptr);
 
 }  // namespace rotolidar

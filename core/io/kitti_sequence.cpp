@@ -69,6 +69,19 @@ Status CheckCovers(const std::string& path, size_t lines, const KittiSequence& s
   return Status::Ok();
 }
 
+/// With a velodyne_times/ folder: the time file of every bin (same name), which must exist.
+Status ListPointTimes(const std::string& times_dir, KittiSequence* seq) {
+  std::error_code ec;
+  if (!fs::is_directory(times_dir, ec)) return Status::Ok();
+  for (const std::string& bin : seq->bin_paths) {
+    const std::string path = times_dir + "/" + fs::path(bin).filename().string();
+    if (!fs::is_regular_file(path, ec))
+      return Status::Error(path + ": no such file: with a velodyne_times/ folder every bin needs its point times");
+    seq->point_time_paths.push_back(path);
+  }
+  return Status::Ok();
+}
+
 std::string SequenceName(const std::string& dir) {
   fs::path p = fs::absolute(dir).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
@@ -102,6 +115,13 @@ Status OpenKittiSequence(const KittiSequencePaths& paths, KittiSequence* sequenc
     if (Status s = ReadKittiPoses(seq.poses_path, &seq.poses); !s) return s;
     if (Status s = CheckCovers(seq.poses_path, seq.poses.size(), seq); !s) return s;
   }
+  if (Status s = ListPointTimes(paths.dir + "/velodyne_times", &seq); !s) return s;
+  const std::string info_path = paths.dir + "/sequence_info.txt";
+  std::error_code ec;
+  if (fs::is_regular_file(info_path, ec)) {
+    if (Status s = ReadKittiSequenceInfo(info_path, &seq.info); !s) return s;
+    seq.info_path = info_path;
+  }
   *sequence = std::move(seq);
   return Status::Ok();
 }
@@ -112,8 +132,16 @@ std::string KittiDatasetLayout::BinPath(int frame_id) const {
   return SequenceDir() + "/velodyne/" + name;
 }
 
-Status CreateKittiDatasetFolders(const KittiDatasetLayout& layout) {
-  for (const std::string& dir : {layout.SequenceDir() + "/velodyne", layout.root + "/poses"}) {
+std::string KittiDatasetLayout::PointTimesPath(int frame_id) const {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06d.bin", frame_id);
+  return SequenceDir() + "/velodyne_times/" + name;
+}
+
+Status CreateKittiDatasetFolders(const KittiDatasetLayout& layout, bool point_times) {
+  std::vector<std::string> dirs = {layout.SequenceDir() + "/velodyne", layout.root + "/poses"};
+  if (point_times) dirs.push_back(layout.SequenceDir() + "/velodyne_times");
+  for (const std::string& dir : dirs) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) return Status::Error(dir + ": cannot create folder: " + ec.message());
@@ -129,7 +157,8 @@ bool KittiScanConfig::Validate(std::string* error) const {
     return false;
   };
   if (!(line_break_deg > 0.0 && line_break_deg < 360.0)) return fail("kitti.line_break_deg must be in (0, 360)");
-  if (expected_lines < 1 || expected_lines > 256) return fail("kitti.expected_lines must be in [1, 256]");
+  if (expected_lines < 0 || expected_lines > 256)
+    return fail("kitti.expected_lines must be in [0, 256] (0: the sequence's)");
   if (!(scan_period_s > 0.0 && std::isfinite(scan_period_s))) return fail("kitti.scan_period_s must be > 0");
   return true;
 }
@@ -151,60 +180,114 @@ float Median(std::vector<float>* v) {
   return (*v)[v->size() / 2];
 }
 
+bool IsFinite(const KittiPoint& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.z_m) && std::isfinite(p.reflectance);
+}
+
+/// Per bin point: its scan line (-1: dropped as non-finite), azimuth [deg] and time [s].
+struct LineSplit {
+  std::vector<int> line;
+  std::vector<float> az;
+  std::vector<double> t_s;
+};
+
+/// Line medians of the elevation, the line-count limit, the elevation check (azimuth split only) and the
+/// ScanPoints: ring = lines - 1 - line (the top line is stored first).
+Status MakeScanPoints(const std::vector<KittiPoint>& bin, const LineSplit& split, KittiScanStats* st,
+                      std::vector<ScanPoint>* points) {
+  if (st->num_lines > 256)
+    return Status::Error("KITTI bin: " + std::to_string(st->num_lines) + " scan lines (> 256): the points are not " +
+                         "stored line by line" + (st->lines_from_times ? "" : " by azimuth (a bin in another order, "
+                         "e.g. a rotolidar export, needs its per-point times in velodyne_times/)"));
+  std::vector<std::vector<float>> elevations(st->num_lines);
+  for (size_t i = 0; i < bin.size(); ++i)
+    if (split.line[i] >= 0)
+      elevations[size_t(split.line[i])].push_back(
+          float(std::atan2(double(bin[i].z_m), std::hypot(double(bin[i].x_m), double(bin[i].y_m))) * 180.0 / M_PI));
+  for (auto& e : elevations) st->line_median_elevation_deg.push_back(Median(&e));
+  for (size_t l = 1; l < st->num_lines && !st->lines_from_times; ++l)
+    st->elevation_inversions += st->line_median_elevation_deg[l] > st->line_median_elevation_deg[l - 1] ? 1 : 0;
+  std::vector<ScanPoint> out;
+  out.reserve(bin.size() - st->num_nonfinite);
+  for (size_t i = 0; i < bin.size(); ++i) {
+    if (split.line[i] < 0) continue;
+    ScanPoint sp;
+    sp.p_base = Eigen::Vector3f(bin[i].x_m, bin[i].y_m, bin[i].z_m);
+    sp.range_m = sp.p_base.norm();
+    sp.azimuth_deg = split.az[i];
+    sp.intensity = 255.f * bin[i].reflectance;
+    sp.ring = uint8_t(int(st->num_lines) - 1 - split.line[i]);
+    sp.t_s = split.t_s[i];
+    out.push_back(sp);
+  }
+  *points = std::move(out);
+  return Status::Ok();
+}
+
 }  // namespace
 
+// A line ends where the azimuth falls back to ~0 (the HDL-64E's order).
 Status KittiScanPoints(const std::vector<KittiPoint>& bin, Seconds t_frame_s, const KittiScanConfig& config,
                        std::vector<ScanPoint>* points, KittiScanStats* stats) {
   std::string why;
   if (!config.Validate(&why)) return Status::Error(why);
   KittiScanStats st;
   st.num_input = bin.size();
-  // Pass 1: azimuth and scan line of every finite point (a line ends where the azimuth falls back to ~0).
-  std::vector<float> az(bin.size());
-  std::vector<int> line(bin.size(), -1);
+  LineSplit split{std::vector<int>(bin.size(), -1), std::vector<float>(bin.size()), std::vector<double>(bin.size())};
   int current = -1;
   float prev_az = 0.f;
   for (size_t i = 0; i < bin.size(); ++i) {
-    const KittiPoint& p = bin[i];
-    if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !std::isfinite(p.z_m) || !std::isfinite(p.reflectance)) {
+    if (!IsFinite(bin[i])) {
       ++st.num_nonfinite;
       continue;
     }
-    az[i] = AzimuthCcwDeg(p.x_m, p.y_m);
-    if (current < 0 || double(prev_az) - double(az[i]) > config.line_break_deg) ++current;
-    line[i] = current;
-    prev_az = az[i];
+    const float az = AzimuthCcwDeg(bin[i].x_m, bin[i].y_m);
+    if (current < 0 || double(prev_az) - double(az) > config.line_break_deg) ++current;
+    split.line[i] = current;
+    split.az[i] = az;
+    split.t_s[i] = t_frame_s + config.scan_period_s * double(az) / 360.0;
+    prev_az = az;
   }
   st.num_lines = size_t(current + 1);
-  if (st.num_lines > 256)
-    return Status::Error("KITTI bin: " + std::to_string(st.num_lines) +
-                         " scan lines (> 256): the points are not stored line by line");
-  // Median elevation per line: the lines must descend (the HDL-64E's top beam is stored first).
-  std::vector<std::vector<float>> elevations(st.num_lines);
-  for (size_t i = 0; i < bin.size(); ++i)
-    if (line[i] >= 0)
-      elevations[size_t(line[i])].push_back(
-          float(std::atan2(double(bin[i].z_m), std::hypot(double(bin[i].x_m), double(bin[i].y_m))) * 180.0 / M_PI));
-  for (auto& e : elevations) st.line_median_elevation_deg.push_back(Median(&e));
-  for (size_t l = 1; l < st.num_lines; ++l)
-    st.elevation_inversions += st.line_median_elevation_deg[l] > st.line_median_elevation_deg[l - 1] ? 1 : 0;
+  if (Status s = MakeScanPoints(bin, split, &st, points); !s) return s;
+  if (stats) *stats = std::move(st);
+  return Status::Ok();
+}
 
-  std::vector<ScanPoint> out;
-  out.reserve(bin.size() - st.num_nonfinite);
+// A line ends where the point time falls back (each line is stored in firing order).
+Status KittiScanPoints(const std::vector<KittiPoint>& bin, const std::vector<float>& point_times_s,
+                       Seconds t_frame_s, const KittiScanConfig& config, std::vector<ScanPoint>* points,
+                       KittiScanStats* stats) {
+  std::string why;
+  if (!config.Validate(&why)) return Status::Error(why);
+  if (point_times_s.size() != bin.size())
+    return Status::Error("KITTI bin of " + std::to_string(bin.size()) + " points has " +
+                         std::to_string(point_times_s.size()) + " point times");
+  KittiScanStats st;
+  st.num_input = bin.size();
+  st.lines_from_times = true;
+  LineSplit split{std::vector<int>(bin.size(), -1), std::vector<float>(bin.size()), std::vector<double>(bin.size())};
+  int current = -1;
+  float prev_t = 0.f;
   for (size_t i = 0; i < bin.size(); ++i) {
-    if (line[i] < 0) continue;
-    ScanPoint sp;
-    sp.p_base = Eigen::Vector3f(bin[i].x_m, bin[i].y_m, bin[i].z_m);
-    sp.range_m = sp.p_base.norm();
-    sp.azimuth_deg = az[i];
-    sp.intensity = 255.f * bin[i].reflectance;
-    sp.ring = uint8_t(int(st.num_lines) - 1 - line[i]);
-    sp.t_s = t_frame_s + config.scan_period_s * double(az[i]) / 360.0;
-    out.push_back(sp);
+    const float t = point_times_s[i];
+    if (!IsFinite(bin[i]) || !std::isfinite(t)) {
+      ++st.num_nonfinite;
+      continue;
+    }
+    if (current < 0 || t < prev_t) ++current;
+    split.line[i] = current;
+    double az = std::fmod(360.0 * double(t) / config.scan_period_s, 360.0);
+    if (az < 0.0) az += 360.0;
+    split.az[i] = std::min(float(az), std::nextafter(360.f, 0.f));
+    split.t_s[i] = t_frame_s + double(t);
+    prev_t = t;
   }
-  *points = std::move(out);
+  st.num_lines = size_t(current + 1);
+  if (Status s = MakeScanPoints(bin, split, &st, points); !s) return s;
   if (stats) *stats = std::move(st);
   return Status::Ok();
 }
 
 }  // namespace rotolidar
+

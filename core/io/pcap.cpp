@@ -3,6 +3,7 @@
 
 #include <pcap/pcap.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -141,7 +142,31 @@ Status PcapReader::Open(const std::string& path, double epoch_unix_s) {
   path_ = path;
   epoch_unix_s_ = epoch_unix_s;
   records_ = skipped_ = 0;
+  traffic_ = PcapTraffic();
   return Status::Ok();
+}
+
+Status PcapReader::NoVlp16DataError() const {
+  return Status::Error(path_ + ": no VLP-16 data packets (" + std::to_string(kVlp16PacketBytes) +
+                       "-byte payloads on UDP port " + std::to_string(kVlp16DataPort) + "): saw " +
+                       traffic_.Describe());
+}
+
+std::string PcapTraffic::Describe() const {
+  if (records == 0) return "no packets (the file holds a pcap header only)";
+  std::vector<std::pair<std::pair<uint16_t, std::size_t>, std::size_t>> kinds(udp.begin(), udp.end());
+  std::stable_sort(kinds.begin(), kinds.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::size_t datagrams = 0;
+  for (const auto& kind : kinds) datagrams += kind.second;
+  std::string text = std::to_string(datagrams) + " UDP packets";
+  constexpr std::size_t kMaxKinds = 8;
+  for (std::size_t i = 0; i < kinds.size() && i < kMaxKinds; ++i) {
+    text += (i == 0 ? ": port " : ", port ") + std::to_string(kinds[i].first.first) + " x " +
+            std::to_string(kinds[i].second) + " (payload " + std::to_string(kinds[i].first.second) + " B)";
+  }
+  if (kinds.size() > kMaxKinds) text += " and " + std::to_string(kinds.size() - kMaxKinds) + " more port/size kinds";
+  if (other_frames > 0) text += "; " + std::to_string(other_frames) + " other frames (not UDP over IPv4)";
+  return text;
 }
 
 bool PcapReader::Next(LidarPacket* packet, Status* status) {
@@ -162,6 +187,7 @@ bool PcapReader::Next(LidarPacket* packet, Status* status) {
       return false;
     }
     ++records_;
+    ++traffic_.records;
     bool is_vlp = false;
     const Status s = ParseFrame(data, header->caplen, header->len, packet, &is_vlp);
     if (!s) {
@@ -199,30 +225,37 @@ Status PcapReader::ParseFrame(const uint8_t* frame, std::size_t caplen, std::siz
     ethertype = GetU16Be(frame + 14);
     ip = 16;
   }
-  if (ethertype != 0x0800) return Status::Ok();  // not IPv4: skipped
+  if (ethertype != 0x0800) {  // not IPv4: skipped
+    ++traffic_.other_frames;
+    return Status::Ok();
+  }
   if (caplen < ip + kIpBytes) return bad(ip, "truncated IPv4 header");
   if ((frame[ip] >> 4) != 4) return bad(ip, "IP version " + std::to_string(frame[ip] >> 4) + " (expected 4)");
   const std::size_t ihl = 4u * (frame[ip] & 0x0F);
   const std::size_t total = GetU16Be(frame + ip + 2);
   if (ihl < kIpBytes || caplen < ip + ihl) return bad(ip, "IPv4 header length " + std::to_string(ihl));
-  if (frame[ip + 9] != 17) return Status::Ok();  // not UDP: skipped
   const uint16_t frag = GetU16Be(frame + ip + 6);
-  if ((frag & 0x1FFF) != 0) return Status::Ok();  // a later fragment: carries no UDP header, skipped
+  // Not UDP, or a later fragment (which carries no UDP header): skipped.
+  if (frame[ip + 9] != 17 || (frag & 0x1FFF) != 0) {
+    ++traffic_.other_frames;
+    return Status::Ok();
+  }
   const std::size_t udp = ip + ihl;
   if (caplen < udp + kUdpBytes) return bad(udp, "truncated UDP header");
   const uint16_t port = GetU16Be(frame + udp + 2);
+  const std::size_t udp_len = GetU16Be(frame + udp + 4);
+  const std::size_t n = udp_len >= kUdpBytes ? udp_len - kUdpBytes : 0;
+  ++traffic_.udp[{port, n}];
   if (port != kVlp16DataPort && port != kVlp16PositionPort) return Status::Ok();  // other traffic: skipped
   if (frag & 0x2000) return bad(ip + 6, "fragmented IPv4 datagram to port " + std::to_string(port));
   if (total < ihl + kUdpBytes || ip + total > caplen) {
     return bad(ip + 2, "IPv4 total length " + std::to_string(total) + " inconsistent with captured " +
                            std::to_string(caplen - ip) + " bytes (wire length " + std::to_string(len) + ")");
   }
-  const std::size_t udp_len = GetU16Be(frame + udp + 4);
   if (udp_len < kUdpBytes || udp + udp_len > ip + total) {
     return bad(udp + 4, "UDP length " + std::to_string(udp_len) + " inconsistent with IPv4 total length " +
                             std::to_string(total));
   }
-  const std::size_t n = udp_len - kUdpBytes;
   const std::size_t expected = port == kVlp16DataPort ? kVlp16PacketBytes : kVlp16PositionPacketBytes;
   if (n != expected) {
     return bad(udp + kUdpBytes, "UDP payload of " + std::to_string(n) + " bytes on port " + std::to_string(port) +
@@ -231,6 +264,7 @@ Status PcapReader::ParseFrame(const uint8_t* frame, std::size_t caplen, std::siz
   packet->udp_port = port;
   packet->payload.assign(frame + udp + kUdpBytes, frame + udp + kUdpBytes + n);
   *is_vlp = true;
+  traffic_.vlp16_data += port == kVlp16DataPort ? 1 : 0;
   return Status::Ok();
 }
 

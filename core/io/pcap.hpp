@@ -5,7 +5,9 @@
 // checksum 0 = none, legal for IPv4). Also the headerless raw format (concatenated 1206-byte payloads).
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/types/messages.hpp"
@@ -39,6 +41,19 @@ class PcapWriter {
   std::size_t written_ = 0;
 };
 
+/// What a PcapReader has seen so far, VLP-16 or not: the answer to "why did this capture give no points?".
+struct PcapTraffic {
+  std::size_t records = 0;        ///< records read
+  std::size_t other_frames = 0;   ///< records that are not UDP over IPv4 (ARP, IPv6, TCP, later IP fragments)
+  /// UDP datagrams by (destination port, payload size [bytes] from the UDP header), every port.
+  std::map<std::pair<uint16_t, std::size_t>, std::size_t> udp;
+  std::size_t vlp16_data = 0;     ///< of those: 1206-byte payloads to port 2368 (VLP-16 data packets)
+  /// "1000 UDP packets: port 7502 x 900 (payload 12608 B), port 7503 x 100 (payload 48 B)" (most frequent first,
+  /// at most 8 kinds, then how many more), "; 3 other frames (not UDP over IPv4)" when there are any; "no
+  /// packets (the file holds a pcap header only)" when nothing was read.
+  std::string Describe() const;
+};
+
 /// Streams LidarPackets out of a pcap/pcapng file (Ethernet, 802.1Q-tagged Ethernet or Linux cooked capture).
 /// UDP/IPv4 frames to port 2368 or 8308 become packets (udp_port = the destination port, t_capture_s = record time -
 /// epoch_unix_s); everything else (ARP, IPv6, TCP, other ports) is skipped and counted. Not thread-safe.
@@ -58,6 +73,10 @@ class PcapReader {
   bool Next(LidarPacket* packet, Status* status);
   std::size_t records() const { return records_; }  ///< records read so far
   std::size_t skipped() const { return skipped_; }  ///< non-VLP-16 frames skipped
+  const PcapTraffic& traffic() const { return traffic_; }  ///< every record read so far, by kind
+  /// "<path>: no VLP-16 data packets (1206-byte payloads on UDP port 2368): saw <traffic().Describe()>": the
+  /// error for a capture that held no VLP-16 data (read it to the end first).
+  Status NoVlp16DataError() const;
   void Close();
 
  private:
@@ -69,6 +88,7 @@ class PcapReader {
   int link_type_ = 0;
   std::size_t records_ = 0;
   std::size_t skipped_ = 0;
+  PcapTraffic traffic_;
 };
 
 /// Reads a file of concatenated raw 1206-byte data payloads (no headers; the vlp16_einride format). Packets get

@@ -84,7 +84,10 @@ Status LoadPackets(const std::string& path, double epoch_unix_s, std::vector<Lid
   LidarPacket packet;
   Status status;
   while (reader.Next(&packet, &status)) out->push_back(packet);
-  return status;
+  if (!status) return status;
+  // Position packets alone give no points: a capture of another sensor must not read as an empty recording.
+  if (reader.traffic().vlp16_data == 0) return reader.NoVlp16DataError();
+  return Status::Ok();
 }
 
 }  // namespace
@@ -99,7 +102,6 @@ Status LoadRecording(const std::string& dir, Recording* recording) {
   if (Status s = LoadEncoder(dir + "/" + RecordingLayout::kEncoder, r.calib.encoder.counts_per_rev, &r.encoder); !s)
     return s;
   if (Status s = LoadCamera(dir, &r.camera); !s) return s;
-  if (r.lidar_packets.empty()) return Status::Error(dir + "/" + RecordingLayout::kLidar + ": no VLP-16 packets");
   if (r.encoder.size() < 2) return Status::Error(dir + "/" + RecordingLayout::kEncoder + ": fewer than 2 samples");
   *recording = std::move(r);
   return Status::Ok();

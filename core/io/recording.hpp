@@ -45,6 +45,8 @@ struct Recording {
 
 /// Loads and validates a recording. Every error names the file and line (CSV, YAML) or record (pcap).
 /// Missing optional streams (camera) are allowed; calib.yaml, lidar.pcap, imu.csv and encoder.csv are required.
+/// A lidar.pcap without VLP-16 data packets (position packets alone included) is an error that names the UDP
+/// ports and payload sizes it holds (PcapReader::NoVlp16DataError).
 Status LoadRecording(const std::string& dir, Recording* recording);
 
 /// Reads one camera image (BGR8); fails with the file name when it cannot be read.

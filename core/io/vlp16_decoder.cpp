@@ -16,16 +16,16 @@ constexpr double kHourS = 3600.0;
 constexpr uint8_t kPpsLocked = 2;
 
 uint8_t ReturnTypeOf(Vlp16ReturnMode mode, int block) {
-  if (mode == Vlp16ReturnMode::kDual) return block % 2 == 0 ? 1 : 0;  // even = last, odd = strongest
-  return mode == Vlp16ReturnMode::kLast ? 1 : 0;
-}
-
-bool Keep(Vlp16ReturnFilter filter, uint8_t return_type) {
-  if (filter == Vlp16ReturnFilter::kAll) return true;
-  return (filter == Vlp16ReturnFilter::kStrongest) == (return_type == 0);
+  if (mode == Vlp16ReturnMode::kDual) return block % 2 == 0 ? kReturnLast : kReturnStrongest;  // even = last
+  return mode == Vlp16ReturnMode::kLast ? kReturnLast : kReturnStrongest;
 }
 
 }  // namespace
+
+bool Vlp16ReturnSelected(Vlp16ReturnFilter filter, uint8_t return_type) {
+  if (filter == Vlp16ReturnFilter::kAll || return_type == kReturnStrongestAndLast) return true;
+  return (filter == Vlp16ReturnFilter::kStrongest) == (return_type == kReturnStrongest);
+}
 
 bool Vlp16DecoderConfig::Validate(std::string* error) const {
   auto fail = [&](const std::string& m) {
@@ -97,7 +97,7 @@ std::array<double, 12> Vlp16Decoder::AzimuthSteps() const {
 // sine come from the base angle's (one sincos per firing) rotated by the per-laser increment (cached per d_az):
 // the same numbers as direct evaluation to ~1e-16.
 void Vlp16Decoder::DecodeFiring(int block, int firing, double d_az, double packet_t_s,
-                                std::vector<LidarPoint>* appended) const {
+                                std::vector<LidarPoint>* appended) {
   const auto mode = static_cast<Vlp16ReturnMode>(raw_.return_mode);
   const bool dual = mode == Vlp16ReturnMode::kDual;
   const int stride = dual ? 2 : 1;
@@ -116,14 +116,19 @@ void Vlp16Decoder::DecodeFiring(int block, int firing, double d_az, double packe
   const double firing_t_s = packet_t_s + seq * kVlp16SequencePeriodS;
   for (int laser = 0; laser < 16; ++laser) {
     const int ch = 16 * firing + laser;
-    for (int k = 0; k < stride; ++k) {  // dual: the even (last) block, then the odd (strongest) one
+    // Dual: one echo repeated in both blocks (the strongest was also the last) is one point unless asked for both.
+    const bool duplicate = dual && !config_.keep_duplicate_dual_returns &&
+                           raw_.blocks[block].distance_2mm[ch] == raw_.blocks[block + 1].distance_2mm[ch] &&
+                           raw_.blocks[block].reflectivity[ch] == raw_.blocks[block + 1].reflectivity[ch];
+    for (int k = 0; k < (duplicate ? 1 : stride); ++k) {  // dual: the even (last) block, then the odd (strongest)
       const Vlp16RawBlock& raw_block = raw_.blocks[block + k];
       const uint16_t d = raw_block.distance_2mm[ch];
       if (d == 0) continue;
       const double range_m = d * kVlp16DistanceUnitM;
       if (range_m < config_.min_range_m || range_m > config_.max_range_m) continue;
-      const uint8_t return_type = ReturnTypeOf(mode, block + k);
-      if (!Keep(config_.return_filter, return_type)) continue;
+      const uint8_t return_type = duplicate ? kReturnStrongestAndLast : ReturnTypeOf(mode, block + k);
+      if (!Vlp16ReturnSelected(config_.return_filter, return_type)) continue;
+      merged_dual_duplicates_ += duplicate ? 1 : 0;
       const double cos_az = cos_base * cos_increment_[laser] - sin_base * sin_increment_[laser];
       const double sin_az = sin_base * cos_increment_[laser] + cos_base * sin_increment_[laser];
       const double horizontal_m = cos_elevation_[laser] * range_m;

@@ -46,9 +46,17 @@ struct LidarPoint {
   float azimuth_deg = 0.f;    ///< interpolated firing azimuth, [0, 360), clockwise from +Y as the manual counts
   uint8_t ring = 0;           ///< ring index sorted by elevation: 0 = -15 deg ... 15 = +15 deg
   uint8_t laser_id = 0;       ///< the laser's firing order 0..15 (manual Table 9-1)
-  uint8_t return_type = 0;    ///< 0 = strongest, 1 = last (dual mode: both may come)
+  uint8_t return_type = 0;    ///< kReturnStrongest, kReturnLast or kReturnStrongestAndLast (below)
   Seconds t_s = 0.0;          ///< firing time of this point on the rig clock
 };
+
+/// LidarPoint::return_type. Single-return modes give the mode's type. Dual mode gives a firing's last and its
+/// strongest (or second strongest) return as two points, or, where both blocks hold the same echo (identical
+/// distance and reflectivity), one point of type kReturnStrongestAndLast (Vlp16DecoderConfig::
+/// keep_duplicate_dual_returns keeps the two copies instead).
+inline constexpr uint8_t kReturnStrongest = 0;
+inline constexpr uint8_t kReturnLast = 1;
+inline constexpr uint8_t kReturnStrongestAndLast = 2;
 
 /// One revolution of the LiDAR head (or any span of points): points in the lidar frame, each with its own time.
 struct LidarScan {

@@ -193,3 +193,122 @@ TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
 
 }  // namespace
 }  // namespace rotolidar::bench
+
+namespace rotolidar::bench {
+namespace {
+
+// Dual-return packets whose two blocks carry the same echo (5 m, reflectivity 40) for lasers 0..9 and two echoes
+// (last 5 m, strongest 2 m) for lasers 10..15: the duplicates are one row each (return 2), counted in the summary;
+// keep_duplicate_dual_returns brings the second copy back.
+TEST(Decode, DualDuplicatesAreOneRowAndCounted) {
+  Vlp16PacketEncoder encoder(Vlp16ReturnMode::kDual, 0.0);
+  const std::string pcap = Prefix("dual_dup") + ".pcap";
+  PcapWriter writer;
+  ASSERT_TRUE(writer.Open(pcap).ok);
+  Vlp16FiringSequence s;
+  s.distance_2mm.fill(2500);
+  s.reflectivity.fill(40);
+  for (int l = 0; l < 16; ++l) {
+    s.distance2_2mm[l] = l < 10 ? 2500 : 1000;
+    s.reflectivity2[l] = l < 10 ? 40 : 90;
+  }
+  for (int k = 0; k < 12 * 20; ++k) {
+    s.t_s = k * kVlp16SequencePeriodS;
+    s.azimuth_centideg = static_cast<uint16_t>((k * 20) % 36000);
+    if (auto p = encoder.Add(s)) {
+      ASSERT_TRUE(writer.Write(*p).ok);
+    }
+  }
+  ASSERT_TRUE(writer.Close().ok);
+  const std::size_t firings = 12 * 20;
+  DecodeOptions options;
+  options.input_path = pcap;
+  options.output_prefix = Prefix("dual_dup_out");
+  DecodeSummary summary;
+  ASSERT_TRUE(RunDecode(options, &summary).ok);
+  EXPECT_EQ(summary.points, firings * (10 + 6 * 2));
+  EXPECT_EQ(summary.merged_dual_duplicates, firings * 10);
+  std::size_t both = 0;
+  for (const auto& [range_m, ret] : ReadRows(options.output_prefix + ".csv")) {
+    if (ret != 2) continue;
+    ++both;
+    EXPECT_NEAR(range_m, 5.0, 0.02);
+  }
+  EXPECT_EQ(both, firings * 10);
+  std::ostringstream printed;
+  PrintDecodeSummary(summary, printed);
+  EXPECT_NE(printed.str().find("dual duplicates   " + std::to_string(firings * 10)), std::string::npos)
+      << printed.str();
+
+  options.keep_duplicate_dual_returns = true;
+  ASSERT_TRUE(RunDecode(options, &summary).ok);
+  EXPECT_EQ(summary.points, firings * 16 * 2);
+  EXPECT_EQ(summary.merged_dual_duplicates, 0u);
+}
+
+/// Runs decode on `input` and returns the error (the test fails if the run succeeds).
+std::string DecodeError(const std::string& input, bool raw, double max_range_m = 130.0, int revolution = -1) {
+  DecodeOptions options;
+  options.input_path = input;
+  options.raw = raw;
+  options.output_prefix = Prefix("fail_out");
+  options.max_range_m = max_range_m;
+  options.revolution = revolution;
+  DecodeSummary summary;
+  const Status s = RunDecode(options, &summary);
+  EXPECT_FALSE(s.ok) << input << " decoded " << summary.points << " points";
+  return s.message;
+}
+
+// No run ends well with zero points: each cause has its message.
+TEST(Decode, ZeroPointsIsAnErrorSayingWhy) {
+  const std::string foreign = Prefix("foreign") + ".pcap";
+  PcapWriter writer;
+  ASSERT_TRUE(writer.Open(foreign).ok);
+  for (int i = 0; i < 5; ++i) {
+    LidarPacket p;
+    p.t_capture_s = 0.01 * i;
+    p.udp_port = i == 0 ? 7503 : 7502;
+    p.payload.assign(i == 0 ? 48 : 12608, 7);
+    ASSERT_TRUE(writer.Write(p).ok);
+  }
+  ASSERT_TRUE(writer.Close().ok);
+  EXPECT_EQ(DecodeError(foreign, false), foreign + ": no VLP-16 data packets (1206-byte payloads on UDP port 2368): "
+                                                   "saw 5 UDP packets: port 7502 x 4 (payload 12608 B), port 7503 x "
+                                                   "1 (payload 48 B)");
+
+  const std::string header_only = Prefix("header_only") + ".pcap";
+  ASSERT_TRUE(writer.Open(header_only).ok);
+  ASSERT_TRUE(writer.Close().ok);
+  EXPECT_NE(DecodeError(header_only, false).find("saw no packets (the file holds a pcap header only)"),
+            std::string::npos);
+
+  const std::string empty_raw = Prefix("empty") + ".bin";
+  std::ofstream(empty_raw, std::ios::binary).close();
+  EXPECT_EQ(DecodeError(empty_raw, true), empty_raw + ": empty file: no 1206-byte payloads");
+
+  const std::string random_raw = Prefix("random") + ".bin";
+  {
+    std::ofstream out(random_raw, std::ios::binary);
+    uint32_t x = 12345;
+    for (int i = 0; i < 3 * 1206; ++i) out.put(char((x = x * 1664525u + 1013904223u) >> 24));
+  }
+  const std::string random_error = DecodeError(random_raw, true);
+  EXPECT_NE(random_error.find("no decodable VLP-16 data packet; 3 malformed (first: "), std::string::npos)
+      << random_error;
+
+  // Valid packets whose returns (5 m .. 5.15 m) all lie beyond max_range_m; a revolution past the last scan.
+  const std::string good = Prefix("good") + ".pcap";
+  ASSERT_TRUE(writer.Open(good).ok);
+  for (const LidarPacket& p : SyntheticPackets()) ASSERT_TRUE(writer.Write(p).ok);
+  ASSERT_TRUE(writer.Close().ok);
+  const std::string range_error = DecodeError(good, false, 1.0);
+  EXPECT_NE(range_error.find("263 data packets gave 0 points inside the range limits"), std::string::npos)
+      << range_error;
+  const std::string revolution_error = DecodeError(good, false, 130.0, 9);
+  EXPECT_NE(revolution_error.find("revolution 9 not found: the input has 5 scans"), std::string::npos)
+      << revolution_error;
+}
+
+}  // namespace
+}  // namespace rotolidar::bench

@@ -163,6 +163,10 @@ TEST_F(Kitti00Run, RunnerStepsMatchBothStereoSlams) {
   ASSERT_TRUE(s) << s.message;
   ASSERT_EQ(r.frame_ids.size(), kFrames);
   EXPECT_EQ(r.frames_other_line_count, 0u);
+  EXPECT_EQ(r.expected_lines, 64);  // KITTI has no sequence_info.txt: the first frame's count, the HDL-64E's
+  EXPECT_EQ(r.expected_lines_source, "first frame");
+  EXPECT_FALSE(r.point_times);
+  EXPECT_EQ(r.range_sigma_m, kKittiDefaultRangeSigmaM);
   ExpectOutputs(o.out_dir);
   // The runner's own RPE against its --poses (cam0 convention, delta 1 frame): one error per consecutive pair.
   ASSERT_TRUE(r.has_ground_truth);

@@ -291,3 +291,116 @@ TEST(KittiScan, AnEmptyBinGivesNoPoints) {
 
 }  // namespace
 }  // namespace rotolidar
+
+namespace rotolidar {
+namespace {
+
+TEST(KittiIo, PointTimesAndSequenceInfoRoundTrip) {
+  const std::string dir = TempDir("companions");
+  const std::vector<float> times = {0.f, 1.5e-5f, 0.0999f, 0.f, 0.05f};
+  ASSERT_TRUE(WriteKittiPointTimes(dir + "/t.bin", times));
+  std::vector<float> back;
+  ASSERT_TRUE(ReadKittiPointTimes(dir + "/t.bin", &back));
+  EXPECT_EQ(back, times);
+  std::ofstream(dir + "/t.bin", std::ios::app | std::ios::binary) << "xy";
+  Status s = ReadKittiPointTimes(dir + "/t.bin", &back);
+  EXPECT_NE(s.message.find("partial value starts at byte offset 20"), std::string::npos) << s.message;
+
+  KittiSequenceInfo info;
+  info.sensor = "VLP-16";
+  info.scan_lines = 16;
+  info.deskew = "estimator (an estimate)";
+  info.source = "a: b";  // a colon inside a value
+  ASSERT_TRUE(WriteKittiSequenceInfo(dir + "/info.txt", info));
+  KittiSequenceInfo read;
+  ASSERT_TRUE(ReadKittiSequenceInfo(dir + "/info.txt", &read));
+  EXPECT_EQ(read.sensor, "VLP-16");
+  EXPECT_EQ(read.scan_lines, 16);
+  EXPECT_EQ(read.deskew, "estimator (an estimate)");
+  EXPECT_EQ(read.source, "a: b");
+  EXPECT_TRUE(read.point_order.empty());
+
+  WriteText(dir + "/bad.txt", "# comment\nsensor: x\nlaser_count: 16\n");
+  s = ReadKittiSequenceInfo(dir + "/bad.txt", &read);
+  EXPECT_NE(s.message.find("bad.txt:3: unknown key 'laser_count'"), std::string::npos) << s.message;
+  WriteText(dir + "/bad.txt", "scan_lines: 16.5\n");
+  s = ReadKittiSequenceInfo(dir + "/bad.txt", &read);
+  EXPECT_NE(s.message.find("bad.txt:1: scan_lines = '16.5'"), std::string::npos) << s.message;
+  WriteText(dir + "/bad.txt", "sensor: a\n\nsensor: b\n");
+  s = ReadKittiSequenceInfo(dir + "/bad.txt", &read);
+  EXPECT_NE(s.message.find("bad.txt:3: key 'sensor' given twice"), std::string::npos) << s.message;
+  info.sensor = "two\nlines";
+  EXPECT_FALSE(WriteKittiSequenceInfo(dir + "/info.txt", info));
+}
+
+TEST(KittiIo, SequenceFolderReadsPointTimesAndInfo) {
+  KittiDatasetLayout layout;
+  layout.root = TempDir("dataset_times");
+  ASSERT_TRUE(CreateKittiDatasetFolders(layout, true));
+  for (int id : {0, 1}) ASSERT_TRUE(WriteKittiBin(layout.BinPath(id), {KittiPoint{1.f, 2.f, 3.f, 0.5f}}));
+  ASSERT_TRUE(WriteKittiCalib(layout.CalibPath(), KittiCalib()));
+  KittiSequencePaths paths;
+  paths.dir = layout.SequenceDir();
+  KittiSequence seq;
+  ASSERT_TRUE(WriteKittiPointTimes(layout.PointTimesPath(0), {0.f}));
+  Status s = OpenKittiSequence(paths, &seq);
+  EXPECT_NE(s.message.find("velodyne_times/000001.bin: no such file"), std::string::npos) << s.message;
+  ASSERT_TRUE(WriteKittiPointTimes(layout.PointTimesPath(1), {0.f}));
+  KittiSequenceInfo info;
+  info.scan_lines = 16;
+  ASSERT_TRUE(WriteKittiSequenceInfo(layout.InfoPath(), info));
+  s = OpenKittiSequence(paths, &seq);
+  ASSERT_TRUE(s) << s.message;
+  EXPECT_EQ(seq.point_time_paths, (std::vector<std::string>{layout.PointTimesPath(0), layout.PointTimesPath(1)}));
+  EXPECT_EQ(seq.info.scan_lines, 16);
+  EXPECT_EQ(seq.info_path, layout.InfoPath());
+}
+
+/// A rotary rig's revolution in its base frame: 16 rings of 400 points, each in firing order over 0.1 s, the
+/// sensor's spin axis across base x and turned about it by the rotor during the sweep (so a ring's base-frame
+/// azimuth atan2(y, x) does not sweep 0 -> 360: an azimuth split does not find the 16 rings). Stored top ring
+/// first, as rotolidar exports.
+void RotaryBin(std::vector<KittiPoint>* bin, std::vector<float>* times) {
+  for (int ring = 15; ring >= 0; --ring) {
+    const double elevation = (2.0 * ring - 15.0) * M_PI / 180.0;
+    for (int i = 0; i < 400; ++i) {
+      const double t = 0.1 * i / 400.0 + 2.304e-6 * ring;
+      const double head = 2.0 * M_PI * 10.0 * t, rotor = 0.3 + 2.6 * t;  // head 10 Hz; rotor 2.6 rad/s
+      const Eigen::Vector3d dir_lidar(std::cos(elevation) * std::cos(head), std::cos(elevation) * std::sin(head),
+                                      std::sin(elevation));
+      // Spin axis along base y, turned about base x by the rotor angle.
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(rotor, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+                                Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+      const Eigen::Vector3d p = R * dir_lidar * (5.0 + 0.01 * ring);
+      bin->push_back({float(p.x()), float(p.y()), float(p.z()), 0.25f});
+      times->push_back(float(t));
+    }
+  }
+}
+
+TEST(KittiScan, PointTimesSplitLinesWhereTheAzimuthCannot) {
+  std::vector<KittiPoint> bin;
+  std::vector<float> times;
+  RotaryBin(&bin, &times);
+  std::vector<ScanPoint> points;
+  KittiScanStats stats;
+  const Status by_azimuth = KittiScanPoints(bin, 50.0, KittiScanConfig(), &points, &stats);
+  EXPECT_TRUE(!by_azimuth || stats.num_lines != 16u) << "azimuth split: " << stats.num_lines << " lines";
+
+  ASSERT_TRUE(KittiScanPoints(bin, times, 50.0, KittiScanConfig(), &points, &stats));
+  EXPECT_TRUE(stats.lines_from_times);
+  EXPECT_EQ(stats.num_lines, 16u);
+  EXPECT_EQ(stats.elevation_inversions, 0u);  // not checked for a time split
+  ASSERT_EQ(points.size(), bin.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(points[i].ring, 15 - int(i / 400)) << i;  // top ring first in the bin
+    EXPECT_DOUBLE_EQ(points[i].t_s, 50.0 + double(times[i])) << i;
+    // the head's sweep at the nominal 10 Hz: 360 deg * t / 0.1 s
+    EXPECT_NEAR(points[i].azimuth_deg, std::fmod(3600.0 * double(times[i]), 360.0), 1e-3) << i;
+  }
+  const Status mismatch = KittiScanPoints(bin, std::vector<float>(3, 0.f), 0.0, KittiScanConfig(), &points);
+  EXPECT_NE(mismatch.message.find("6400 points has 3 point times"), std::string::npos) << mismatch.message;
+}
+
+}  // namespace
+}  // namespace rotolidar

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <map>
 
 #include <unistd.h>
 
@@ -155,6 +156,52 @@ TEST(Pcap, ForeignTrafficSkippedMalformedReportedWithRecordAndOffset) {
   EXPECT_TRUE(s.ok);
   EXPECT_EQ(reader.skipped(), 3u);
   EXPECT_EQ(reader.records(), 7u);
+  // The census counts every UDP datagram by port and size, malformed VLP-16 ones included (record 5's UDP
+  // header says 512 bytes although the capture is cut), and the rest as other frames (ARP, TCP).
+  const PcapTraffic& t = reader.traffic();
+  EXPECT_EQ(t.records, 7u);
+  EXPECT_EQ(t.other_frames, 2u);
+  EXPECT_EQ(t.vlp16_data, 1u);
+  EXPECT_EQ(t.udp, (std::map<std::pair<uint16_t, std::size_t>, std::size_t>{
+                       {{53, 40}, 1}, {{2368, 1000}, 1}, {{2368, 1206}, 1}, {{8308, 512}, 2}}));
+  EXPECT_EQ(t.Describe(), "5 UDP packets: port 8308 x 2 (payload 512 B), port 53 x 1 (payload 40 B), port 2368 x 1 "
+                          "(payload 1000 B), port 2368 x 1 (payload 1206 B); 2 other frames (not UDP over IPv4)");
+  std::remove(path.c_str());
+}
+
+// An Ouster-like capture (lidar data on UDP 7502, IMU on 7503) holds no VLP-16 data: the error names the file, what
+// was expected, and the ports and payload sizes that were there. A pcap with only its file header says so.
+TEST(Pcap, NoVlp16DataNamesThePortsAndSizesSeen) {
+  const std::string path = TempPath("ouster.pcap");
+  PcapWriter writer;
+  ASSERT_TRUE(writer.Open(path).ok);
+  for (int i = 0; i < 10; ++i) {
+    LidarPacket p;
+    p.t_capture_s = 0.01 * i;
+    p.udp_port = i == 4 ? 7503 : 7502;
+    p.payload.assign(i == 4 ? 48 : 12608, uint8_t(i));
+    ASSERT_TRUE(writer.Write(p).ok);
+  }
+  ASSERT_TRUE(writer.Close().ok);
+  PcapReader reader;
+  ASSERT_TRUE(reader.Open(path).ok);
+  LidarPacket p;
+  Status s;
+  EXPECT_FALSE(reader.Next(&p, &s));
+  EXPECT_TRUE(s.ok);  // foreign traffic is skipped, not malformed
+  EXPECT_EQ(reader.traffic().vlp16_data, 0u);
+  EXPECT_EQ(reader.NoVlp16DataError().message,
+            path + ": no VLP-16 data packets (1206-byte payloads on UDP port 2368): saw 10 UDP packets: port 7502 x 9 "
+                   "(payload 12608 B), port 7503 x 1 (payload 48 B)");
+
+  ASSERT_TRUE(writer.Open(path).ok);  // header only
+  ASSERT_TRUE(writer.Close().ok);
+  ASSERT_TRUE(reader.Open(path).ok);
+  EXPECT_FALSE(reader.Next(&p, &s));
+  EXPECT_TRUE(s.ok);
+  EXPECT_EQ(reader.NoVlp16DataError().message,
+            path + ": no VLP-16 data packets (1206-byte payloads on UDP port 2368): saw no packets (the file holds a "
+                   "pcap header only)");
   std::remove(path.c_str());
 }
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "core/io/calib_yaml.hpp"
+#include "core/io/pcap.hpp"
 #include "core/io/recording.hpp"
 #include "core/io/vlp16.hpp"
 
@@ -123,6 +124,32 @@ TEST(Recording, NonIncreasingTimeIsNamed) {
   const Status s = LoadRecording(dir, &rec);
   ASSERT_FALSE(s.ok);
   EXPECT_NE(s.message.find("does not increase"), std::string::npos) << s.message;
+}
+
+// A lidar.pcap of another sensor (Ouster-like: lidar data on UDP 7502, IMU on 7503) with a position packet that
+// looks like a VLP-16's: no data packet, so no points; loading names what the capture holds.
+TEST(Recording, LidarPcapWithoutVlp16DataNamesWhatItHolds) {
+  const std::string dir = TempDir("foreign_pcap");
+  WriteSmallRecording(dir, TestCalib());
+  PcapWriter pcap;
+  ASSERT_TRUE(pcap.Open(dir + "/lidar.pcap").ok);
+  for (int i = 0; i < 4; ++i) {
+    LidarPacket p;
+    p.t_capture_s = 0.001 * (i + 1);
+    p.udp_port = i == 3 ? 7503 : 7502;
+    p.payload.assign(i == 3 ? 48 : 12608, 0);
+    ASSERT_TRUE(pcap.Write(p).ok);
+  }
+  ASSERT_TRUE(pcap.Write(EncodeVlp16PositionPacket(0.005, 0.0, 2, "$GPRMC")).ok);
+  ASSERT_TRUE(pcap.Close().ok);
+  Recording rec;
+  const Status s = LoadRecording(dir, &rec);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find(dir + "/lidar.pcap: no VLP-16 data packets"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("port 7502 x 3 (payload 12608 B), port 7503 x 1 (payload 48 B), port 8308 x 1 (payload "
+                           "512 B)"),
+            std::string::npos)
+      << s.message;
 }
 
 TEST(CalibYaml, UnknownKeyIsAnErrorWithLine) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/io/vlp16.hpp"
 #include "core/util/rng.hpp"
@@ -134,6 +135,83 @@ TEST(Vlp16Codec, DualReturnFilterKeepsOneReturn) {
     }
     ExpectMatchesTruth(points, kept);
   }
+}
+
+// One dual-return packet (12 sequences) through the codec's serializer. Per firing: lasers 0..7 carry one echo
+// in both blocks (identical distance and reflectivity: the strongest was also the last), lasers 8..11 two echoes
+// (last 5 m / reflectivity 10, strongest 2 m / 80), lasers 12..13 the same distance with different
+// reflectivities (not a duplicate: two points), lasers 14..15 no return.
+LidarPacket DualPacketWithDuplicates() {
+  Vlp16PacketEncoder encoder(Vlp16ReturnMode::kDual, 0.0);
+  Vlp16FiringSequence s;
+  for (int l = 0; l < 16; ++l) {
+    const bool same = l < 8, two = l >= 8 && l < 12, reflect_only = l == 12 || l == 13;
+    s.distance_2mm[l] = same ? 3000 : two ? 2500 : reflect_only ? 4000 : 0;
+    s.reflectivity[l] = same ? 50 : two ? 10 : reflect_only ? 30 : 0;
+    s.distance2_2mm[l] = same ? 3000 : two ? 1000 : reflect_only ? 4000 : 0;
+    s.reflectivity2[l] = same ? 50 : two ? 80 : reflect_only ? 31 : 0;
+  }
+  for (int k = 0;; ++k) {
+    s.t_s = 2.0 + k * kVlp16SequencePeriodS;
+    s.azimuth_centideg = static_cast<uint16_t>(k * 20);
+    if (std::optional<LidarPacket> p = encoder.Add(s)) return *p;
+  }
+}
+
+std::vector<LidarPoint> DecodeDual(const LidarPacket& packet, bool keep_both, Vlp16ReturnFilter filter,
+                                   std::size_t* merged) {
+  Vlp16DecoderConfig config;
+  config.keep_duplicate_dual_returns = keep_both;
+  config.return_filter = filter;
+  Vlp16Decoder decoder(LidarIntrinsics(), config);
+  std::vector<LidarPoint> points;
+  EXPECT_TRUE(decoder.Decode(packet, &points).ok);
+  *merged = decoder.merged_dual_duplicates();
+  return points;
+}
+
+TEST(Vlp16Codec, DualDuplicateReturnsBecomeOnePointFlaggedBoth) {
+  const LidarPacket packet = DualPacketWithDuplicates();
+  std::size_t merged = 0;
+  const std::vector<LidarPoint> points = DecodeDual(packet, false, Vlp16ReturnFilter::kAll, &merged);
+  // Per firing: 8 merged + 4 x 2 + 2 x 2 = 20 points; 12 firings.
+  ASSERT_EQ(points.size(), 12u * 20);
+  EXPECT_EQ(merged, 12u * 8);
+  std::size_t both = 0;
+  for (const LidarPoint& p : points) {
+    const bool duplicate_laser = p.laser_id < 8;
+    EXPECT_EQ(p.return_type == kReturnStrongestAndLast, duplicate_laser) << int(p.laser_id);
+    // 3000 x 2 mm from the laser's origin, which sits < 12 mm off the lidar origin
+    if (duplicate_laser) {
+      EXPECT_NEAR(Eigen::Vector3f(p.x_m, p.y_m, p.z_m).norm(), 6.0, 0.02);
+    }
+    both += p.return_type == kReturnStrongestAndLast;
+  }
+  EXPECT_EQ(both, merged);
+
+  // Keep both: the two copies come back (last, then strongest), nothing merged; points + merged above = this.
+  std::size_t merged_keep = 0;
+  const std::vector<LidarPoint> kept = DecodeDual(packet, true, Vlp16ReturnFilter::kAll, &merged_keep);
+  EXPECT_EQ(kept.size(), 12u * 28);
+  EXPECT_EQ(merged_keep, 0u);
+  EXPECT_EQ(kept.size(), points.size() + merged);
+  for (const LidarPoint& p : kept) EXPECT_NE(p.return_type, kReturnStrongestAndLast);
+  ASSERT_EQ(kept[0].laser_id, 0);
+  EXPECT_EQ(kept[0].return_type, kReturnLast);
+  EXPECT_EQ(kept[1].laser_id, 0);
+  EXPECT_EQ(kept[1].return_type, kReturnStrongest);
+  EXPECT_EQ(kept[0].x_m, kept[1].x_m);
+
+  // One echo a firing: the merged point passes either filter (8 + 4 + 2 per firing), as one copy did before.
+  for (Vlp16ReturnFilter filter : {Vlp16ReturnFilter::kStrongest, Vlp16ReturnFilter::kLast}) {
+    std::size_t m = 0, m_keep = 0;
+    EXPECT_EQ(DecodeDual(packet, false, filter, &m).size(), 12u * 14);
+    EXPECT_EQ(DecodeDual(packet, true, filter, &m_keep).size(), 12u * 14);
+    EXPECT_EQ(m, 12u * 8);
+  }
+  EXPECT_TRUE(Vlp16ReturnSelected(Vlp16ReturnFilter::kLast, kReturnStrongestAndLast));
+  EXPECT_FALSE(Vlp16ReturnSelected(Vlp16ReturnFilter::kLast, kReturnStrongest));
+  EXPECT_FALSE(Vlp16ReturnSelected(Vlp16ReturnFilter::kStrongest, kReturnLast));
 }
 
 // The head's clock passes the top of the hour mid-stream: rig times must continue smoothly.

@@ -71,13 +71,18 @@ void ResolveSensor(const KittiSequence& seq, const KittiRunOptions& o, KittiRunR
   }
 }
 
+/// The run's calibration: base = velodyne (no rotor, no IMU, identity extrinsics) and the sensor's range noise.
+RigCalib KittiRunCalib(const KittiRunResult& r) {
+  RigCalib calib;
+  calib.lidar.range_sigma_m = r.range_sigma_m;
+  return calib;
+}
+
 /// Feeds the picked frames to a fresh estimator; fills the per-frame parts of *r and the dense map [velo(first)].
 Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
                  KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
                  const std::function<void(double)>& progress) {
-  RigCalib calib;  // base = velodyne: no rotor, no IMU, identity extrinsics; the sensor's range noise
-  calib.lidar.range_sigma_m = r->range_sigma_m;
-  Estimator estimator(calib, o.estimator);
+  Estimator estimator(KittiRunCalib(*r), o.estimator);
   double estimator_s = 0.0;
   size_t next_report = picked.size() / 10;
   for (size_t n = 0; n < picked.size(); ++n) {
@@ -205,7 +210,7 @@ Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const st
   if (Status s = SavePointCloud(d + "/map.ply", map); !s) return s;
   if (Status s = WriteScanTable(d + "/scans.csv", r); !s) return s;
   YAML::Emitter out;
-  EmitEstimatorConfig(out, o.estimator);
+  EmitEstimatorConfig(out, ResolveFromCalib(o.estimator, KittiRunCalib(r)));  // as the estimator ran
   std::ofstream file(d + "/slam_config.yaml");
   file << "# Resolved estimator configuration of this run (rotolidar slam --kitti).\n" << out.c_str() << "\n";
   if (!file) return Status::Error(d + "/slam_config.yaml: write failed");

@@ -150,28 +150,49 @@ Status FillScenePath(const Scene& scene, CarrierConfig* carrier) {
   return Status::Ok();
 }
 
+namespace {
+
+/// True when the samples within `window` of k, all moved by `shift`, are clear of static geometry.
+bool ClearWhenMoved(const std::vector<Eigen::Vector3d>& samples, size_t k, const Eigen::Vector3d& shift,
+                    size_t window, const EmbreeScene& embree) {
+  const size_t first = k > window ? k - window : 1;
+  const size_t last = std::min(samples.size() - 1, k + window);
+  for (size_t j = first; j <= last; ++j)
+    if (StaticHitOnSegment(embree, samples[j - 1] + shift, samples[j] + shift).hit) return false;
+  return true;
+}
+
+/// True when the path near sample k (the segment k-1 -> k hit a surface with normal n) only dips less than
+/// `graze_m` into the obstacle: moved graze_m along n or against it (entering or leaving), it is clear.
+bool OnlyGrazes(const std::vector<Eigen::Vector3d>& samples, size_t k, const Eigen::Vector3d& n, double graze_m,
+                size_t window, const EmbreeScene& embree) {
+  if (!(graze_m > 0) || !(n.norm() > 0)) return false;
+  const Eigen::Vector3d shift = graze_m * n.normalized();
+  return ClearWhenMoved(samples, k, shift, window, embree) || ClearWhenMoved(samples, k, -shift, window, embree);
+}
+
+}  // namespace
+
 Status CheckCarrierPath(const CarrierConfig& carrier, const BaseMotion& motion, double duration_s,
                         const Scene& scene, const EmbreeScene& embree, const PathCheckOptions& options) {
   const size_t n = std::max<size_t>(
       1, std::min(options.max_samples, size_t(std::ceil(duration_s / options.sample_dt_s - 1e-9))));
   const double dt = duration_s / double(n);
   const std::string what = "scene '" + scene.name + "': the " + CarrierTypeName(carrier.type) + " path ";
-  Eigen::Vector3d prev = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> samples(n + 1);
+  for (size_t k = 0; k <= n; ++k) samples[k] = motion.At(double(k) * dt).T_world_base.translation();
+  const size_t window = size_t(std::ceil(options.graze_window_s / dt));
   for (size_t k = 0; k <= n; ++k) {
-    const double t = double(k) * dt;
-    const Eigen::Vector3d p = motion.At(t).T_world_base.translation();
+    const Eigen::Vector3d& p = samples[k];
     if (const std::string out = OutsideBounds(scene.bounds, p); !out.empty())
-      return Status::Error(what + "leaves the scene's bounds at t = " + TimeText(t) + ", " +
-                           Point3(p) + " (" + out + "), " + WhereOnPath(carrier, p));
-    if (k > 0) {
-      const RayHit hit = StaticHitOnSegment(embree, prev, p);
-      if (hit.hit) {
-        const Eigen::Vector3d q = prev + hit.distance_m * (p - prev).normalized();
-        return Status::Error(what + "crosses " + PrimitiveName(scene, hit.triangle_id) + " at t = " +
-                             TimeText(t) + ", " + Point3(q) + ", " + WhereOnPath(carrier, q));
-      }
-    }
-    prev = p;
+      return Status::Error(what + "leaves the scene's bounds at t = " + TimeText(double(k) * dt) + ", " + Point3(p) +
+                           " (" + out + "), " + WhereOnPath(carrier, p));
+    if (k == 0) continue;
+    const RayHit hit = StaticHitOnSegment(embree, samples[k - 1], p);
+    if (!hit.hit || OnlyGrazes(samples, k, hit.normal_world, options.graze_m, window, embree)) continue;
+    const Eigen::Vector3d q = samples[k - 1] + hit.distance_m * (p - samples[k - 1]).normalized();
+    return Status::Error(what + "crosses " + PrimitiveName(scene, hit.triangle_id) + " at t = " +
+                         TimeText(double(k) * dt) + ", " + Point3(q) + ", " + WhereOnPath(carrier, q));
   }
   return Status::Ok();
 }

@@ -71,12 +71,17 @@ TEST(SceneCarrier, EveryShippedDefaultPathStaysInsideItsScene) {
 
 TEST(SceneCarrier, TheDemoLoopFitsTheBoxRoomButNotTheLab) {
   CarrierConfig loop;  // the scripted loop around (0, 0): the box room's, the lab's corner
-  EXPECT_TRUE(Check(Load("box_room"), loop, 60.0).ok);
+  const Status box = Check(Load("box_room"), loop, 60.0);
+  EXPECT_TRUE(box.ok) << box.message;
   const Status s = Check(Load("lab"), loop, 20.0);
   ASSERT_FALSE(s.ok);
-  EXPECT_NE(s.message.find("leaves the scene's bounds at t = 0.00 s"), std::string::npos) << s.message;
-  EXPECT_NE(s.message.find("< bounds min"), std::string::npos) << s.message;
+  // It starts at (3.25, 0, 1.2), touching the lab's south wall (a graze), and a quarter lap later walks out
+  // through the west wall.
+  EXPECT_NE(s.message.find("scripted_loop path crosses primitive 'west_pier_0' at t = 5.00 s"), std::string::npos)
+      << s.message;
   EXPECT_NE(s.message.find("scripted loop around (0.00, 0.00)"), std::string::npos) << s.message;
+  loop.scripted_loop.center_x_m = 4.0, loop.scripted_loop.center_y_m = 3.5;  // around the lab's round column: through the desks
+  EXPECT_FALSE(Check(Load("lab"), loop, 20.0).ok);
 }
 
 TEST(SceneCarrier, APathThroughAWallNamesTheWaypointAndTheWall) {
@@ -151,8 +156,9 @@ TEST(RecordingDir, ANonEmptyFolderIsRefusedUnlessForced) {
   const fs::path dir = fs::temp_directory_path() / "rotolidar_prepare_recording_dir_test";
   fs::remove_all(dir);
   EXPECT_TRUE(PrepareRecordingDir(dir.string(), false).ok);  // absent
-  fs::create_directories(dir / "truth");
+  fs::create_directories(dir);
   EXPECT_TRUE(PrepareRecordingDir(dir.string(), false).ok);  // empty
+  fs::create_directories(dir / "truth");
   std::ofstream(dir / "lidar.pcap") << "old";
   std::ofstream(dir / "truth" / "base.tum") << "old";
   fs::create_directories(dir / "camera");

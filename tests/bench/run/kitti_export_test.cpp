@@ -28,6 +28,7 @@ class KittiExport : public ::testing::Test {
     fs::remove_all(*dir_);
     sim::SimConfig config = sim::DefaultSimConfig();
     config.scene = "lab";
+    config.carrier_from_scene = true;  // the lab's own walk (the default scripted loop leaves the lab)
     config.duration_s = 2.0;
     sim::SimSummary summary;
     sim_status_ = new Status(sim::RunSimulation(config, *dir_ + "/recording", &summary));

@@ -137,7 +137,7 @@ TEST(SceneCarrier, TheUrbanLoopCheckIsCheap) {
   const Status s = Check(urban, c, 115.0);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_TRUE(s.ok) << s.message;
-  EXPECT_LT(wall_s, 1.0);  // measured ~0.01 s: 5,750 rays
+  EXPECT_LT(wall_s, 1.0);  // 5,750 rays; the whole test, scene load included, took 0.13 s
 }
 
 TEST(SceneFiles, AnUnknownSceneListsTheAvailableOnes) {

@@ -1,5 +1,6 @@
 #include "sim/sim_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -159,7 +160,8 @@ bool SimConfig::Validate(std::string* error) const {
   std::string why;
   if (!rig_model.Validate(&why)) return fail("rig_model: " + why);
   // Handheld/wheeled without waypoints take the scene's default path: validated once the scene is loaded.
-  if (!UsesSceneDefaultPath(carrier) && !carrier.Validate(&why)) return fail("carrier: " + why);
+  if (!carrier_from_scene && !UsesSceneDefaultPath(carrier) && !carrier.Validate(&why))
+    return fail("carrier: " + why);
   if (!motor.Validate(&why)) return fail("motor: " + why);
   if (!imu.Validate(&why)) return fail("imu: " + why);
   if (!lidar.Validate(&why)) return fail("lidar: " + why);
@@ -184,6 +186,29 @@ std::string ResolveScenePath(const std::string& scene) {
   return dir + "/" + scene + ".yaml";
 }
 
+std::vector<std::string> AvailableScenes() {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(ResolveScenePath("")).parent_path();  // "" never exists: "<dir>/.yaml"
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->is_regular_file() && it->path().extension() == ".yaml") names.push_back(it->path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+Status FindSceneFile(const std::string& scene, std::string* path) {
+  const std::string file = ResolveScenePath(scene);
+  if (std::filesystem::is_regular_file(file)) {
+    *path = file;
+    return Status::Ok();
+  }
+  std::string names;
+  for (const std::string& n : AvailableScenes()) names += (names.empty() ? "" : ", ") + n;
+  return Status::Error("unknown scene '" + scene + "' (no file " + file + "); available scenes: " +
+                       (names.empty() ? "none found" : names) + " (or give a scene file's path)");
+}
+
 Status LoadSimConfig(const std::string& path, SimConfig* config) {
   try {
     return ParseSimConfig(path, yaml::LoadFile(path), config);
@@ -199,7 +224,10 @@ Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig
       throw yaml::ParseError(yaml::Where(path, root) + "sim config: expected a mapping");
     ParseTop(path, root, &c);
     if (const YAML::Node n = root["rig_model"]) ParseRigModelSection(path, n, &c.rig_model);
-    if (const YAML::Node n = root["carrier"]) ParseCarrierConfig(path, n, &c.carrier);
+    if (const YAML::Node n = root["carrier"]) {
+      ParseCarrierConfig(path, n, &c.carrier);
+      if (n.IsMap() && n["type"]) c.carrier_from_scene = false;  // the file names the carrier
+    }
     if (const YAML::Node n = root["motor"]) ParseMotorDriveConfig(path, n, &c.motor);
     if (const YAML::Node n = root["imu"]) ParseImuConfig(path, n, &c.imu);
     if (const YAML::Node n = root["lidar"]) ParseLidar(path, n, &c.lidar);

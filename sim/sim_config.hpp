@@ -4,6 +4,7 @@
 // errors naming file:line. The sections reuse each module's own parser (rig_model, carrier, motor, imu).
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/io/vlp16.hpp"
 #include "core/types/calib.hpp"
@@ -42,6 +43,11 @@ struct SimConfig {
   LidarIntrinsics lidar_intrinsics;  ///< the VLP-16's laser table (manual's values by default)
   ClockConfig clocks;
   CameraConfig camera;               ///< the RGB camera (sim/camera/camera_model.hpp); on by default at 30 Hz
+  /// true: the run takes the scene's default carrier (sim/scene_carrier.hpp ChooseSceneCarrier: its handheld
+  /// path, else its first path, else the scripted loop if that fits) and carrier.type is ignored. The CLI sets
+  /// it unless --carrier or a config file's carrier.type names one; a config file with carrier.type clears it.
+  /// Not a YAML key: the resolved config of a run (sim_config.yaml) names the carrier that was chosen.
+  bool carrier_from_scene = false;
 
   bool Validate(std::string* error) const;
   /// The rig's TRUE calibration, as written to calib.yaml: geometry from rig_model, IMU noise, encoder
@@ -60,6 +66,12 @@ RigCalib DefaultRigCalib();
 /// Resolves `scene` to a file: an existing path is used as is; otherwise <scenes_dir>/<scene>.yaml, with
 /// scenes_dir from $ROTOLIDAR_SCENES or the source tree's scenes/.
 std::string ResolveScenePath(const std::string& scene);
+
+/// Names of the scene files (*.yaml, without the extension) in the scenes folder ResolveScenePath uses, sorted.
+std::vector<std::string> AvailableScenes();
+
+/// ResolveScenePath; fails when no such file exists, listing AvailableScenes() in the message.
+Status FindSceneFile(const std::string& scene, std::string* path);
 
 /// Reads a YAML file whose keys override DefaultSimConfig() (only the keys given change). `rig_model` may be a
 /// mapping of overrides or a path to a rig parameter file (relative paths resolve against the config's folder).

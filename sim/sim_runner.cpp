@@ -3,6 +3,7 @@
 #include <chrono>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 
@@ -13,6 +14,7 @@
 #include "sim/lidar/position_source.hpp"
 #include "sim/rig/rig_physics.hpp"
 #include "sim/rig/rig_trace.hpp"
+#include "sim/scene_carrier.hpp"
 #include "sim/truth/truth.hpp"
 #include "sim/world/embree_scene.hpp"
 #include "sim/world/scene.hpp"
@@ -31,30 +33,32 @@ struct SimWorld {
   CarrierConfig carrier_config;  ///< the config's carrier with the scene's default path filled in
 };
 
-/// The carrier's waypoints default to the scene's own path for that carrier (scenes list handheld/wheeled/car).
-CarrierConfig CarrierWithSceneDefaults(const CarrierConfig& config, const Scene& scene) {
-  CarrierConfig c = config;
-  const auto fill = [&](const char* key, std::vector<Waypoint2d>* waypoints) {
-    const auto it = scene.default_paths.find(key);
-    if (waypoints->empty() && it != scene.default_paths.end()) *waypoints = it->second;
-  };
-  if (c.type == CarrierType::kHandheld) fill("handheld", &c.handheld.waypoints);
-  if (c.type == CarrierType::kWheeled) fill("wheeled", &c.wheeled.waypoints);
-  if (c.type == CarrierType::kCar && c.car.waypoints_file.empty()) fill("car", &c.car.waypoints);
-  return c;
+/// The run's carrier: the scene's default when the config asks for it, its path filled from the scene where the
+/// config leaves it empty, checked against the scene's bounds and static geometry before anything runs.
+Status ResolveCarrier(const SimConfig& config, const std::string& scene_path, SimWorld* world) {
+  CarrierConfig& c = world->carrier_config;
+  c = config.carrier;
+  if (config.carrier_from_scene) ChooseSceneCarrier(world->scene, &c);
+  if (Status s = FillScenePath(world->scene, &c); !s) return Status::Error(scene_path + ": " + s.message);
+  std::string why;
+  if (!c.Validate(&why)) return Status::Error(scene_path + ": carrier: " + why);
+  if (Status s = MakeCarrierMotion(c, &world->carrier); !s) return s;
+  Status s = CheckCarrierPath(c, *world->carrier, config.duration_s, world->scene, *world->embree);
+  if (!s && config.carrier_from_scene && c.type == CarrierType::kScriptedLoop)
+    return Status::Error(s.message + ". The scene offers no carrier paths (`paths:` in " + scene_path +
+                         "), and the scripted loop does not fit it: give --carrier with waypoints in --config");
+  return s;
 }
 
 Status BuildWorld(const SimConfig& config, SimWorld* world) {
-  const std::string path = ResolveScenePath(config.scene);
+  std::string path;
+  if (Status s = FindSceneFile(config.scene, &path); !s) return s;
   if (Status s = LoadScene(path, &world->scene); !s) return s;
   if (Status s = EmbreeScene::Create(world->scene, &world->embree); !s) return s;
   world->triangles = world->embree->num_triangles();
   if (Status s = CheckCasterMaterials(config.lidar, world->embree->materials()); !s) return s;
   if (Status s = RigModel::Create(config.rig_model, &world->rig); !s) return s;
-  world->carrier_config = CarrierWithSceneDefaults(config.carrier, world->scene);
-  std::string why;
-  if (!world->carrier_config.Validate(&why)) return Status::Error(path + ": carrier: " + why);
-  return MakeCarrierMotion(world->carrier_config, &world->carrier);
+  return ResolveCarrier(config, path, world);
 }
 
 Status WriteText(const std::string& path, const std::string& text) {
@@ -239,6 +243,28 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
 }
 
 }  // namespace
+
+std::vector<std::string> RecordingOutputNames() {
+  return {RecordingLayout::kCalib,  RecordingLayout::kLidar,     RecordingLayout::kImu,
+          RecordingLayout::kEncoder, RecordingLayout::kCamera,   RecordingLayout::kCameraDir,
+          RecordingLayout::kTruthDir, "sim_config.yaml",          "rig_model.xml"};
+}
+
+Status PrepareRecordingDir(const std::string& dir, bool force) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return Status::Ok();
+  if (!fs::is_directory(dir, ec)) return Status::Error(dir + ": exists and is not a folder");
+  if (fs::is_empty(dir, ec)) return Status::Ok();
+  if (!force)
+    return Status::Error(dir + ": folder is not empty (a previous run?); choose another folder, or give --force "
+                               "to replace its recording");
+  for (const std::string& name : RecordingOutputNames()) {
+    fs::remove_all(fs::path(dir) / name, ec);
+    if (ec) return Status::Error((fs::path(dir) / name).string() + ": cannot remove: " + ec.message());
+  }
+  return Status::Ok();
+}
 
 Status RunSimulation(const SimConfig& config, const std::string& recording_dir, SimSummary* summary,
                      const ProgressFn& progress) {

@@ -3,6 +3,7 @@
 // logger writes (calib.yaml, lidar.pcap, imu.csv, encoder.csv, camera.csv + camera/), plus truth/ on its own channel.
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "core/util/log.hpp"
 #include "sim/sim_config.hpp"
@@ -25,8 +26,19 @@ struct SimSummary {
 /// Called about every simulated second with the fraction done in [0, 1].
 using ProgressFn = std::function<void(double fraction)>;
 
+/// What a simulation writes into a recording folder: the recording's files and folders (core/io/recording.hpp)
+/// plus sim_config.yaml and rig_model.xml.
+std::vector<std::string> RecordingOutputNames();
+
+/// Readies `dir` for a new recording so that it never mixes two runs: Ok when it does not exist or is empty;
+/// an error naming it when it holds anything, unless `force`, which removes the previous run's recording outputs
+/// (RecordingOutputNames; other files stay). Fails naming the path when it is a file or cannot be cleared.
+Status PrepareRecordingDir(const std::string& dir, bool force);
+
 /// Simulates `config` into `recording_dir` (created; files overwritten). Fails with a message naming the file
-/// or field on bad config, scene or I/O errors.
+/// or field on bad config, scene or I/O errors; an unknown scene lists the available ones; a carrier path
+/// that leaves the scene's bounds or crosses its static geometry fails before anything is simulated
+/// (sim/scene_carrier.hpp).
 Status RunSimulation(const SimConfig& config, const std::string& recording_dir, SimSummary* summary,
                      const ProgressFn& progress = nullptr);
 

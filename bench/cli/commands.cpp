@@ -14,6 +14,7 @@
 #include "bench/run/truth_eval.hpp"
 #include "core/io/config_yaml.hpp"
 #include "core/io/yaml_util.hpp"
+#include "sim/sim_runner.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -33,7 +34,25 @@ Status LoadSlamConfig(const std::string& path, EstimatorConfig* config) {
   }
 }
 
+/// --carrier: scene (the scene's default), handheld, wheeled, car or scripted_loop.
+Status ApplyCarrierOption(const OptionParser& p, sim::SimConfig* config) {
+  const std::string name = p.Get("carrier");
+  sim::CarrierType type = sim::CarrierType::kScriptedLoop;
+  if (name == "scene") {
+    config->carrier_from_scene = true;
+    return Status::Ok();
+  }
+  if (name == "kitti" || !sim::CarrierTypeFromName(name, &type))
+    return Status::Error("--carrier: scene, handheld, wheeled, car or scripted_loop (got '" + name + "')");
+  config->carrier.type = type;
+  config->carrier_from_scene = false;
+  return Status::Ok();
+}
+
+/// The sim config of `sim` and `demo`: the built-in default, then --config's keys, then the flags. The carrier
+/// is the scene's default unless --carrier or the config file's carrier.type names one.
 Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
+  config->carrier_from_scene = true;
   if (!p.Get("config").empty())
     if (Status s = sim::LoadSimConfig(p.Get("config"), config); !s) return s;
   long seed = 0;
@@ -44,6 +63,12 @@ Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
   if (p.IsSet("duration"))
     if (Status s = p.GetDouble("duration", &config->duration_s); !s) return s;
   if (p.IsSet("scene")) config->scene = p.Get("scene");
+  if (p.IsSet("carrier"))
+    if (Status s = ApplyCarrierOption(p, config); !s) return s;
+  if (p.IsSet("camera")) {
+    if (p.Get("camera") != "on" && p.Get("camera") != "off") return Status::Error("--camera: on or off");
+    config->camera.enabled = p.Get("camera") == "on";
+  }
   if (p.IsSet("motor-speed"))
     if (Status s = p.GetDouble("motor-speed", &config->motor.profile.speed_radps); !s) return s;
   if (p.IsSet("profile") && !sim::ParseMotorProfileType(p.Get("profile"), &config->motor.profile.type))
@@ -62,6 +87,10 @@ Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
 void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
   p->Add("config", "", "-", "sim config YAML; its keys override the built-in default");
   p->Add("scene", d.scene, "-", "scene name in scenes/ or a scene file path");
+  p->Add("carrier", "scene", "-",
+         "scene (the scene's handheld path, else its first path, else scripted_loop if it fits)|handheld|"
+         "wheeled|car|scripted_loop");
+  p->Add("camera", d.camera.enabled ? "on" : "off", "-", "RGB camera: on|off (off: a much faster sim)");
   p->Add("duration", std::to_string(int(d.duration_s)), "s", "simulated time");
   p->Add("seed", std::to_string(d.seed), "-", "run seed (every random stream derives from it)");
   p->Add("motor-speed", std::to_string(d.motor.profile.speed_radps), "rad/s", "rotor speed (the seed's 2.6)");
@@ -109,8 +138,10 @@ int CmdSim(int argc, char** argv) {
                         "encoder.csv, truth/).");
   p.AddPositional("OUT_DIR", "recording folder to write");
   AddSimOptions(&p, config);
+  p.AddFlag("force", "write into a non-empty OUT_DIR, replacing its previous recording");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   if (Status s = LoadSimOverrides(p, &config); !s) return Fail(s);
+  if (Status s = sim::PrepareRecordingDir(p.Get("OUT_DIR"), p.Flag("force")); !s) return Fail(s);
   sim::SimSummary summary;
   if (Status s = sim::RunSimulation(config, p.Get("OUT_DIR"), &summary, MakeProgressPrinter("sim")); !s)
     return Fail(s);
@@ -126,11 +157,14 @@ int CmdSlam(int argc, char** argv) {
     if (std::string(argv[i]) == "--kitti" || std::string(argv[i]).rfind("--kitti=", 0) == 0)
       return CmdSlamKitti(argc, argv);
   OptionParser p("slam", "Run the SLAM core on a recording folder; writes trajectory (TUM, KITTI), map (PLY, PCD), "
-                         "per-scan timings, the resolved config, metrics.json and report.html.");
+                         "per-scan timings, the resolved config, metrics.json and report.html (with the ATE when "
+                         "the recording has truth/). --score adds the map metrics against the scene.");
   p.AddPositional("RECORDING", "recording folder (docs/recording_format.md)");
   p.Add("out", "runs/slam", "-", "output folder");
   p.Add("config", "", "-", "estimator config YAML (keys of slam_config.yaml)");
   p.Add("kitti", "", "-", "a KITTI sequence folder instead of RECORDING (`slam --kitti DIR --help`)");
+  p.AddFlag("score", "also score the map against the sim's scene (coverage, completeness, map-to-truth, "
+                     "elements; minutes on long runs, as `rotolidar mapeval`)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EstimatorConfig config;
   if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);
@@ -139,10 +173,19 @@ int CmdSlam(int argc, char** argv) {
     return Fail(s);
   std::printf("%zu scans, median %.1f ms per scan, %.1fx real time; outputs in %s\n", r.scans.size(),
               r.median_scan_ms, r.wall_time_s > 0 ? r.data_duration_s / r.wall_time_s : 0.0, p.Get("out").c_str());
-  RunEvaluation ev;  // truth and map metrics when the recording has them (bench may read truth/)
-  if (Status s = WriteSlamRunReport(p.Get("RECORDING"), p.Get("out"), r, &ev); !s) return Fail(s);
+  RunEvaluationOptions score;  // the ATE when the recording has truth (bench may read truth/); map metrics on --score
+  score.map_metrics = p.Flag("score");
+  if (score.map_metrics) std::fprintf(stderr, "scoring the map against the scene (--score)\n");
+  RunEvaluation ev;
+  if (Status s = WriteSlamRunReport(p.Get("RECORDING"), p.Get("out"), r, score, &ev); !s) return Fail(s);
   if (ev.has_truth)
     std::printf("ATE vs truth (SE(3)): RMSE %.4f m over %zu poses\n", ev.ape.stats.rmse, ev.ape.num_associated);
+  if (ev.has_map_metrics)
+    std::printf("map: map-to-truth median %.4f m, coverage %.1f %%, element size RMSE %.3f m (%.0f s)\n",
+                ev.map.map_to_truth.median_m, 100 * ev.map.coverage.total.coverage, ev.map.element_summary.rmse_m,
+                ev.map_metrics_wall_s);
+  else if (score.map_metrics)
+    std::printf("no map metrics: %s\n", ev.map_note.c_str());
   std::printf("report: %s/report.html\n", p.Get("out").c_str());
   return 0;
 }

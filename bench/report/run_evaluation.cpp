@@ -172,7 +172,7 @@ Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir
     return Status::Ok();
   }
   if (!options.map_metrics) {
-    out->map_note = "map metrics not requested";
+    out->map_note = "map metrics not computed (`rotolidar slam --score` or `rotolidar mapeval` compute them)";
     return Status::Ok();
   }
   if (out->map_points.empty()) {

@@ -153,10 +153,10 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
 }
 
 Status WriteSlamRunReport(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,
-                          RunEvaluation* evaluation) {
+                          const RunEvaluationOptions& options, RunEvaluation* evaluation) {
   RunEvaluation local;
   RunEvaluation* ev = evaluation ? evaluation : &local;
-  if (Status s = EvaluateRun(recording_dir, slam_dir, slam, "", RunEvaluationOptions{}, ev); !s) return s;
+  if (Status s = EvaluateRun(recording_dir, slam_dir, slam, "", options, ev); !s) return s;
   nlohmann::json j;
   j["recording"] = recording_dir;
   AddRunMetricsJson(slam, *ev, &j);

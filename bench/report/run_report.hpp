@@ -45,9 +45,10 @@ Status WriteRunReport(const std::string& path, const RunReportInput& input);
 /// (map_metrics.hpp ToJson). Existing members of `out` are kept.
 void AddRunMetricsJson(const SlamRunResult& slam, const RunEvaluation& evaluation, nlohmann::json* out);
 
-/// For `rotolidar slam`: evaluates the run (EvaluateRun; truth and map metrics when the recording has them),
-/// writes <slam_dir>/report.html and <slam_dir>/metrics.json, and returns the evaluation (optional).
+/// For `rotolidar slam`: evaluates the run (EvaluateRun with `options`: the trajectory against truth when the
+/// recording has it; the map metrics only when options.map_metrics, as `slam --score`: they cost minutes on long
+/// runs), writes <slam_dir>/report.html and <slam_dir>/metrics.json, and returns the evaluation (optional).
 Status WriteSlamRunReport(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,
-                          RunEvaluation* evaluation = nullptr);
+                          const RunEvaluationOptions& options, RunEvaluation* evaluation = nullptr);
 
 }  // namespace rotolidar::bench

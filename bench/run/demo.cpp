@@ -41,6 +41,7 @@ Status RunDemo(const DemoOptions& options, DemoResult* result) {
   const std::string slam_dir = options.out_dir + "/slam";
   LOG_INFO("simulating " << options.sim.duration_s << " s of the rig in scene '" << options.sim.scene << "' -> "
                          << recording);
+  if (Status s = sim::PrepareRecordingDir(recording, true); !s) return s;  // its own folder: never two runs mixed
   if (Status s = sim::RunSimulation(options.sim, recording, &result->sim, MakeProgressPrinter("sim")); !s) return s;
   LOG_INFO("running the SLAM core on the recording");
   // The deskew error needs every scan's deskewed points; RunSlam bounds how many it keeps (DeskewScanStride).

@@ -268,6 +268,7 @@ void SceneParser::ParsePaths(const YAML::Node& node, Scene* scene) const {
     const std::string context = "path '" + carrier + "'";
     if (!kv.second.IsSequence()) y_.Fail(kv.second, context + " must be a list of [x, y] or [x, y, dwell_s]");
     std::vector<Waypoint2d>& path = scene->default_paths[carrier];
+    scene->path_order.push_back(carrier);
     for (const YAML::Node& w : kv.second) {
       const bool with_dwell = w.IsSequence() && w.size() == 3;
       const Eigen::Vector3d v = y_.VecNode(w, carrier, with_dwell ? 3 : 2, context);

@@ -132,6 +132,7 @@ struct Scene {
   std::vector<DynamicObject> dynamic_objects;
   /// Default motion paths per carrier ("handheld", "wheeled", "car"), world xy; consumed by sim/rig's carriers.
   std::map<std::string, std::vector<Waypoint2d>> default_paths;
+  std::vector<std::string> path_order;  ///< keys of default_paths in the file's order (the first is a default)
   SceneLighting lighting;
   SceneView view;
 

@@ -276,7 +276,7 @@ std::string ReadAll(const std::string& path) {
 TEST(RunReport, SyntheticRunWithTruthHasEverySection) {
   const SyntheticRun run = MakeRun("truth", true);
   RunEvaluation ev;
-  const Status s = WriteSlamRunReport(run.recording, run.slam_dir, run.slam, &ev);
+  const Status s = WriteSlamRunReport(run.recording, run.slam_dir, run.slam, RunEvaluationOptions{}, &ev);  // --score
   ASSERT_TRUE(s.ok) << s.message;
   ASSERT_TRUE(ev.has_truth) << ev.truth_note;
   ASSERT_TRUE(ev.has_map_metrics) << ev.map_note;
@@ -305,10 +305,33 @@ TEST(RunReport, SyntheticRunWithTruthHasEverySection) {
   EXPECT_NEAR(j["slam"]["stage_mean_ms"]["deskew"].get<double>(), 2.0, 1e-12);
 }
 
+// `rotolidar slam` without --score: the trajectory is scored against truth (cheap), the map is not (minutes).
+TEST(RunReport, WithoutScoreTheMapIsNotScored) {
+  const SyntheticRun run = MakeRun("no_score", true);
+  RunEvaluationOptions options;
+  options.map_metrics = false;
+  RunEvaluation ev;
+  const Status s = WriteSlamRunReport(run.recording, run.slam_dir, run.slam, options, &ev);
+  ASSERT_TRUE(s.ok) << s.message;
+  ASSERT_TRUE(ev.has_truth) << ev.truth_note;
+  EXPECT_NEAR(ev.ape.stats.rmse, 0.004, 0.0004);
+  EXPECT_FALSE(ev.has_map_metrics);
+  EXPECT_NE(ev.map_note.find("--score"), std::string::npos) << ev.map_note;
+  const nlohmann::json j = nlohmann::json::parse(ReadAll(run.slam_dir + "/metrics.json"));
+  EXPECT_TRUE(j.contains("ape_translation_m"));
+  EXPECT_FALSE(j.contains("map"));
+  const std::string html = ReadAll(run.slam_dir + "/report.html");
+  std::string why;
+  ASSERT_TRUE(WellFormed(html, &why)) << why;
+  for (const char* id : {"coverage", "elements"})
+    EXPECT_EQ(html.find(std::string("<section id=\"") + id + "\">"), std::string::npos) << id;
+  EXPECT_NE(html.find("--score"), std::string::npos);
+}
+
 TEST(RunReport, RunWithoutTruthLeavesTruthSectionsOut) {
   const SyntheticRun run = MakeRun("no_truth", false);
   RunEvaluation ev;
-  const Status s = WriteSlamRunReport(run.recording, run.slam_dir, run.slam, &ev);
+  const Status s = WriteSlamRunReport(run.recording, run.slam_dir, run.slam, RunEvaluationOptions{}, &ev);
   ASSERT_TRUE(s.ok) << s.message;
   EXPECT_FALSE(ev.has_truth);
   EXPECT_FALSE(ev.has_map_metrics);

@@ -214,6 +214,7 @@ KittiSequenceInfo ExportInfo(const KittiExportOptions& o, const RigCalib& calib,
   info.sensor = "VLP-16 on a rotor (rotolidar rig)";
   info.scan_lines = 16;
   info.range_sigma_m = calib.lidar.range_sigma_m;  // calib.yaml's: the features' noise gate needs it
+  info.rotor_deg_per_scan = std::abs(calib.motor_speed_radps) * 60.0 / calib.lidar.rpm * 180.0 / M_PI;
   info.point_order = "rings top first (ring 15 .. 0 by the lasers' elevation), each ring in firing order";
   info.point_times = "velodyne_times/%06d.bin: float32 [s] after the frame's times.txt entry, one per point in the "
                      "bin's order";

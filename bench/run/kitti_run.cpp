@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -56,6 +57,7 @@ Status ScanPointsOf(const KittiSequence& seq, size_t i, Seconds t_s, const Kitti
 /// The sensor's range noise (the config's, else sequence_info.txt's, else the KITTI default) and the scan lines
 /// every frame should have (the option, else sequence_info.txt's, else 0: the first frame's).
 void ResolveSensor(const KittiSequence& seq, const KittiRunOptions& o, KittiRunResult* r) {
+  r->rotor_deg_per_scan = seq.info.rotor_deg_per_scan;
   r->range_sigma_m = seq.info.range_sigma_m > 0.0 ? seq.info.range_sigma_m : kKittiDefaultRangeSigmaM;
   r->range_sigma_source = seq.info.range_sigma_m > 0.0 ? seq.info_path : "default";
   if (o.estimator.features.range_sigma_m != kRangeSigmaFromCalib) {
@@ -71,10 +73,12 @@ void ResolveSensor(const KittiSequence& seq, const KittiRunOptions& o, KittiRunR
   }
 }
 
-/// The run's calibration: base = velodyne (no rotor, no IMU, identity extrinsics) and the sensor's range noise.
+/// The run's calibration: base = velodyne (no IMU, identity extrinsics), the sensor's range noise, and a rotary
+/// rig's rotor speed at the nominal 600 rpm head (from its angle per frame: it sets the keyframe policy).
 RigCalib KittiRunCalib(const KittiRunResult& r) {
   RigCalib calib;
   calib.lidar.range_sigma_m = r.range_sigma_m;
+  calib.motor_speed_radps = r.rotor_deg_per_scan * M_PI / 180.0 * calib.lidar.rpm / 60.0;
   return calib;
 }
 

@@ -55,6 +55,7 @@ struct KittiRunResult {
   std::string expected_lines_source; ///< "option", the sequence_info.txt path, or "first frame"
   bool point_times = false;          ///< lines split by velodyne_times/ (else by azimuth)
   double range_sigma_m = 0.0;        ///< the features' range noise used [m]
+  double rotor_deg_per_scan = 0.0;   ///< sequence_info.txt's rotor angle per frame (0: a fixed sensor) [deg]
   std::string range_sigma_source;    ///< "config", the sequence_info.txt path, or "default
   size_t frames_other_line_count = 0;  ///< frames whose line count != expected_lines
   size_t elevation_inversions = 0;     ///< summed over frames (0: every line split follows the beam order)

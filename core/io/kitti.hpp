@@ -60,6 +60,9 @@ struct KittiSequenceInfo {
   std::string sensor;       ///< e.g. "VLP-16"
   int scan_lines = 0;       ///< the sensor's scan lines (lasers) = rings per bin; 0 = not stated
   double range_sigma_m = 0.0;  ///< the sensor's range noise, 1 sigma [m]; 0 = not stated
+  /// Rotor angle a rotary rig's sensor turns through per frame [deg]; 0 = no rotor (a fixed sensor, e.g. KITTI's
+  /// own HDL-64E). The runner derives its keyframe policy from it, as the estimator does from calib.yaml.
+  double rotor_deg_per_scan = 0.0;
   std::string point_order;  ///< how a bin orders its points
   std::string point_times;  ///< where the per-point times are, and their unit and origin
   std::string frame;        ///< what the "velodyne" frame of a bin is

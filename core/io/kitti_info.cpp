@@ -85,10 +85,15 @@ Status ReadKittiSequenceInfo(const std::string& path, KittiSequenceInfo* info) {
         return Status::Error(Where(path, line) + "range_sigma_m = '" + value + "': expected a number > 0 [m]");
       continue;
     }
+    if (key == "rotor_deg_per_scan") {
+      if (!ParseNumber(value, &out.rotor_deg_per_scan) || !(out.rotor_deg_per_scan >= 0.0))
+        return Status::Error(Where(path, line) + "rotor_deg_per_scan = '" + value + "': expected a number >= 0 [deg]");
+      continue;
+    }
     std::string* field = nullptr;
     for (auto& [name, target] : TextFields(&out)) field = key == name ? target : field;
     if (field == nullptr)
-      return Status::Error(Where(path, line) + "unknown key '" + key + "' (sensor scan_lines range_sigma_m " +
+      return Status::Error(Where(path, line) + "unknown key '" + key + "' (sensor scan_lines range_sigma_m rotor_deg_per_scan " +
                            "point_order point_times frame deskew returns source)");
     *field = value;
   }
@@ -106,6 +111,7 @@ Status WriteKittiSequenceInfo(const std::string& path, const KittiSequenceInfo& 
   if (!copy.sensor.empty()) text += "sensor: " + copy.sensor + "\n";
   if (copy.scan_lines > 0) text += "scan_lines: " + std::to_string(copy.scan_lines) + "\n";
   if (copy.range_sigma_m > 0.0) text += "range_sigma_m: " + FormatNumber(copy.range_sigma_m) + "\n";
+  if (copy.rotor_deg_per_scan > 0.0) text += "rotor_deg_per_scan: " + FormatNumber(copy.rotor_deg_per_scan) + "\n";
   for (size_t k = 1; k < fields.size(); ++k)
     if (!fields[k].second->empty()) text += std::string(fields[k].first) + ": " + *fields[k].second + "\n";
   return WriteText(path, text);

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/run/kitti_run.hpp"
+#include "tests/common/kitti00_reference.hpp"
 #include "tests/common/test_data.hpp"
 
 namespace rotolidar::bench {
@@ -20,7 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr size_t kFrames = 11;  ///< kitti00 holds velodyne/000000.bin .. 000010.bin
+using namespace testdata;  // NOLINT: the kitti00 references and bounds
+constexpr size_t kFrames = kKitti00Frames;
 
 /// The runner's inputs; the poses file is ORB-SLAM2's trajectory (cam0 convention, frames 0-10).
 KittiSequencePaths Kitti00Paths(const std::string& dir) {
@@ -28,20 +30,6 @@ KittiSequencePaths Kitti00Paths(const std::string& dir) {
           dir + "/orbslam2_stereo_00_frames_0-10_cam0.txt"};
 }
 
-// Per-step bounds against either stereo reference [m, deg] (see their use below).
-constexpr double kMaxStereoStepM = 0.045;
-constexpr double kMaxStereoStepDeg = 0.3;
-
-double Rms(const std::vector<double>& v) {
-  double s = 0.0;
-  for (double x : v) s += x * x;
-  return v.empty() ? 0.0 : std::sqrt(s / double(v.size()));
-}
-
-double TranslationError(const Pose3& a, const Pose3& b) { return (a.translation() - b.translation()).norm(); }
-double RotationErrorDeg(const Pose3& a, const Pose3& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
-}
 
 class Kitti00Run : public ::testing::Test {
  protected:
@@ -81,16 +69,6 @@ TEST_F(Kitti00Run, BinsSplitIntoSixtyFourDescendingLinesAndPosesConvert) {
     EXPECT_LT(TranslationError(mine, velo[k]), 1e-6) << k;  // the shipped file has 10 significant digits
     EXPECT_LT(RotationErrorDeg(mine, velo[k]), 1e-5) << k;
   }
-}
-
-/// T_velo(k)_velo(k+1), k = 0..9, of a cam0 poses file of frames 0-10: Tr^-1 * P_k^-1 * P_k+1 * Tr.
-Status ReadVeloSteps(const std::string& path, const Pose3& T_cam0_velo, std::vector<Pose3>* steps) {
-  std::vector<Pose3> cam0;
-  if (Status s = ReadKittiPoses(path, &cam0); !s) return s;
-  if (cam0.size() != kFrames) return Status::Error(path + ": expected 11 poses, got " + std::to_string(cam0.size()));
-  for (size_t k = 0; k + 1 < cam0.size(); ++k)
-    steps->push_back(Cam0ToVeloPose(T_cam0_velo, cam0[k].inverse() * cam0[k + 1]));
-  return Status::Ok();
 }
 
 /// The runner's files exist and trajectory.kitti starts at the identity.

@@ -25,6 +25,7 @@ Case RegisterBothWays(const Vector6d& offset, double reuse_m) {
   const LocalMap map = MapOf(scene, rng);
   const FeatureSet scan = Sample(scene, 4.0, 5.0, 0.01, kTruth, rng);
   ScanToMapConfig config;
+  config.neighbour_reuse_m = 0.0;  // exact: a set is reused only while provably still the k nearest
   Case c;
   c.features = scan.edge.size() + scan.planar.size();
   c.exact = Register(scan, map, PoseBoxPlus(kTruth, offset), config);

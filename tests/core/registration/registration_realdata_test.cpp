@@ -26,6 +26,7 @@
 #include "core/io/kitti.hpp"
 #include "core/pipeline/scan_matcher.hpp"
 #include "core/registration/scan_to_map.hpp"
+#include "tests/common/kitti00_reference.hpp"
 #include "tests/common/test_data.hpp"
 
 namespace rotolidar {
@@ -111,10 +112,6 @@ std::vector<Pose3> LoadPoses(const std::string& path) {
   return poses;
 }
 
-double TranslationError(const Pose3& a, const Pose3& b) { return (a.translation() - b.translation()).norm(); }
-double RotationErrorDeg(const Pose3& a, const Pose3& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
-}
 
 LocalMap SingleKeyframeMap(const FeatureSet& features) {
   LocalMapConfig config;
@@ -135,7 +132,8 @@ std::vector<Eigen::Vector3d> GicpInput(const Cloud& raw, double min_range_m, dou
   return VoxelDownsample(points, voxel_m);
 }
 
-constexpr size_t kKittiFrames = 11;  ///< kitti00 holds velodyne/000000.bin .. 000010.bin
+using namespace testdata;  // NOLINT: the kitti00 references and bounds
+constexpr size_t kKittiFrames = kKitti00Frames;
 
 struct KittiFrames {
   std::vector<FeatureSet> features;                      ///< PCA features per frame (LiDAR frame of that scan)
@@ -144,18 +142,6 @@ struct KittiFrames {
   std::vector<Pose3> orb, sptam, official;
   std::string error;                                     ///< non-empty when a file is missing or short
 };
-
-/// LiDAR-frame steps of a cam0 poses file of frames 0..10: T_velo(k)_velo(k+1) = Tr^-1 * P_k^-1 * P_k+1 * Tr, with
-/// P_k = T_cam0(0)_cam0(k) and Tr = T_cam0_velo (calib_00.txt). Returns "" or why it failed.
-std::string LoadReference(const std::string& path, const Pose3& T_cam0_velo, std::vector<Pose3>* steps) {
-  std::vector<Pose3> cam0;
-  if (const Status s = ReadKittiPoses(path, &cam0); !s) return s.message;
-  if (cam0.size() != kKittiFrames)
-    return path + ": expected " + std::to_string(kKittiFrames) + " poses, got " + std::to_string(cam0.size());
-  for (size_t k = 0; k + 1 < cam0.size(); ++k)
-    steps->push_back(Cam0ToVeloPose(T_cam0_velo, cam0[k].inverse() * cam0[k + 1]));
-  return "";
-}
 
 KittiFrames LoadKitti(const std::string& dir) {
   KittiFrames k;
@@ -168,8 +154,12 @@ KittiFrames LoadKitti(const std::string& dir) {
       {"orbslam2_stereo_00_frames_0-10_cam0.txt", &k.orb},
       {"sptam_stereo_00_frames_0-10_cam0.txt", &k.sptam},
       {"gt_poses_00_frames_0-10_cam0.txt", &k.official}};
-  for (const auto& [file, ref] : refs)
-    if (k.error = LoadReference(dir + file, calib.T_cam0_velo, ref); !k.error.empty()) return k;
+  for (const auto& [file, ref] : refs) {
+    if (const Status s = ReadVeloSteps(dir + file, calib.T_cam0_velo, ref); !s) {
+      k.error = s.message;
+      return k;
+    }
+  }
   for (size_t i = 0; i < kKittiFrames; ++i) {
     char name[32];
     std::snprintf(name, sizeof(name), "velodyne/%06zu.bin", i);
@@ -212,20 +202,7 @@ struct StepError {
 };
 StepError Diff(const Pose3& a, const Pose3& b) { return {TranslationError(a, b), RotationErrorDeg(a, b)}; }
 
-// Bounds against the stereo references, which are estimates too: ORB-SLAM2 and S-PTAM disagree with each other by
-// 0.9-3.7 cm (RMS 2.7 cm) and 0.05-0.24 deg per step on these frames. Per step (either reference): 4.5 cm and
-// 0.3 deg, just above that disagreement (measured: <= 2.8 cm / 0.15 deg from ORB-SLAM2, <= 4.0 cm / 0.25 deg from
-// S-PTAM). Over the ten steps: our RMS distance to each reference must stay below the references' RMS distance to
-// each other (measured 1.9 and 2.1 cm vs 2.7 cm), i.e. we are no farther from either than they are from each
-// other. A lost or half-converged step (off by a good part of the ~0.75 m step) fails both by far.
-constexpr double kMaxStereoStepM = 0.045;
-constexpr double kMaxStereoStepDeg = 0.3;
-
-double Rms(const std::vector<double>& v) {
-  double s = 0.0;
-  for (double x : v) s += x * x;
-  return v.empty() ? 0.0 : std::sqrt(s / double(v.size()));
-}
+// Bounds: kMaxStereoStepM / kMaxStereoStepDeg and the RMS rule (tests/common/kitti00_reference.hpp).
 
 ScanMatcherConfig KittiGicpConfig() {
   ScanMatcherConfig c;

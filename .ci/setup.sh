@@ -62,6 +62,10 @@ run_tests() {
   local skipped
   skipped=$(grep -c '(Skipped)$' "$log" || true)
   rm -f "$log"
+  # ctest prints no output of skipped tests: show each distinct skip reason once.
+  if [ "$skipped" -gt 0 ] && [ -f "$BUILD_DIR/Testing/Temporary/LastTest.log" ]; then
+    grep -h -o '\[realdata\] skipped: .*' "$BUILD_DIR/Testing/Temporary/LastTest.log" | sort -u | head -n 8 || true
+  fi
   if [ ! -d "$ROTOLIDAR_DATA" ]; then
     echo "[setup] real data: $ROTOLIDAR_DATA does not exist; $skipped tests skipped (label realdata: they need" \
          "ROTOLIDAR_DATA pointing at the real-data folder)"

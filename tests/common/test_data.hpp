@@ -27,7 +27,7 @@ inline std::string FindDataFolder(const std::string& folder, std::string* dir) {
   const char* root = std::getenv("ROTOLIDAR_DATA");
   if (root == nullptr || *root == '\0')
     return "ROTOLIDAR_DATA is not set (point it at the real-data folder to run this test)";
-  *dir = std::string(root) + "/" + folder;
+  *dir = folder.empty() ? std::string(root) : std::string(root) + "/" + folder;
   std::error_code ec;
   if (!std::filesystem::is_directory(*dir, ec))
     return *dir + " does not exist (ROTOLIDAR_DATA=" + root +

@@ -142,18 +142,11 @@ std::vector<std::pair<double, int>> ReadRows(const std::string& csv_path) {
   return rows;
 }
 
-// Dual-return packets whose last return (even blocks) is at 5 m and strongest (odd blocks) at 2 m: --return and
-// the range limits select the rows.
-TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
+/// Writes 12 x 20 dual-return firing sequences, all like `s` (azimuth stepping 0.2 deg), as a pcap at `path`.
+void WriteDualPcap(const std::string& path, Vlp16FiringSequence s) {
   Vlp16PacketEncoder encoder(Vlp16ReturnMode::kDual, 0.0);
-  const std::string pcap = Prefix("dual") + ".pcap";
   PcapWriter writer;
-  ASSERT_TRUE(writer.Open(pcap).ok);
-  Vlp16FiringSequence s;
-  s.distance_2mm.fill(2500);   // last: 5 m
-  s.distance2_2mm.fill(1000);  // strongest: 2 m
-  s.reflectivity.fill(10);
-  s.reflectivity2.fill(80);
+  ASSERT_TRUE(writer.Open(path).ok);
   for (int k = 0; k < 12 * 20; ++k) {
     s.t_s = k * kVlp16SequencePeriodS;
     s.azimuth_centideg = static_cast<uint16_t>((k * 20) % 36000);
@@ -162,6 +155,18 @@ TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
     }
   }
   ASSERT_TRUE(writer.Close().ok);
+}
+
+// Dual-return packets whose last return (even blocks) is at 5 m and strongest (odd blocks) at 2 m: --return and
+// the range limits select the rows.
+TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
+  const std::string pcap = Prefix("dual") + ".pcap";
+  Vlp16FiringSequence s;
+  s.distance_2mm.fill(2500);   // last: 5 m
+  s.distance2_2mm.fill(1000);  // strongest: 2 m
+  s.reflectivity.fill(10);
+  s.reflectivity2.fill(80);
+  ASSERT_NO_FATAL_FAILURE(WriteDualPcap(pcap, s));
   const std::size_t per_return = 12 * 20 * 16;
   struct Case {
     Vlp16ReturnFilter filter;
@@ -191,20 +196,11 @@ TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
   }
 }
 
-}  // namespace
-}  // namespace rotolidar::bench
-
-namespace rotolidar::bench {
-namespace {
-
 // Dual-return packets whose two blocks carry the same echo (5 m, reflectivity 40) for lasers 0..9 and two echoes
 // (last 5 m, strongest 2 m) for lasers 10..15: the duplicates are one row each (return 2), counted in the summary;
 // keep_duplicate_dual_returns brings the second copy back.
 TEST(Decode, DualDuplicatesAreOneRowAndCounted) {
-  Vlp16PacketEncoder encoder(Vlp16ReturnMode::kDual, 0.0);
   const std::string pcap = Prefix("dual_dup") + ".pcap";
-  PcapWriter writer;
-  ASSERT_TRUE(writer.Open(pcap).ok);
   Vlp16FiringSequence s;
   s.distance_2mm.fill(2500);
   s.reflectivity.fill(40);
@@ -212,14 +208,7 @@ TEST(Decode, DualDuplicatesAreOneRowAndCounted) {
     s.distance2_2mm[l] = l < 10 ? 2500 : 1000;
     s.reflectivity2[l] = l < 10 ? 40 : 90;
   }
-  for (int k = 0; k < 12 * 20; ++k) {
-    s.t_s = k * kVlp16SequencePeriodS;
-    s.azimuth_centideg = static_cast<uint16_t>((k * 20) % 36000);
-    if (auto p = encoder.Add(s)) {
-      ASSERT_TRUE(writer.Write(*p).ok);
-    }
-  }
-  ASSERT_TRUE(writer.Close().ok);
+  ASSERT_NO_FATAL_FAILURE(WriteDualPcap(pcap, s));
   const std::size_t firings = 12 * 20;
   DecodeOptions options;
   options.input_path = pcap;

@@ -1,6 +1,7 @@
 // eval and decode: the measurement commands.
 #include <cstdio>
 #include <iostream>
+#include <sstream>
 
 #include "bench/cli/commands.hpp"
 #include "bench/cli/options.hpp"
@@ -9,6 +10,13 @@
 
 namespace rotolidar::bench {
 namespace {
+
+/// A default for the help table, printed as C++ prints it (0.4, 130).
+std::string FormatNumber(double value) {
+  std::ostringstream os;
+  os << value;
+  return os.str();
+}
 
 int Usage(const std::string& message) {
   std::cerr << "error: " << message << "\n";
@@ -69,8 +77,9 @@ int CmdDecode(int argc, char** argv) {
   p.Add("out", "decoded", "-", "output prefix");
   p.AddFlag("raw", "input is headerless concatenated 1206-byte payloads (no pcap)");
   p.Add("return", "all", "-", "all | strongest | last");
-  p.Add("min-range", "0.4", "m", "drop closer returns");
-  p.Add("max-range", "130", "m", "drop farther returns");
+  const Vlp16DecoderConfig defaults;
+  p.Add("min-range", FormatNumber(defaults.min_range_m), "m", "drop closer returns");
+  p.Add("max-range", FormatNumber(defaults.max_range_m), "m", "drop farther returns");
   p.Add("clock-offset", "0", "s", "rig time = VLP-16 time past the hour + this");
   p.Add("cut-azimuth", "0", "deg", "revolutions start where the azimuth crosses this");
   p.Add("revolution", "-1", "-", "write only this revolution (0 = first, usually partial); -1 = all points");
@@ -83,11 +92,12 @@ int CmdDecode(int argc, char** argv) {
   o.output_prefix = p.Get("out");
   o.raw = p.Flag("raw");
   o.strict = p.Flag("strict");
-  o.keep_duplicate_dual_returns = p.Flag("keep-dual-duplicates");
-  if (!ParseReturnFilter(p.Get("return"), &o.return_filter)) return Usage("decode: --return: all, strongest or last");
+  o.decoder.keep_duplicate_dual_returns = p.Flag("keep-dual-duplicates");
+  if (!ParseReturnFilter(p.Get("return"), &o.decoder.return_filter)) return Usage("decode: --return: all, strongest or last");
   long revolution = -1;
-  for (const Status& s : {p.GetDouble("min-range", &o.min_range_m), p.GetDouble("max-range", &o.max_range_m),
-                          p.GetDouble("clock-offset", &o.lidar_clock_offset_s),
+  for (const Status& s : {p.GetDouble("min-range", &o.decoder.min_range_m),
+                          p.GetDouble("max-range", &o.decoder.max_range_m),
+                          p.GetDouble("clock-offset", &o.decoder.lidar_clock_offset_s),
                           p.GetDouble("cut-azimuth", &o.cut_azimuth_deg), p.GetInt("revolution", &revolution)})
     if (!s) return Usage(s.message);
   o.revolution = int(revolution);

@@ -111,11 +111,11 @@ Status WriteResolvedOptions(const DecodeOptions& o) {
   std::ofstream out(path);
   out.precision(17);
   out << "input_path: \"" << o.input_path << "\"\nraw: " << (o.raw ? "true" : "false")
-      << "\nreturn_filter: " << FilterName(o.return_filter) << "\nmin_range_m: " << o.min_range_m
-      << "\nmax_range_m: " << o.max_range_m << "\nlidar_clock_offset_s: " << o.lidar_clock_offset_s
+      << "\nreturn_filter: " << FilterName(o.decoder.return_filter) << "\nmin_range_m: " << o.decoder.min_range_m
+      << "\nmax_range_m: " << o.decoder.max_range_m << "\nlidar_clock_offset_s: " << o.decoder.lidar_clock_offset_s
       << "\nepoch_unix_s: " << o.epoch_unix_s << "\ncut_azimuth_deg: " << o.cut_azimuth_deg
       << "\nrevolution: " << o.revolution << "\nstrict: " << (o.strict ? "true" : "false")
-      << "\nkeep_duplicate_dual_returns: " << (o.keep_duplicate_dual_returns ? "true" : "false") << "\n";
+      << "\nkeep_duplicate_dual_returns: " << (o.decoder.keep_duplicate_dual_returns ? "true" : "false") << "\n";
   return out ? Status::Ok() : Status::Error(path + ": cannot write");
 }
 
@@ -137,8 +137,9 @@ Status NoPointsError(const DecodeOptions& o, const PacketStream& stream, const D
     return Status::Error(o.input_path + ": no decodable VLP-16 data packet" + malformed);
   if (s.points == 0)
     return Status::Error(o.input_path + ": " + std::to_string(s.packets) + " data packets gave 0 points inside " +
-                         "the range limits [" + std::to_string(o.min_range_m) + ", " + std::to_string(o.max_range_m) +
-                         "] m with return filter " + FilterName(o.return_filter) + malformed);
+                         "the range limits [" + std::to_string(o.decoder.min_range_m) + ", " +
+                         std::to_string(o.decoder.max_range_m) + "] m with return filter " +
+                         FilterName(o.decoder.return_filter) + malformed);
   return Status::Error(o.input_path + ": revolution " + std::to_string(o.revolution) + " not found: the input has " +
                        std::to_string(s.scans) + " scans (0 .. " + std::to_string(s.scans - 1) + ")");
 }
@@ -152,23 +153,16 @@ bool DecodeOptions::Validate(std::string* error) const {
   };
   if (input_path.empty()) return fail("input_path is empty");
   if (output_prefix.empty()) return fail("output_prefix is empty");
-  if (!(min_range_m >= 0.0) || !(max_range_m > min_range_m)) return fail("need 0 <= min_range_m < max_range_m");
   if (!std::isfinite(cut_azimuth_deg)) return fail("cut_azimuth_deg must be finite");
   if (revolution < -1) return fail("revolution must be >= -1");
-  return true;
+  return decoder.Validate(error);
 }
 
 Status RunDecode(const DecodeOptions& o, DecodeSummary* summary) {
   *summary = DecodeSummary();
   std::string error;
   if (!o.Validate(&error)) return Status::Error(error);
-  Vlp16DecoderConfig config;
-  config.min_range_m = o.min_range_m;
-  config.max_range_m = o.max_range_m;
-  config.return_filter = o.return_filter;
-  config.lidar_clock_offset_s = o.lidar_clock_offset_s;
-  config.keep_duplicate_dual_returns = o.keep_duplicate_dual_returns;
-  if (!config.Validate(&error)) return Status::Error(error);
+  const Vlp16DecoderConfig& config = o.decoder;
   PacketStream stream;
   if (Status s = stream.Open(o); !s) return s;
   PointWriter writer;

@@ -14,17 +14,12 @@ struct DecodeOptions {
   std::string input_path;     ///< a .pcap/.pcapng file, or concatenated 1206-byte payloads with raw = true
   std::string output_prefix;  ///< writes <prefix>.csv, <prefix>.ply and <prefix>.decode.yaml (resolved options)
   bool raw = false;
-  Vlp16ReturnFilter return_filter = Vlp16ReturnFilter::kAll;
-  double min_range_m = 0.4;
-  double max_range_m = 130.0;
-  double lidar_clock_offset_s = 0.0;  ///< rig time = VLP-16 time past the hour (unwrapped) + this [s]
+  /// Range limits, return filter, clock offset and dual-return duplicates, as the core decoder takes them.
+  Vlp16DecoderConfig decoder;
   double epoch_unix_s = 0.0;          ///< pcap only: record time - this = t_capture_s [s]
   double cut_azimuth_deg = 0.0;       ///< revolutions start where the azimuth crosses this [deg]
   int revolution = -1;  ///< write only this scan (0 = the first, usually partial, scan); -1 = every point
   bool strict = false;  ///< stop at the first malformed packet/record instead of counting it
-  /// Dual-return input: keep both copies of an echo that is both the strongest and the last (default: one point,
-  /// return 2; Vlp16DecoderConfig::keep_duplicate_dual_returns).
-  bool keep_duplicate_dual_returns = false;
   bool Validate(std::string* error) const;
 };
 

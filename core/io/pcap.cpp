@@ -10,6 +10,7 @@
 #include <iterator>
 
 #include "core/io/vlp16.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 namespace {
@@ -62,10 +63,13 @@ uint16_t Ipv4HeaderChecksum(const uint8_t* header, std::size_t bytes) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-PcapWriter::~PcapWriter() { Close(); }
+// A destructor cannot return the flush's outcome: call Close() to handle it; here it is only logged.
+PcapWriter::~PcapWriter() {
+  if (Status s = Close(); !s) LOG_ERROR(s.message << " (closed by the destructor)");
+}
 
 Status PcapWriter::Open(const std::string& path, double epoch_unix_s) {
-  Close();
+  if (Status s = Close(); !s) return s;
   pcap_t* pcap = pcap_open_dead(DLT_EN10MB, 65535);
   if (pcap == nullptr) return Status::Error(path + ": pcap_open_dead failed");
   pcap_dumper_t* dumper = pcap_dump_open(pcap, path.c_str());

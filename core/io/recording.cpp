@@ -8,6 +8,7 @@
 #include "core/io/calib_yaml.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/pcap.hpp"
+#include "core/util/log.hpp"
 
 namespace fs = std::filesystem;
 
@@ -125,7 +126,10 @@ struct RecordingWriter::Impl {
 };
 
 RecordingWriter::RecordingWriter() : impl_(std::make_unique<Impl>()) {}
-RecordingWriter::~RecordingWriter() { Close(); }
+// A destructor cannot return the flush's outcome: call Close() to handle it; here it is only logged.
+RecordingWriter::~RecordingWriter() {
+  if (Status s = Close(); !s) LOG_ERROR(s.message << " (closed by the destructor)");
+}
 
 Status RecordingWriter::Open(const std::string& dir, const RigCalib& calib) {
   dir_ = dir;

@@ -156,8 +156,8 @@ enum class Vlp16ReturnFilter { kAll = 0, kStrongest = 1, kLast = 2 };
 bool Vlp16ReturnSelected(Vlp16ReturnFilter filter, uint8_t return_type);
 
 struct Vlp16DecoderConfig {
-  double min_range_m = 0.4;    ///< closer returns are dropped [m] (the sensor's blind zone)
-  double max_range_m = 130.0;  ///< farther returns are dropped [m] (rated 100 m; real units report up to ~130 m)
+  double min_range_m = kVlp16BlindZoneM;         ///< closer returns are dropped [m]
+  double max_range_m = kVlp16MaxReportedRangeM;  ///< farther returns are dropped [m]
   Vlp16ReturnFilter return_filter = Vlp16ReturnFilter::kAll;  ///< keeps points with Vlp16ReturnSelected
   double lidar_clock_offset_s = 0.0;  ///< rig time = unwrapped us past the hour * 1e-6 + this [s]
   /// Dual mode: when a firing's two blocks carry the same echo (identical distance and reflectivity: the

@@ -142,37 +142,38 @@ bool FitVisiblePlane(const Eigen::Vector3d& view_scan, const ScanToMapConfig& c,
 
 /// Correspondences of every scan edge and planar point at the pose T_map_scan (neighbour sets from *cache where
 /// still exact).
-Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan, const ScanToMapConfig& c,
-                    MatchCache* cache) {
+/// For each point of one feature class: its k map neighbours (reused while the point stays within
+/// neighbour_reuse_m), a local fit decided once per neighbour set (`fit`: true = accepted), and `emit` for each
+/// accepted one. Points with fewer than k neighbours within max_neighbour_distance_m are skipped.
+template <class Points, class FitFn, class EmitFn>
+void MatchClass(const Points& points, FeatureKind kind, const LocalMap& map, const Pose3& T_map_scan,
+                const ScanToMapConfig& c, std::vector<NeighbourSet>* sets, int* searches, FitFn fit, EmitFn emit) {
   using Fit = NeighbourSet::Fit;
-  Matches m;
   const int k = c.num_neighbours;
   const float max_sq = float(c.max_neighbour_distance_m * c.max_neighbour_distance_m);
   const float bound_sq = std::nextafter(max_sq, std::numeric_limits<float>::infinity());  // k-th == max passes
-  for (size_t i = 0; i < scan.edge.points.size(); ++i) {
-    const auto& pt = scan.edge.points[i];
-    const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
-    NeighbourSet& s = cache->edges[i];
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d p_scan(points[i].x, points[i].y, points[i].z);
+    NeighbourSet& s = (*sets)[i];
     const double kth_sq =
-        KthSquaredDistance(map, FeatureKind::kEdge, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s,
-                           &cache->searches);
+        KthSquaredDistance(map, kind, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s, searches);
     if (int(s.points.size()) < k || kth_sq > max_sq) continue;
-    if (s.fit == Fit::kUnknown)
-      s.fit = FitLine(s.points, c.min_line_eigen_ratio, &s.a_or_n, &s.u) ? Fit::kAccepted : Fit::kRejected;
-    if (s.fit == Fit::kAccepted) m.edges.push_back({p_scan, s.a_or_n, s.u});
+    if (s.fit == Fit::kUnknown) s.fit = fit(&s) ? Fit::kAccepted : Fit::kRejected;
+    if (s.fit == Fit::kAccepted) emit(p_scan, s);
   }
-  for (size_t i = 0; i < scan.planar.points.size(); ++i) {
-    const auto& pt = scan.planar.points[i];
-    const Eigen::Vector3d p_scan(pt.x, pt.y, pt.z);
-    NeighbourSet& s = cache->planes[i];
-    const double kth_sq =
-        KthSquaredDistance(map, FeatureKind::kPlanar, T_map_scan * p_scan, k, bound_sq, c.neighbour_reuse_m, &s,
-                           &cache->searches);
-    if (int(s.points.size()) < k || kth_sq > max_sq) continue;
-    if (s.fit == Fit::kUnknown)
-      s.fit = FitVisiblePlane(T_map_scan.translation() - s.q_map, c, &s) ? Fit::kAccepted : Fit::kRejected;
-    if (s.fit == Fit::kAccepted) m.planes.push_back({p_scan, s.a_or_n, s.d_m});
-  }
+}
+
+Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_map_scan, const ScanToMapConfig& c,
+                    MatchCache* cache) {
+  Matches m;
+  MatchClass(
+      scan.edge.points, FeatureKind::kEdge, map, T_map_scan, c, &cache->edges, &cache->searches,
+      [&](NeighbourSet* s) { return FitLine(s->points, c.min_line_eigen_ratio, &s->a_or_n, &s->u); },
+      [&](const Eigen::Vector3d& p, const NeighbourSet& s) { m.edges.push_back({p, s.a_or_n, s.u}); });
+  MatchClass(
+      scan.planar.points, FeatureKind::kPlanar, map, T_map_scan, c, &cache->planes, &cache->searches,
+      [&](NeighbourSet* s) { return FitVisiblePlane(T_map_scan.translation() - s->q_map, c, s); },
+      [&](const Eigen::Vector3d& p, const NeighbourSet& s) { m.planes.push_back({p, s.a_or_n, s.d_m}); });
   return m;
 }
 

@@ -13,13 +13,19 @@
 
 namespace rotolidar {
 
+/// VLP-16 range limits (VLP-16 user manual): returns inside the blind zone are dropped; rated range 100 m; real
+/// units report returns up to ~130 m. The decoder's filter, the calibration and `rotolidar decode` start from these.
+constexpr double kVlp16BlindZoneM = 0.4;
+constexpr double kVlp16RatedRangeM = 100.0;
+constexpr double kVlp16MaxReportedRangeM = 130.0;
+
 /// VLP-16 laser geometry (manual Table 9-1), indexed by laser ID (firing order).
 struct LidarIntrinsics {
   std::array<double, 16> elevation_deg{-15, 1, -13, 3, -11, 5, -9, 7, -7, 9, -5, 11, -3, 13, -1, 15};
   std::array<double, 16> vertical_offset_m{0.0112, -0.0007, 0.0097, -0.0022, 0.0081, -0.0037, 0.0066, -0.0051,
                                            0.0051, -0.0066, 0.0037, -0.0081, 0.0022, -0.0097, 0.0007, -0.0112};
-  double min_range_m = 0.4;    ///< returns closer than this are dropped by the decoder
-  double max_range_m = 100.0;  ///< VLP-16 rated range
+  double min_range_m = kVlp16BlindZoneM;   ///< returns closer than this are dropped by the decoder [m]
+  double max_range_m = kVlp16RatedRangeM;  ///< the sensor's rated range [m]
   /// 1-sigma range noise [m]. The estimator's feature noise gate uses it unless its config sets one
   /// (features.range_sigma_m). 0.01 m: a real VLP-16 on matte surfaces (the manual's "+-3 cm typical" is an
   /// accuracy bound, not a sigma); the sim writes its caster's sigma here.

@@ -1,9 +1,11 @@
 #pragma once
 // Minimal logging and an always-on check for programmer errors (not assert, which vanishes in Release).
-// Library code never exits: expected failures are returned as values (result structs, Status).
+// Library code never exits: expected failures are returned as values (result structs, Status in status.hpp).
 #include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 
@@ -12,15 +14,6 @@ enum class LogLevel { kDebug = 0, kInfo = 1, kWarn = 2, kError = 3, kQuiet = 4 }
 void SetLogLevel(LogLevel level);
 LogLevel GetLogLevel();
 void LogMessage(LogLevel level, const std::string& message);  ///< thread-safe, to stderr
-
-/// A success flag plus a message that names the file, line or field. Loaders return this or carry it.
-struct Status {
-  bool ok = true;
-  std::string message;
-  static Status Ok() { return {}; }
-  static Status Error(std::string msg) { return {false, std::move(msg)}; }
-  explicit operator bool() const { return ok; }
-};
 
 /// Thrown only by ROTOLIDAR_CHECK: a broken invariant inside the library (a bug), never bad input.
 struct InternalError : std::logic_error {

@@ -117,7 +117,7 @@ TEST(Decode, OneRevolutionAndErrors) {
   EXPECT_FALSE(s.ok);
   EXPECT_NE(s.message.find(".missing"), std::string::npos);
   options.input_path = raw;
-  options.max_range_m = 0.1;
+  options.decoder.max_range_m = 0.1;
   EXPECT_FALSE(RunDecode(options, &summary).ok);
   Vlp16ReturnFilter f;
   EXPECT_TRUE(ParseReturnFilter("last", &f));
@@ -180,8 +180,8 @@ TEST(Decode, ReturnSelectionAndRangeLimitsInDualMode) {
     DecodeOptions options;
     options.input_path = pcap;
     options.output_prefix = Prefix("dual_out");
-    options.return_filter = c.filter;
-    options.min_range_m = c.min_range_m;
+    options.decoder.return_filter = c.filter;
+    options.decoder.min_range_m = c.min_range_m;
     DecodeSummary summary;
     ASSERT_TRUE(RunDecode(options, &summary).ok);
     std::size_t rows_2m = 0, rows_5m = 0;
@@ -229,7 +229,7 @@ TEST(Decode, DualDuplicatesAreOneRowAndCounted) {
   EXPECT_NE(printed.str().find("dual duplicates   " + std::to_string(firings * 10)), std::string::npos)
       << printed.str();
 
-  options.keep_duplicate_dual_returns = true;
+  options.decoder.keep_duplicate_dual_returns = true;
   ASSERT_TRUE(RunDecode(options, &summary).ok);
   EXPECT_EQ(summary.points, firings * 16 * 2);
   EXPECT_EQ(summary.merged_dual_duplicates, 0u);
@@ -241,7 +241,7 @@ std::string DecodeError(const std::string& input, bool raw, double max_range_m =
   options.input_path = input;
   options.raw = raw;
   options.output_prefix = Prefix("fail_out");
-  options.max_range_m = max_range_m;
+  options.decoder.max_range_m = max_range_m;
   options.revolution = revolution;
   DecodeSummary summary;
   const Status s = RunDecode(options, &summary);

@@ -6,7 +6,6 @@
 #include <map>
 #include <random>
 
-#include "core/pipeline/scan_matcher.hpp"
 #include "core/pipeline/voxel_map.hpp"
 
 namespace rotolidar {

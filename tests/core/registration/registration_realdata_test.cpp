@@ -2,7 +2,7 @@
 //  - KITTI 00 frames 0..10 (HDL-64E bins of kitti00/): every consecutive pair k -> k+1 registered (frame k+1 into
 //    a map of frame k) and compared with two independent stereo SLAM results on the same frames, ORB-SLAM2 and
 //    S-PTAM, converted to the LiDAR frame (T_velo = Tr^-1 * P_k^-1 * P_k+1 * Tr), and with PCL's GICP (through
-//    core's ScanMatcher). KITTI's official ground truth is wrong for frames 0..~13 of sequence 00 (a constant
+//    core's GicpMatcher). KITTI's official ground truth is wrong for frames 0..~13 of sequence 00 (a constant
 //    0.86 m per frame while the car accelerates from ~0.68 m; docs/registration.md): it is printed, and the test
 //    asserts that our 0->1 step is far closer to the stereo references than to it. Frames 0..5 also run as
 //    sequential odometry through a growing LocalMap, checked against direct registration to frame 0.
@@ -24,7 +24,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/io/kitti.hpp"
-#include "core/pipeline/scan_matcher.hpp"
+#include "core/registration/gicp_matcher.hpp"
 #include "core/registration/scan_to_map.hpp"
 #include "tests/common/kitti00_reference.hpp"
 #include "tests/common/test_data.hpp"
@@ -122,7 +122,7 @@ LocalMap SingleKeyframeMap(const FeatureSet& features) {
   return map;
 }
 
-/// Points beyond min_range_m as Eigen vectors, voxel-downsampled (for PCL GICP through core's ScanMatcher).
+/// Points beyond min_range_m as Eigen vectors, voxel-downsampled (for PCL GICP through core's GicpMatcher).
 std::vector<Eigen::Vector3d> GicpInput(const Cloud& raw, double min_range_m, double voxel_m) {
   std::vector<Eigen::Vector3d> points;
   for (const auto& p : raw.points) {
@@ -204,8 +204,8 @@ StepError Diff(const Pose3& a, const Pose3& b) { return {TranslationError(a, b),
 
 // Bounds: kMaxStereoStepM / kMaxStereoStepDeg and the RMS rule (tests/common/kitti00_reference.hpp).
 
-ScanMatcherConfig KittiGicpConfig() {
-  ScanMatcherConfig c;
+GicpConfig KittiGicpConfig() {
+  GicpConfig c;
   c.max_correspondence_m = 1.0;
   c.max_iterations = 100;
   c.transformation_epsilon = 1e-10;
@@ -214,7 +214,7 @@ ScanMatcherConfig KittiGicpConfig() {
 
 TEST_F(Kitti00, ConsecutivePairsAgreeWithBothStereoReferences) {
   const KittiFrames& d = *data_;
-  ScanMatcher gicp(KittiGicpConfig());
+  GicpMatcher gicp(KittiGicpConfig());
   std::vector<double> orb_m, sptam_m, refs_m;  // per step translation errors [m]
   Pose3 guess = Pose3::Identity();              // 0->1: ~0.7 m off; then the previous step (constant velocity)
   for (size_t k = 0; k + 1 < kKittiFrames; ++k) {

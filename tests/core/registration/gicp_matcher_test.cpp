@@ -1,7 +1,7 @@
 // GICP scan-to-map registration recovers a known rigid transform on a synthetic room.
 #include <gtest/gtest.h>
 
-#include "core/pipeline/scan_matcher.hpp"
+#include "core/registration/gicp_matcher.hpp"
 #include "core/util/rng.hpp"
 
 namespace rotolidar {
@@ -25,14 +25,14 @@ std::vector<Eigen::Vector3d> RoomCloud(RandomStream* rng, int n) {
   return pts;
 }
 
-TEST(ScanMatcher, RecoversAKnownTransform) {
-  RandomStream rng(3, "scan_matcher_test");
+TEST(GicpMatcher, RecoversAKnownTransform) {
+  RandomStream rng(3, "gicp_matcher_test");
   const std::vector<Eigen::Vector3d> target = RoomCloud(&rng, 20000);
   const Pose3 T_target_source =
       MakePose({0.3, -0.2, 0.1}, Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d(0.2, 0.3, 1).normalized())));
   std::vector<Eigen::Vector3d> source;
   for (const auto& p : RoomCloud(&rng, 8000)) source.push_back(T_target_source.inverse() * p);
-  ScanMatcher matcher(ScanMatcherConfig{});
+  GicpMatcher matcher(GicpConfig{});
   matcher.SetTarget(target);
   const RegistrationResult r = matcher.Align(source, Pose3::Identity());
   ASSERT_TRUE(r.converged);
@@ -43,8 +43,8 @@ TEST(ScanMatcher, RecoversAKnownTransform) {
   EXPECT_LT(Eigen::AngleAxisd(r.T_target_source.linear().transpose() * T_target_source.linear()).angle(), 1e-3);
 }
 
-TEST(ScanMatcher, WithoutTargetReportsNotConverged) {
-  ScanMatcher matcher(ScanMatcherConfig{});
+TEST(GicpMatcher, WithoutTargetReportsNotConverged) {
+  GicpMatcher matcher(GicpConfig{});
   const RegistrationResult r = matcher.Align({Eigen::Vector3d::Zero()}, Pose3::Identity());
   EXPECT_FALSE(r.converged);
 }

@@ -1,7 +1,7 @@
 #pragma once
-// Scan-to-map registration with PCL's Generalized-ICP (plane-to-plane). The estimator registers with the seed's
-// feature-based Ceres registration (core/registration/); this GICP is an independent reference for tests and
-// real-data checks. PCL stays inside the .cpp.
+// Pairwise registration of two point clouds with PCL's Generalized-ICP (plane-to-plane). The estimator's odometry
+// registers with the seed's feature-based Ceres scan-to-map (scan_to_map.hpp); this dense GICP is the independent
+// reference for tests and real-data checks. PCL stays inside the .cpp.
 #include <memory>
 #include <vector>
 
@@ -9,7 +9,7 @@
 
 namespace rotolidar {
 
-struct ScanMatcherConfig {
+struct GicpConfig {
   double max_correspondence_m = 0.5;   ///< correspondences farther than this are rejected [m]
   int max_iterations = 30;
   double transformation_epsilon = 1e-6;  ///< convergence: squared change of the transform between iterations
@@ -28,12 +28,12 @@ struct RegistrationResult {
 
 /// Holds a target cloud (with its kd-tree and covariances) and aligns source clouds to it.
 /// Not thread-safe: one matcher per thread.
-class ScanMatcher {
+class GicpMatcher {
  public:
-  explicit ScanMatcher(const ScanMatcherConfig& config);
-  ~ScanMatcher();
-  ScanMatcher(const ScanMatcher&) = delete;
-  ScanMatcher& operator=(const ScanMatcher&) = delete;
+  explicit GicpMatcher(const GicpConfig& config);
+  ~GicpMatcher();
+  GicpMatcher(const GicpMatcher&) = delete;
+  GicpMatcher& operator=(const GicpMatcher&) = delete;
 
   /// Replaces the target (points in the target frame, e.g. world). Cost grows with its size (kd-tree + covariances).
   void SetTarget(const std::vector<Eigen::Vector3d>& p_target);

@@ -1,4 +1,4 @@
-#include "core/pipeline/scan_matcher.hpp"
+#include "core/registration/gicp_matcher.hpp"
 
 #include <cmath>
 #include <string>
@@ -27,7 +27,7 @@ class Gicp : public pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::Po
 
 }  // namespace
 
-bool ScanMatcherConfig::Validate(std::string* error) const {
+bool GicpConfig::Validate(std::string* error) const {
   auto fail = [&](const char* m) { if (error) *error = m; return false; };
   if (!(max_correspondence_m > 0)) return fail("registration.max_correspondence_m must be > 0");
   if (max_iterations < 1) return fail("registration.max_iterations must be >= 1");
@@ -36,13 +36,13 @@ bool ScanMatcherConfig::Validate(std::string* error) const {
   return true;
 }
 
-struct ScanMatcher::Impl {
-  ScanMatcherConfig config;
+struct GicpMatcher::Impl {
+  GicpConfig config;
   Gicp gicp;
   Cloud::Ptr target;
 };
 
-ScanMatcher::ScanMatcher(const ScanMatcherConfig& config) : impl_(std::make_unique<Impl>()) {
+GicpMatcher::GicpMatcher(const GicpConfig& config) : impl_(std::make_unique<Impl>()) {
   impl_->config = config;
   impl_->gicp.setMaxCorrespondenceDistance(config.max_correspondence_m);
   impl_->gicp.setMaximumIterations(config.max_iterations);
@@ -50,14 +50,14 @@ ScanMatcher::ScanMatcher(const ScanMatcherConfig& config) : impl_(std::make_uniq
   impl_->gicp.setCorrespondenceRandomness(config.k_correspondences);
 }
 
-ScanMatcher::~ScanMatcher() = default;
+GicpMatcher::~GicpMatcher() = default;
 
-void ScanMatcher::SetTarget(const std::vector<Eigen::Vector3d>& p_target) {
+void GicpMatcher::SetTarget(const std::vector<Eigen::Vector3d>& p_target) {
   impl_->target = ToCloud(p_target);
   impl_->gicp.setInputTarget(impl_->target);
 }
 
-RegistrationResult ScanMatcher::Align(const std::vector<Eigen::Vector3d>& p_source,
+RegistrationResult GicpMatcher::Align(const std::vector<Eigen::Vector3d>& p_source,
                                       const Pose3& T_target_source_guess) {
   RegistrationResult result;
   if (!impl_->target || impl_->target->size() < size_t(impl_->config.k_correspondences) ||

@@ -13,7 +13,7 @@
 // segment; dynamic objects are ignored: they move out of the way; a dip of less than 5 cm into an obstacle is
 // a graze, let through: PathCheckOptions::graze_m). Errors name the carrier, the time, the
 // point, the bound or the static primitive, and the waypoint leg the point lies on (index and coordinates).
-// Cost: ~6,000 rays for a 115 s run (well under 1 s on urban_loop).
+// Cost: one ray per segment (docs/scenes.md, 'Simulating in a scene').
 #include <string>
 #include <vector>
 
@@ -38,9 +38,9 @@ struct PathCheckOptions {
   double sample_dt_s = 0.02;      ///< spacing of the path samples [s]
   size_t max_samples = 200000;    ///< longer runs sample coarser (duration / max_samples)
   /// A path that dips less than this into an obstacle and comes out again is let through: the path moved this
-  /// far along the hit surface's normal is clear within graze_window_s of the hit [m]. It is this large for the
-  /// demo: the box room's scripted loop passes 3.6 cm inside column_b (r 0.25 m) at t = 16.5 s, and the demo's
-  /// recording must not change. A crossing of a wall or pane is never a graze.
+  /// far along the hit surface's normal is clear within graze_window_s of the hit [m]; <= 0: no grazes. A crossing
+  /// of a wall or pane is never a graze. Default 5 cm: the demo's scripted loop through the box room grazes a
+  /// column and its recording must not change (why: docs/scenes.md, 'Simulating in a scene').
   double graze_m = 0.05;
   double graze_window_s = 1.0;    ///< half width of the stretch of path moved for the graze test [s]
 };

@@ -69,7 +69,8 @@ struct MapMetrics {
 /// Computes every metric. Fails (Status naming the field) on an invalid config, an empty map, a scene whose
 /// mesh is empty, or an Embree error. Elements that cannot be fitted (too few points) are reported with
 /// measured = false and left out of the RMSE.
-/// `progress` (optional) follows the visibility pass, the long part (minutes for a 200 s parking run).
+/// `progress` (optional) follows the visibility pass, the long part (minutes on long runs: docs/metrics.md,
+/// 'Coverage and completeness').
 Status ComputeMapMetrics(const sim::Scene& scene, const std::vector<Eigen::Vector3f>& map_world,
                          const MapMetricsConfig& config, MapMetrics* out,
                          const std::function<void(double)>& progress = nullptr);

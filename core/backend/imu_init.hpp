@@ -25,9 +25,9 @@ struct ImuInitConfig {
   double gravity_mps2 = 9.81;  ///< magnitude of gravity [m/s^2]
 
   // Static start. The gyro threshold is ~5x the default Kalibr white noise per 200 Hz sample (2.44e-4 * sqrt(200)
-  // = 3.5e-3 rad/s). The accelerometer's is set by the spinning rotor, not by the sensor noise (0.032 m/s^2): the
-  // twin's default imbalance shakes a standing rig to 0.20-0.21 m/s^2 per axis over 1 s (lab, seed 1), while a
-  // walk reaches 0.4 m/s^2 within 0.3 s of setting off. Raise it on a rig whose motor vibrates the IMU more.
+  // = 3.5e-3 rad/s). The accelerometer's is set by the spinning rotor, not by the sensor noise (0.032 m/s^2): it
+  // lies between the rotor's shaking of a standing rig and the first steps of a walk (why: docs/backend.md,
+  // 'Initialisation'). Raise it on a rig whose motor vibrates the IMU more.
   double static_window_s = 1.0;              ///< the first this many seconds of samples are averaged [s]
   int static_min_samples = 20;               ///< fewer samples in the window -> failure
   double static_max_gyro_std_radps = 0.02;   ///< max per-axis standard deviation of the gyro in the window

@@ -48,34 +48,34 @@ struct SlidingWindowConfig {
   MarginalizationScheme marginalization = MarginalizationScheme::kSchurComplement;
 
   /// Estimate gravity's direction (|g| fixed) as one window block on the sphere, shared by the IMU factors
-  /// (ImuGravityFactor), instead of holding gravity_world_mps2 fixed. The LiDAR map's roll/pitch drifts slowly
-  /// (0.1-0.3 deg over tens of seconds); the LiDAR factors pull the attitudes to it, and a fixed gravity then
-  /// leaks ~0.01 m/s^2 into the directions the LiDAR cannot see (a corridor's axis). false = the fixed gravity.
+  /// (ImuGravityFactor), instead of holding gravity_world_mps2 fixed. The LiDAR map's roll/pitch drifts slowly;
+  /// the LiDAR factors pull the attitudes to it, and a fixed gravity then leaks into the directions the LiDAR
+  /// cannot see (a corridor's axis). false = the fixed gravity (why: docs/backend.md, 'Gravity direction').
   bool estimate_gravity = true;
   /// Random walk of gravity's direction in world [rad/sqrt(s)] (the map's tilt drift as seen by the window):
-  /// the marginalised information on gravity is diluted by (this |g|)^2 dt per slide of dt. 3e-3 measured better
-  /// than 1e-3 on the sim's corridor (ATE 0.074 vs 0.122 m over 20 s; docs/backend.md).
+  /// the marginalised information on gravity is diluted by (this |g|)^2 dt per slide of dt. > 0. Default 3e-3:
+  /// lets gravity follow the map's tilt in a corridor (why: docs/backend.md, 'Gravity direction').
   double gravity_random_walk_rad_per_sqrt_s = 3e-3;
   /// Prior on gravity's direction at Initialize (1-sigma per axis) [rad]: the initialisation's tilt error,
   /// dominated by the accelerometer bias it does not estimate (|ba| / g).
   double initial_gravity_sigma_rad = 0.01;
 
-  // Ceres (Levenberg-Marquardt, dense: a window is ~150 tangent dimensions).
-  /// Per Optimize(). Each scan adds one state to a window already at its optimum, so a few steps converge: 10
-  /// vs 3 changed no ATE by more than 1 mm on the lab / box-room runs and cost 1 ms per scan.
+  // Ceres (Levenberg-Marquardt; a window is ~150 tangent dimensions).
+  /// Per Optimize(); >= 1. Each scan adds one state to a window already at its optimum, so a few steps converge
+  /// (why 3: docs/backend.md, 'The window').
   int max_iterations = 3;
   /// LM damps with diag(J^T J) / radius. The bias random walk puts ~1e10 on bias diagonals whose net information
   /// is ~1e2, so Ceres' default radius (1e4) shrinks bias steps ~1e4-fold and needs ~10 iterations to grow back
-  /// (measured: 11 iterations vs 2 on a two-state window). A large radius starts as Gauss-Newton (the window is
-  /// nearly linear); a rejected step still shrinks it.
+  /// (docs/backend.md, 'The window'). A large radius starts as Gauss-Newton (the window is nearly linear); a
+  /// rejected step still shrinks it. > 0.
   double initial_trust_region_radius = 1e10;
   double max_solver_time_s = 1.0;      ///< wall-clock cap per Optimize() [s]
   double function_tolerance = 1e-8;    ///< relative cost change that counts as converged
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-10;
   int num_threads = 1;
-  /// The window's Jacobian (~350 x 150) is block-sparse: dense normal equations cost ~1 ms per scan more
-  /// (fuse 1.9 -> 0.8 ms; same lab / box-room ATE to 0.1 mm).
+  /// The window's Jacobian (~350 x 150) is block-sparse, so sparse normal equations are cheaper than dense ones
+  /// at the same estimates (docs/backend.md, 'The window'). Validate checks it with Ceres' Solver::Options.
   ceres::LinearSolverType linear_solver = ceres::SPARSE_NORMAL_CHOLESKY;
 
   /// Robust loss on the LiDAR factors only (outlier registrations); the scale is on the whitened residual

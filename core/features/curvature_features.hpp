@@ -18,7 +18,8 @@ struct FeatureConfig {
   int sectors = 12;               ///< equal sectors of VLP-16 azimuth per ring (seed: 12); sector = floor(az / (360/S))
   int edges_per_sector = 4;       ///< at most this many edge points per (ring, sector) (seed: 4)
   /// At most this many planar points per (ring, sector). The seed takes 4; a rotary VLP-16 scan is a 30 deg fan,
-  /// so registration needs more planar points than a full revolution gives at 4 (measured: docs/estimator.md).
+  /// so registration needs more planar points than a full revolution gives at 4 (why 20: docs/estimator.md,
+  /// "Defaults that differ from the modules'").
   int planars_per_sector = 20;
   int less_sharp_per_sector = 20; ///< map-side edge set per (ring, sector), a superset of the edges (LOAM: 20)
   int neighbours = 5;             ///< N: curvature window +-N same-ring points, |S| = 2N (LOAM: 5)
@@ -50,11 +51,11 @@ struct FeatureConfig {
   /// Scan-side planar set downsampling: one point per voxel of this edge (the one nearest the voxel's centroid,
   /// VoxelRepresentatives) [m]; 0 keeps every selected point (the seed's per-sector counts). A rotary band puts
   /// many planar points within centimetres of each other near the rig; A-LOAM's mapping thins its surface
-  /// points to 0.4 m the same way. 0.25 m: with neighbour reuse and a keyframe every 2nd scan, ATE equal or
-  /// better on lab, box room and parking than 0.15, the register stage ~20 % cheaper (docs/estimator.md).
+  /// points to 0.4 m the same way. Finite, >= 0. Default 0.25 m, chosen with neighbour reuse and the rotary
+  /// keyframe policy (why: docs/features.md, 'Scan-side thinning').
   double planar_voxel_m = 0.25;
-  /// Map-side planar set downsampling [m] (LOAM: 0.2 m; 0.3 m measured equal or better with the thinned scan
-  /// side, docs/estimator.md); 0 keeps every point.
+  /// Map-side planar set downsampling [m] (LOAM: 0.2 m); 0 keeps every point. Finite, >= 0. Default 0.3 m,
+  /// chosen together with planar_voxel_m (why: docs/features.md, 'Scan-side thinning').
   double less_flat_voxel_m = 0.3;
   int threads = 0;  ///< worker threads; 0 = std::thread::hardware_concurrency(); results never depend on it
   /// False (and *error names the field, e.g. "features.sectors must be in [1, 360] (got 0)") if a value is invalid.

@@ -26,8 +26,8 @@ constexpr int kDeriveFromCalib = -1;
 ///   every_scans       = max(1, floor(30 deg / a)): every other band still overlaps its neighbours' fans;
 ///   initial_keyframes = min(floor(2 pi / a), max_keyframes): a young map takes every scan for one revolution.
 /// A rotor at rest (a < 1e-6 rad) forces neither (both 0: the local map's distance/angle rule alone decides).
-/// The seed's 2.6 rad/s at 600 rpm: a = 14.9 deg, every 2nd scan after 24 (measured against every scan on lab,
-/// corridor, box room and parking: ATE equal or better, the map stage about half; docs/estimator.md).
+/// The seed's 2.6 rad/s at 600 rpm: a = 14.9 deg, every 2nd scan after 24 (why: docs/estimator.md,
+/// 'Keyframe policy').
 struct KeyframePolicy {
   int every_scans = 1;
   int initial_keyframes = 0;
@@ -46,8 +46,8 @@ struct EstimatorConfig {
   /// map's distance/angle rule a scan becomes a keyframe at least every this many scans (0: never forced).
   /// Default: derived from the calibration (RotaryKeyframePolicy).
   int keyframe_every_scans = kDeriveFromCalib;
-  /// Every scan is a keyframe until the local map holds this many: a young map needs each band (without it the
-  /// box room's moving start drifted 0.017 -> 0.05 m). 0: off. Default: derived (RotaryKeyframePolicy).
+  /// Every scan is a keyframe until the local map holds this many: a young map needs each band (why:
+  /// docs/estimator.md, 'Keyframe policy'). 0: off. Default: derived (RotaryKeyframePolicy).
   int initial_keyframes = kDeriveFromCalib;
   /// Before IMU initialisation, hold the pose while the IMU has been still since the start (ImuIsStill with the
   /// imu_init thresholds over the last static_window_s): the first bands then form the map (docs/estimator.md).

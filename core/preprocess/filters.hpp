@@ -42,8 +42,8 @@ struct PreprocessConfig {
   /// return beyond 8 m and none of the near ones (docs/features.md).
   bool sor_range_normalized = true;
   /// true: K nearest among the ring-order candidates (sor_neighbourhood: 22 candidates per point, linear time);
-  /// false: exact K nearest over the whole scan (PCL's kd-tree, 10-20x slower). Measured agreement and cost:
-  /// docs/features.md. Ring mode needs ring and t_s on the points (any input order).
+  /// false: exact K nearest over the whole scan (PCL's kd-tree; slower, cost and agreement: docs/features.md,
+  /// 'Neighbour search'). Ring mode needs ring and t_s on the points (any input order).
   bool sor_ring_neighbours = true;
   SorNeighbourhood sor_neighbourhood;
   bool enable_voxel = false;  ///< off by default: downsampling before Eq. 3 distorts curvature (docs/features.md)

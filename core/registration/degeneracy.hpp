@@ -13,7 +13,7 @@
 // The analysis solves the generalised problem  (H / N) v = lambda G v.  lambda is dimensionless: the squared
 // residual change per squared point motion, per correspondence. A plane sees the motion along its normal, so a
 // direction seen by all planes head-on has lambda ~ 1 and one seen by nobody has lambda ~ 0 (plus a noise floor
-// from the map's normal noise, measured ~0.01 in scan_to_map_test); this holds for rotations about any axis and
+// from the map's normal noise: docs/registration.md, 'Degeneracy'); this holds for rotations about any axis and
 // for any scan size or scale. Eigenvectors are G-orthonormal (v^T G v = 1: a unit step moves points by 1 m RMS).
 // Pure Eigen; thread-safe (no state).
 #include <string>
@@ -29,9 +29,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 struct DegeneracyConfig {
   bool remap = true;  ///< project updates onto the well-observed subspace (false: detect and report only)
   /// A direction is degenerate when its generalised eigenvalue lambda (see above, dimensionless) is below this.
-  /// Measured smallest lambda: box room 0.27 and corridor axis 0.013 (= the noise floor; scan_to_map_test, 1 cm
-  /// noise), KITTI 00 street scans 0.12-0.14 (registration_realdata_test); the sim corridor's axis seen only
-  /// through its end wall 2-20 m away: 0.005-0.04 (docs/registration.md).
+  /// Finite, >= 0. Default 0.005: low enough that an axis seen only through a far end wall is measured (then
+  /// gated as weak, below) rather than left to the prior (why: docs/registration.md, 'Degeneracy').
   double min_eigenvalue = 0.005;
   /// Weak directions (min_eigenvalue <= lambda < weak_eigenvalue) rest on a few points: a far end wall, or a
   /// person walking by. Their estimate is an innovation against the guess (the motion prior); it is kept only

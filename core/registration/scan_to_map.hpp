@@ -34,9 +34,9 @@ struct ScanToMapConfig {
   /// A point's neighbour set (and its line / plane fit) is reused by later outer iterations while the transformed
   /// point stays within this distance of where the set was searched [m]. 0: only while the set is provably
   /// still the k nearest (half the gap between the k-th and (k+1)-th distance); above it the set is an
-  /// approximation, as LOAM's, which re-searches every 5th iteration only. 0.05 m (a quarter of the map's 0.2 m
-  /// voxels): parking register 4.4 -> 2.2 ms against 0, ATE equal or better except the corridor's weak axis
-  /// (0.0044 -> 0.0049 m; docs/estimator.md).
+  /// approximation, as LOAM's, which re-searches every 5th iteration only. >= 0. Default 0.05 m (a quarter of the
+  /// map's 0.2 m voxels): half the register time of 0 at about the same ATE (why: docs/registration.md,
+  /// 'Neighbour reuse').
   double neighbour_reuse_m = 0.05;
   double max_neighbour_distance_m = 1.0;  ///< the k-th neighbour must be this close to the transformed point [m]
   double min_line_eigen_ratio = 3.0;      ///< edge: lambda_max >= ratio * lambda_mid of the neighbours (LOAM: 3)

@@ -85,8 +85,8 @@ struct StepperConfig {
 struct PidConfig {
   /// Gains, tuned on a 1-DOF model of the rig (J = 1e-3 kg m^2, docs/motor_model.md): every loop delay turns P and
   /// I into negative damping of the torsional mode (P: ~N_r T_hold kp delay; I: ~N_r T_hold ki / w^2), so both are
-  /// kept small next to D; measured stable for encoder latency <= 3 ms at 1 kHz (<= 1 ms at 500 Hz), 1 and 2 ms
-  /// physics steps.
+  /// kept small next to D. Valid range of the defaults: encoder latency <= 3 ms at 1 kHz (<= 1 ms at 500 Hz),
+  /// 1 or 2 ms physics steps (why: docs/motor_model.md, 'The closed loop').
   double kp = 0.3;          ///< [rad/rad]; >= 0
   double ki_per_s = 10.0;   ///< [1/s]; >= 0. Slow pole ki / (1 + kp) = 7.7 /s: removes lag and lost steps
   double kd_s = 5e-3;       ///< [s]; >= 0. N_r T_hold kd = 0.1 N m s/rad: damping ratio ~0.35 on 1e-3 kg m^2

@@ -9,9 +9,8 @@
 // pose at the current time; the static world is one more instance (identity) so that moving an object never
 // rebuilds the static BVH. SetTime(t) recomputes every object's pose (scene_dynamic.hpp), updates the instance
 // transforms and recommits the top level: a rebuild over (objects + 1) instances, O(N log N) in the number of
-// objects and independent of the triangle count (measured median 4 us for 1 object, 16 us for 7 objects on
-// the 2-core dev machine, up to 2x under load: `rotolidar scene list`; see docs/scene_format.md). Call it
-// once per VLP-16 packet (1.33 ms of firing): ~0.3-1.2 % of real time.
+// objects and independent of the triangle count (cost: docs/scene_format.md, 'Dynamic objects'; per scene:
+// `rotolidar scene list`). Call it once per VLP-16 packet (1.33 ms of firing).
 // A scene without dynamic objects is one flat triangle geometry, as fast as before.
 //
 // Thread safety: after Create, Intersect and IntersectBatch are const and may run concurrently from any

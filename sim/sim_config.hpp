@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/types/calib.hpp"
 #include "sim/camera/camera_model.hpp"
 #include "sim/lidar/vlp16_caster.hpp"

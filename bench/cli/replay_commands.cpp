@@ -10,9 +10,9 @@
 
 #include "bench/cli/commands.hpp"
 #include "bench/cli/options.hpp"
-#include "core/io/pcap.hpp"
-#include "core/io/udp_sender.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/udp_sender.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar::bench {
 namespace {

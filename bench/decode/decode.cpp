@@ -8,8 +8,8 @@
 #include <memory>
 #include <vector>
 
-#include "core/io/pcap.hpp"
-#include "core/io/scan_splitter.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/scan_splitter.hpp"
 
 namespace rotolidar::bench {
 namespace {

@@ -5,7 +5,7 @@
 #include <ostream>
 #include <string>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/util/log.hpp"
 
 namespace rotolidar::bench {

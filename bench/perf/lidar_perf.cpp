@@ -10,8 +10,8 @@
 #include <memory>
 
 #include "bench/cli/options.hpp"
-#include "core/io/pcap.hpp"
-#include "core/io/scan_splitter.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/scan_splitter.hpp"
 #include "sim/lidar/position_source.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/carrier_paths.hpp"

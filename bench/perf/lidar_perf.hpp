@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/util/log.hpp"
 
 namespace rotolidar::bench {

@@ -8,7 +8,7 @@
 
 #include "bench/metrics/deskew_error.hpp"  // PoseAt: the truth interpolation the deskew metric uses
 #include "core/io/recording.hpp"
-#include "core/io/scan_splitter.hpp"
+#include "core/wire/scan_splitter.hpp"
 #include "core/pipeline/estimator.hpp"
 #include "sim/truth/truth.hpp"
 

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "core/io/kitti.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/pipeline/estimator_config.hpp"
 
 namespace rotolidar::bench {

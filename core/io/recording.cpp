@@ -7,7 +7,7 @@
 
 #include "core/io/calib_yaml.hpp"
 #include "core/io/csv.hpp"
-#include "core/io/pcap.hpp"
+#include "core/wire/pcap.hpp"
 #include "core/util/log.hpp"
 
 namespace fs = std::filesystem;

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "core/deskew/deskew.hpp"
-#include "core/io/scan_splitter.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/scan_splitter.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/pipeline/estimator_config.hpp"
 #include "core/deskew/rotary.hpp"
 #include "core/pipeline/voxel_map.hpp"

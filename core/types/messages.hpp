@@ -32,7 +32,7 @@ inline constexpr std::size_t kVlp16PacketBytes = 1206;
 
 /// One VLP-16 UDP payload as it came off the wire (data port 2368 or position port 8308).
 /// `t_capture_s` is when the host captured it (pcap record time) on the rig clock; the points' own times come
-/// from the timestamp inside the payload (see Vlp16Decoder in core/io/vlp16.hpp).
+/// from the timestamp inside the payload (see Vlp16Decoder in core/wire/vlp16.hpp).
 struct LidarPacket {
   Seconds t_capture_s = 0.0;
   uint16_t udp_port = 2368;

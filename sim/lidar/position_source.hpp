@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/types/messages.hpp"
 
 namespace rotolidar::sim {

@@ -9,7 +9,7 @@
 // slowly varying speed error); a sequence's azimuth_centideg is a(t_k) rounded to 0.01 deg, while each ray is
 // cast at the exact a(t_k + i * 2.304 us), which the decoder's interpolation between sequences reproduces.
 // Central ray of laser i in the lidar frame: origin Vlp16RayOrigin(offset_i) + r * Vlp16RayDirection(elev_i, a)
-// (shared with the decoder in core/io/vlp16.hpp). Pose: T_world_lidar at each firing time, exactly
+// (shared with the decoder in core/wire/vlp16.hpp). Pose: T_world_lidar at each firing time, exactly
 // (pose_per_firing) or interpolated between exact poses at most 55.296 us apart (the sequence starts around it;
 // the default, measured against the exact poses in tests/sim/lidar/vlp16_caster_test.cpp).
 //
@@ -34,7 +34,7 @@
 
 #include <Eigen/Core>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/types/calib.hpp"
 #include "core/types/geometry.hpp"
 #include "core/util/rng.hpp"

@@ -20,7 +20,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar::sim {
 

@@ -12,8 +12,8 @@
 
 #include "core/deskew/deskew.hpp"
 #include "core/deskew/rotary.hpp"
-#include "core/io/pcap.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/vlp16.hpp"
 #include "sim/lidar/position_source.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/base_motion.hpp"

@@ -21,7 +21,7 @@ TEST(DecodeRealData, EinrideRecordingOneRevolution) {
   const Status s = RunDecode(options, &summary);
   ASSERT_TRUE(s.ok) << s.message;
   PrintDecodeSummary(summary, std::cout);
-  // Numbers measured by core_io_vlp16_realdata_test (same decoder, all ranges 0.50..12.34 m pass 0.4..130 m).
+  // Numbers measured by core_wire_vlp16_realdata_test (same decoder, all ranges 0.50..12.34 m pass 0.4..130 m).
   EXPECT_EQ(summary.packets, 1000u);
   EXPECT_EQ(summary.points, 203034u);
   EXPECT_EQ(summary.scans, 14u);  // 13 crossings of azimuth 0 + the trailing partial

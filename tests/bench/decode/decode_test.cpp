@@ -10,7 +10,7 @@
 #include <unistd.h>
 
 #include "bench/decode/decode.hpp"
-#include "core/io/pcap.hpp"
+#include "core/wire/pcap.hpp"
 
 namespace rotolidar::bench {
 namespace {

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "core/features/curvature_features.hpp"
-#include "core/io/pcap.hpp"
-#include "core/io/scan_splitter.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/scan_splitter.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/preprocess/filters.hpp"
 #include "tests/common/test_data.hpp"
 #include "tests/core/features/feature_test_util.hpp"

@@ -11,7 +11,7 @@
 #include <tuple>
 
 #include "core/features/curvature_features.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "tests/core/features/feature_test_util.hpp"
 #include "core/util/rng.hpp"
 

@@ -5,9 +5,9 @@
 #include <gtest/gtest.h>
 
 #include "core/io/calib_yaml.hpp"
-#include "core/io/pcap.hpp"
+#include "core/wire/pcap.hpp"
 #include "core/io/recording.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar {
 namespace {

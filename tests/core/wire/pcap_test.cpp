@@ -8,8 +8,8 @@
 
 #include <unistd.h>
 
-#include "core/io/pcap.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar {
 namespace {

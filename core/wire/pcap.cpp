@@ -1,5 +1,5 @@
 // VLP-16 packets in pcap files via libpcap; frame layout in pcap.hpp.
-#include "core/io/pcap.hpp"
+#include "core/wire/pcap.hpp"
 
 #include <pcap/pcap.h>
 
@@ -9,7 +9,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/util/log.hpp"
 
 namespace rotolidar {

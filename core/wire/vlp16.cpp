@@ -1,5 +1,5 @@
 // VLP-16 wire format: raw data/position packet fields and the encoder the sim uses (decoder: vlp16_decoder.cpp).
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Revolution splitting of decoded VLP-16 points (contract in scan_splitter.hpp).
-#include "core/io/scan_splitter.hpp"
+#include "core/wire/scan_splitter.hpp"
 
 #include <cmath>
 

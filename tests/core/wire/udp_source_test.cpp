@@ -5,8 +5,8 @@
 #include <chrono>
 #include <thread>
 
-#include "core/io/udp_source.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/udp_source.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar {
 namespace {

@@ -9,9 +9,9 @@
 #include <iterator>
 #include <sstream>
 
-#include "core/io/pcap.hpp"
-#include "core/io/scan_splitter.hpp"
-#include "core/io/vlp16.hpp"
+#include "core/wire/pcap.hpp"
+#include "core/wire/scan_splitter.hpp"
+#include "core/wire/vlp16.hpp"
 #include "tests/common/test_data.hpp"
 
 namespace rotolidar {

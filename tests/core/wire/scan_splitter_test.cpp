@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "core/io/scan_splitter.hpp"
+#include "core/wire/scan_splitter.hpp"
 
 namespace rotolidar {
 namespace {

@@ -1,5 +1,5 @@
 // UDP receive/send of VLP-16 packets with POSIX sockets (contract in udp_source.hpp).
-#include "core/io/udp_source.hpp"
+#include "core/wire/udp_source.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -12,7 +12,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar {
 namespace {

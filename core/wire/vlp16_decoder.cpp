@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar {
 namespace {

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/util/rng.hpp"
 
 namespace rotolidar {

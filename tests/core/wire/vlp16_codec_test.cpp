@@ -5,7 +5,7 @@
 #include <cmath>
 #include <optional>
 
-#include "core/io/vlp16.hpp"
+#include "core/wire/vlp16.hpp"
 #include "core/util/rng.hpp"
 
 namespace rotolidar {

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "core/io/udp_sender.hpp"
+#include "core/wire/udp_sender.hpp"
 #include "core/types/messages.hpp"
 #include "core/util/log.hpp"
 

@@ -1,5 +1,5 @@
 // Paced UDP sending of VLP-16 packets with POSIX sockets (contract in udp_sender.hpp).
-#include "core/io/udp_sender.hpp"
+#include "core/wire/udp_sender.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>

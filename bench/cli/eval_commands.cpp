@@ -28,7 +28,7 @@ Status ParseEvalOptions(const OptionParser& p, EvalOptions* o) {
   o->est_path = p.Get("EST");
   if (!ParseTrajectoryFormat(p.Get("format"), &o->format)) return Status::Error("eval: --format: tum, kitti or euroc");
   if (!ParseAlignment(p.Get("align"), &o->align)) return Status::Error("eval: --align: none, se3, sim3 or posyaw");
-  if (!ParseEvalMetric(p.Get("metric"), &o->metric)) return Status::Error("eval: --metric: ape or rpe");
+  if (!ParseEvalMetric(p.Get("metric"), &o->metric)) return Status::Error("eval: --metric: ape, rpe or kitti");
   if (!ParsePoseRelation(p.Get("relation"), &o->pose_relation))
     return Status::Error("eval: --relation: trans_part, angle_deg, angle_rad, full, rot_part");
   if (!ParseDeltaUnit(p.Get("delta-unit"), &o->delta_unit)) return Status::Error("eval: --delta-unit: frames or m");
@@ -45,13 +45,15 @@ Status ParseEvalOptions(const OptionParser& p, EvalOptions* o) {
 
 int CmdEval(int argc, char** argv) {
   OptionParser p("eval", "Compare an estimated trajectory with a reference: APE or RPE statistics, evo's "
-                         "definitions (max, mean, median, min, rmse, sse, std).");
+                         "definitions (max, mean, median, min, rmse, sse, std), or the KITTI odometry "
+                         "devkit's segment errors (--metric kitti: mean = t_rel [%] or r_rel [deg/100m]).");
   p.AddPositional("REF", "reference trajectory file");
   p.AddPositional("EST", "estimated trajectory file");
   p.Add("format", "tum", "-", "tum | kitti | euroc");
   p.Add("align", "none", "-", "none | se3 | sim3 | posyaw (Umeyama)");
-  p.Add("metric", "ape", "-", "ape | rpe");
-  p.Add("relation", "trans_part", "-", "trans_part | angle_deg | angle_rad | full | rot_part");
+  p.Add("metric", "ape", "-", "ape | rpe | kitti (KITTI devkit: t_rel over 100-800 m segments)");
+  p.Add("relation", "trans_part", "-", "trans_part | angle_deg | angle_rad | full | rot_part (kitti: trans_part "
+                                                "or angle_deg)");
   p.Add("delta", "1", "frames|m", "RPE pair distance");
   p.Add("delta-unit", "frames", "-", "frames | m");
   p.AddFlag("all-pairs", "RPE: use all pairs, not consecutive non-overlapping ones");

@@ -20,10 +20,29 @@ std::string AlignmentTitle(Alignment align) {
   return "";
 }
 
+/// The unit of the errors: the relation's, or per segment length for the kitti metric.
+std::string ErrorUnit(const EvalOptions& o) {
+  if (o.metric == EvalMetric::kKitti)
+    return o.pose_relation == PoseRelation::kTranslation ? "%" : "deg/100m";
+  return PoseRelationUnit(o.pose_relation);
+}
+
+/// "APE", "RPE" or "KITTI": the metric's name in titles and labels.
+std::string MetricLabel(EvalMetric metric) {
+  switch (metric) {
+    case EvalMetric::kApe: return "APE";
+    case EvalMetric::kRpe: return "RPE";
+    case EvalMetric::kKitti: return "KITTI segment error";
+  }
+  return "";
+}
+
 std::string MakeTitle(const EvalOptions& o) {
-  const std::string unit = PoseRelationUnit(o.pose_relation);
-  std::string title = std::string(o.metric == EvalMetric::kApe ? "APE" : "RPE") + " w.r.t. " +
-                      PoseRelationName(o.pose_relation) + (unit.empty() ? "" : " (" + unit + ")");
+  const std::string unit = ErrorUnit(o);
+  std::string title = MetricLabel(o.metric) + " w.r.t. " + PoseRelationName(o.pose_relation) +
+                      (unit.empty() ? "" : " (" + unit + ")");
+  if (o.metric == EvalMetric::kKitti) title += "
+over 100, 200, ..., 800 m segments from every 10th pose (devkit)";
   if (o.metric == EvalMetric::kRpe) {
     std::ostringstream d;
     d << o.delta;
@@ -48,8 +67,18 @@ nlohmann::json StatsJson(const ErrorStatistics& s) {
 bool ParseEvalMetric(const std::string& name, EvalMetric* out) {
   if (name == "ape") *out = EvalMetric::kApe;
   else if (name == "rpe") *out = EvalMetric::kRpe;
+  else if (name == "kitti") *out = EvalMetric::kKitti;
   else return false;
   return true;
+}
+
+const char* EvalMetricName(EvalMetric metric) {
+  switch (metric) {
+    case EvalMetric::kApe: return "ape";
+    case EvalMetric::kRpe: return "rpe";
+    case EvalMetric::kKitti: return "kitti";
+  }
+  return "?";
 }
 
 bool EvalOptions::Validate(std::string* error) const {
@@ -66,6 +95,9 @@ bool EvalOptions::Validate(std::string* error) const {
       return fail("delta must be an integer when delta_unit is frames");
     }
   }
+  if (metric == EvalMetric::kKitti && pose_relation != PoseRelation::kTranslation &&
+      pose_relation != PoseRelation::kRotationAngleDeg)
+    return fail("the kitti metric measures trans_part [%] or angle_deg [deg/100m]");
   return true;
 }
 
@@ -73,7 +105,7 @@ EvalResult EvaluateTrajectories(const Trajectory& ref, const Trajectory& est, co
                                 bool associate) {
   EvalResult r;
   r.title = MakeTitle(options);
-  r.unit = PoseRelationUnit(options.pose_relation);
+  r.unit = ErrorUnit(options);
   r.num_ref_poses = ref.size();
   r.num_est_poses = est.size();
   Trajectory ref_a = ref, est_a = est;
@@ -90,6 +122,11 @@ EvalResult EvaluateTrajectories(const Trajectory& ref, const Trajectory& est, co
   Status s;
   if (options.metric == EvalMetric::kApe) {
     s = ComputeApeErrors(ref_a, est_a, options.pose_relation, &r.errors);
+  } else if (options.metric == EvalMetric::kKitti) {
+    s = ComputeKittiOdometryErrors(ref_a, est_a, KittiOdometryOptions(), &r.kitti);
+    const bool translation = options.pose_relation == PoseRelation::kTranslation;
+    for (const KittiSegmentError& e : r.kitti.segments)
+      r.errors.push_back(translation ? 100.0 * e.t_err_per_m : e.r_err_rad_per_m * 100.0 * 180.0 / M_PI);
   } else {
     RpeOptions rpe;
     rpe.relation = options.pose_relation;
@@ -135,6 +172,14 @@ void PrintEvalStats(const EvalResult& result, std::ostream& os) {
   const auto old_prec = os.precision();
   os << std::fixed << std::setprecision(6);
   for (const auto& [name, value] : rows) os << std::setw(7) << name << "\t" << value << "\n";
+  if (!result.kitti.segments.empty()) {
+    os << "\n length [m]  segments  t_rel [%]  r_rel [deg/100m]\n";
+    for (const KittiLengthError& l : result.kitti.by_length)
+      os << std::setprecision(0) << std::setw(11) << l.length_m << std::setw(10) << l.segments << std::setprecision(4)
+         << std::setw(11) << l.t_rel_percent << std::setw(18) << l.r_rel_deg_per_100m << "\n";
+    os << std::setprecision(4) << "KITTI devkit: t_rel " << result.kitti.t_rel_percent << " %, r_rel "
+       << result.kitti.r_rel_deg_per_100m << " deg/100m over " << result.kitti.segments.size() << " segments\n";
+  }
   os.flags(old_flags);
   os.precision(old_prec);
 }
@@ -144,10 +189,10 @@ Status WriteEvalJson(const std::string& path, const EvalOptions& options, const 
   j["title"] = result.title;
   j["ref_name"] = options.ref_path;
   j["est_name"] = options.est_path;
-  j["label"] = std::string(options.metric == EvalMetric::kApe ? "APE" : "RPE") + " (" + result.unit + ")";
+  j["label"] = MetricLabel(options.metric) + " (" + result.unit + ")";
   j["options"] = {{"format", TrajectoryFormatName(options.format)},
                   {"align", AlignmentName(options.align)},
-                  {"metric", options.metric == EvalMetric::kApe ? "ape" : "rpe"},
+                  {"metric", EvalMetricName(options.metric)},
                   {"pose_relation", PoseRelationName(options.pose_relation)},
                   {"delta", options.delta},
                   {"delta_unit", DeltaUnitName(options.delta_unit)},
@@ -160,6 +205,10 @@ Status WriteEvalJson(const std::string& path, const EvalOptions& options, const 
   j["alignment"] = {{"scale", result.alignment.scale},
                     {"T_ref_est_row_major", std::vector<double>(T.data(), T.data() + 16)}};
   j["stats"] = StatsJson(result.stats);
+  if (options.metric == EvalMetric::kKitti)
+    j["kitti"] = {{"t_rel_percent", result.kitti.t_rel_percent},
+                  {"r_rel_deg_per_100m", result.kitti.r_rel_deg_per_100m},
+                  {"segments", result.kitti.segments.size()}};
   std::ofstream os(path);
   if (!os) return Status::Error(path + ": cannot open for writing");
   os << j.dump(2) << "\n";

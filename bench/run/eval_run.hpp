@@ -3,6 +3,9 @@
 // time, aligns the estimate, computes per-pose (APE) or per-pair (RPE) errors and their statistics, prints
 // them like evo and optionally writes JSON. Numbers are evo's (see bench/eval/trajectory_metrics.hpp).
 //
+// Metrics: ape, rpe (evo's), kitti (the KITTI odometry devkit's segment errors over 100-800 m: per segment,
+// translation [%] or rotation [deg/100 m]; their mean is the benchmark's t_rel / r_rel).
+//
 // Formats: tum (both files TUM); kitti (both KITTI, no association: pose i of one is pose i of the other, and
 // the counts must match, as evo does for KITTI); euroc (reference = EuRoC ground-truth CSV, estimate = TUM,
 // like `evo_ape euroc`).
@@ -11,6 +14,7 @@
 #include <vector>
 
 #include "bench/eval/alignment.hpp"
+#include "bench/eval/kitti_odometry_error.hpp"
 #include "bench/eval/statistics.hpp"
 #include "bench/eval/trajectory_metrics.hpp"
 #include "core/io/trajectory_io.hpp"
@@ -19,8 +23,9 @@
 
 namespace rotolidar::bench {
 
-enum class EvalMetric { kApe, kRpe };
-bool ParseEvalMetric(const std::string& name, EvalMetric* out);  ///< "ape", "rpe"
+enum class EvalMetric { kApe, kRpe, kKitti };
+bool ParseEvalMetric(const std::string& name, EvalMetric* out);  ///< "ape", "rpe", "kitti"
+const char* EvalMetricName(EvalMetric metric);                   ///< "ape", "rpe", "kitti"
 
 struct EvalOptions {
   std::string ref_path;                                  ///< reference trajectory file
@@ -35,8 +40,8 @@ struct EvalOptions {
   double max_diff_s = 0.01;                              ///< association tolerance [s] (tum, euroc)
   std::string json_path;                                 ///< empty: no JSON
 
-  /// False with a message naming the field when a path is empty, delta <= 0 (or not integer in frames) or
-  /// max_diff_s < 0 / not finite.
+  /// False with a message naming the field when a path is empty, delta <= 0 (or not integer in frames),
+  /// max_diff_s < 0 / not finite, or the kitti metric is asked for a relation other than trans_part / angle_deg.
   bool Validate(std::string* error) const;
 };
 
@@ -48,8 +53,9 @@ struct EvalResult {
   size_t num_est_poses = 0;        ///< as read
   size_t num_associated = 0;       ///< poses compared after association
   AlignmentResult alignment;       ///< maps the estimate onto the reference
-  std::vector<double> errors;      ///< per pose (APE) or per pair (RPE), in `unit`
+  std::vector<double> errors;      ///< per pose (APE), per pair (RPE) or per segment (kitti), in `unit`
   ErrorStatistics stats;
+  KittiOdometryErrors kitti;       ///< kitti metric only: segments, per-length means, t_rel and r_rel
 };
 
 /// Runs one evaluation; `out` is filled (its status equals the returned one).
@@ -63,7 +69,8 @@ EvalResult EvaluateTrajectories(const Trajectory& ref, const Trajectory& est, co
 /// APE translation [m] of `est` against `ref` after association (0.01 s) and `align` (demo convenience).
 EvalResult ComputeApe(const Trajectory& ref, const Trajectory& est, Alignment align);
 
-/// evo-like table: title, then one "   name\tvalue" line per statistic (max mean median min rmse sse std).
+/// evo-like table: title, then one "   name\tvalue" line per statistic (max mean median min rmse sse std); the
+/// kitti metric adds the devkit's per-length table and its t_rel / r_rel.
 void PrintEvalStats(const EvalResult& result, std::ostream& os);
 
 /// JSON {"title", "ref_name", "est_name", "label", "options": {...}, "alignment": {...}, "stats": {...}};

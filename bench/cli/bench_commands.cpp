@@ -3,10 +3,7 @@
 #include <iostream>
 
 #include "bench/cli/commands.hpp"
-#include "bench/perf/camera_perf.hpp"
-#include "bench/perf/lidar_perf.hpp"
-#include "bench/perf/rig_perf.hpp"
-#include "bench/perf/slam_perf.hpp"
+#include "bench/cli/perf_commands.hpp"
 
 namespace rotolidar::bench {
 namespace {

@@ -8,8 +8,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bench/cli/options.hpp"
+#include "bench/demo/demo.hpp"
 #include "bench/report/run_report.hpp"
-#include "bench/run/demo.hpp"
 #include "bench/run/progress.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/io/config_yaml.hpp"

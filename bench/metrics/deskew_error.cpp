@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "bench/eval/trajectory_lookup.hpp"
 #include "sim/truth/truth.hpp"
 
 namespace rotolidar::bench {
@@ -40,20 +41,6 @@ Status LoadDeskewTruth(const std::string& recording_dir, DeskewTruth* truth) {
   }
   *truth = std::move(t);
   return Status::Ok();
-}
-
-bool PoseAt(const Trajectory& trajectory, Seconds t_s, Pose3* T) {
-  if (trajectory.empty() || !(t_s >= trajectory.front().t_s) || !(t_s <= trajectory.back().t_s)) return false;
-  const auto it = std::lower_bound(trajectory.begin(), trajectory.end(), t_s,
-                                   [](const StampedPose& p, Seconds t) { return p.t_s < t; });
-  if (it->t_s == t_s || it == trajectory.begin()) {
-    *T = it->T_ref_body;
-    return true;
-  }
-  const StampedPose& a = *(it - 1);
-  const StampedPose& b = *it;
-  *T = Interpolate(a.T_ref_body, b.T_ref_body, (t_s - a.t_s) / (b.t_s - a.t_s));
-  return true;
 }
 
 Status ScanDeskewError(const DeskewTruth& truth, const ScanReport& report, ScanDeskewErrors* out) {

@@ -7,7 +7,7 @@
 //
 //   p_true_i = T_world_base(t_start)^-1 * T_world_lidar(t_i) * p_lidar_i
 //
-// (truth/base.tum and truth/lidar.tum, interpolated linearly in translation and by slerp in rotation). The error
+// (truth/base.tum and truth/lidar.tum, interpolated by PoseAt, bench/eval/trajectory_lookup.hpp). The error
 // is |deskewed_base_i - p_true_i|. It is frame-free (the estimator's world frame never enters: both sides are in
 // the base frame at t_start) and range noise cancels (both use the same decoded p_lidar_i), so it measures the
 // rotary transform (encoder interpolation, calibration) plus the motion compensation only.
@@ -40,10 +40,6 @@ struct DeskewTruth {
 /// Reads <recording_dir>/truth/base.tum and truth/lidar.tum (the sim's truth log). Fails naming the file when
 /// one is missing or unreadable or holds fewer than 2 poses.
 Status LoadDeskewTruth(const std::string& recording_dir, DeskewTruth* truth);
-
-/// The pose at t_s of a time-sorted trajectory: linear in translation, slerp in rotation between the bracketing
-/// samples (the sample itself at an exact stamp). False when t_s lies outside the trajectory's span.
-bool PoseAt(const Trajectory& trajectory, Seconds t_s, Pose3* T);
 
 /// One scan's errors. Points are skipped (and counted) when the estimator left them NaN (not deskewed) or when
 /// t_start_s or their firing time lies outside the truth.

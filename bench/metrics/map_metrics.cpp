@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/eval/alignment.hpp"
+#include "bench/eval/trajectory_lookup.hpp"
 #include "bench/metrics/surface_distance.hpp"
-#include "bench/run/truth_eval.hpp"
 #include "core/io/point_cloud_io.hpp"
 
 namespace rotolidar::bench {

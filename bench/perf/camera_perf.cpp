@@ -6,13 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <memory>
-#include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "bench/cli/options.hpp"
 #include "sim/camera/camera_stream.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/sim_config.hpp"
@@ -97,20 +94,6 @@ Status BenchOne(const CameraBenchOptions& o, const sim::Scene& scene, sim::Embre
   return Status::Ok();
 }
 
-bool ParseSizes(const std::string& text, std::vector<std::pair<int, int>>* sizes) {
-  sizes->clear();
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    int w = 0, h = 0;
-    char x = 0;
-    std::stringstream one(item);
-    if (!(one >> w >> x >> h) || x != 'x') return false;
-    sizes->emplace_back(w, h);
-  }
-  return !sizes->empty();
-}
-
 }  // namespace
 
 bool CameraBenchOptions::Validate(std::string* error) const {
@@ -164,36 +147,6 @@ void PrintCameraBench(const CameraBenchOptions& o, const std::vector<CameraBench
   os << "frame = render + blur + sensor, wall clock (frames/s = 1 / frame); CPU/frame: CPU time of all the "
         "process's threads (OSMesa's llvmpipe threads included; on a loaded machine wall >> CPU / threads); png: "
         "cv::imencode of the frame (the recording writer's cost, one thread, not in frames/s)\n";
-}
-
-int BenchCamera(int argc, char** argv) {
-  OptionParser p("bench camera", "Frames per second of the camera twin for each renderer and image size, along the "
-                                 "scene's handheld path (medians of frames).");
-  p.Add("scene", "lab", "-", "scene name (scenes/NAME.yaml) or path");
-  p.Add("renderer", "both", "-", "embree | osmesa | both");
-  p.Add("frames", "60", "-", "timed frames per renderer and size");
-  p.Add("sizes", "640x480,1280x720", "px", "comma-separated WIDTHxHEIGHT list (fx scaled to keep the field of view)");
-  p.Add("threads", "2", "-", "worker threads (render, blur, sensor)");
-  p.Add("blur", "velocity", "-", "motion blur: none | velocity | subframes");
-  p.Add("seed", "1", "-", "run seed (sensor noise)");
-  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  CameraBenchOptions o;
-  o.scene = p.Get("scene");
-  long frames = 0, threads = 0, seed = 0;
-  for (const Status& s : {p.GetInt("frames", &frames), p.GetInt("threads", &threads), p.GetInt("seed", &seed)})
-    if (!s) return std::cerr << "error: " << s.message << "\n", 2;
-  o.frames = static_cast<int>(frames);
-  o.threads = static_cast<int>(threads);
-  o.seed = static_cast<uint64_t>(seed);
-  o.motion_blur = p.Get("blur");
-  const std::string renderer = p.Get("renderer");
-  o.renderers = renderer == "both" ? std::vector<std::string>{"embree", "osmesa"} : std::vector<std::string>{renderer};
-  if (!ParseSizes(p.Get("sizes"), &o.sizes)) return std::cerr << "error: bench camera: --sizes: e.g. 640x480,1280x720\n", 2;
-  if (std::string why; !o.Validate(&why)) return std::cerr << "error: " << why << "\n", 2;
-  std::vector<CameraBenchRow> rows;
-  if (Status s = RunCameraBench(o, &rows); !s) return std::cerr << "error: " << s.message << "\n", 1;
-  PrintCameraBench(o, rows, std::cout);
-  return 0;
 }
 
 }  // namespace rotolidar::bench

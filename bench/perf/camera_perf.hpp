@@ -36,7 +36,4 @@ struct CameraBenchRow {
 Status RunCameraBench(const CameraBenchOptions& options, std::vector<CameraBenchRow>* rows);
 void PrintCameraBench(const CameraBenchOptions& options, const std::vector<CameraBenchRow>& rows, std::ostream& os);
 
-/// CLI entry point (`rotolidar bench camera ARGS`). Exit codes: 0 ok, 1 failure, 2 usage error.
-int BenchCamera(int argc, char** argv);
-
 }  // namespace rotolidar::bench

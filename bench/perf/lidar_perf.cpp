@@ -6,10 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <memory>
 
-#include "bench/cli/options.hpp"
 #include "core/wire/pcap.hpp"
 #include "core/wire/scan_splitter.hpp"
 #include "sim/lidar/position_source.hpp"
@@ -131,14 +129,6 @@ Timing MedianTiming(std::vector<Timing> runs) {
   m.wall_s = median(&Timing::wall_s);
   m.cpu_s = median(&Timing::cpu_s);
   return m;
-}
-
-bool ParseReturnMode(const std::string& text, Vlp16ReturnMode* mode) {
-  if (text == "strongest") *mode = Vlp16ReturnMode::kStrongest;
-  else if (text == "last") *mode = Vlp16ReturnMode::kLast;
-  else if (text == "dual") *mode = Vlp16ReturnMode::kDual;
-  else return false;
-  return true;
 }
 
 bool LidarBenchOptions::Validate(std::string* error) const {
@@ -284,71 +274,6 @@ void PrintDecodeBench(const DecodeBenchOptions& o, const DecodeBenchResult& r, s
                 r.decode.wall_s, r.stream_s / r.decode.wall_s, 1e-6 * r.points / r.decode.wall_s, r.decode.cpu_s,
                 r.stream_s / r.decode.cpu_s);
   os << line;
-}
-
-// ---------------------------------------------------------------------------------------------------------------
-int BenchLidar(int argc, char** argv) {
-  OptionParser p("bench lidar", "Speed of the simulated VLP-16 (ray casting against a scene, default rig motion) "
-                                "as a ratio to real time (289,344 firings/s), one thread, medians of repetitions.");
-  p.Add("scene", "box_room", "-", "scene name (scenes/NAME.yaml) or path");
-  p.Add("seconds", "1", "s", "simulated time per repetition");
-  p.Add("reps", "5", "-", "repetitions (median reported)");
-  p.Add("rpm", "600", "rpm", "head spin rate (300..1200)");
-  p.Add("return", "strongest", "-", "strongest | last | dual");
-  p.Add("beam-rings", "0", "-", "beam divergence sub-ray rings: 0 = central ray, n = 1 + 3n(n+1) rays");
-  p.AddFlag("truth", "also collect per-firing truth (as the tests do)");
-  p.AddFlag("pose-per-firing", "call the rig pose for every firing instead of once per sequence");
-  p.Add("seed", "1", "-", "run seed");
-  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  LidarBenchOptions o;
-  o.scene = p.Get("scene");
-  long reps = 0, rings = 0, seed = 0;
-  for (const Status& s : {p.GetDouble("seconds", &o.seconds), p.GetInt("reps", &reps), p.GetDouble("rpm", &o.rpm),
-                          p.GetInt("beam-rings", &rings), p.GetInt("seed", &seed)}) {
-    if (!s) return std::cerr << "error: " << s.message << "\n", 2;
-  }
-  if (!ParseReturnMode(p.Get("return"), &o.return_mode)) {
-    return std::cerr << "error: bench lidar: --return: strongest, last or dual\n", 2;
-  }
-  o.repetitions = static_cast<int>(reps);
-  o.beam_rings = static_cast<int>(rings);
-  o.seed = static_cast<uint64_t>(seed);
-  o.truth = p.Flag("truth");
-  o.pose_per_firing = p.Flag("pose-per-firing");
-  if (std::string why; !o.Validate(&why)) return std::cerr << "error: " << why << "\n", 2;
-  LidarBenchResult result;
-  if (Status s = RunLidarBench(o, &result); !s) return std::cerr << "error: " << s.message << "\n", 1;
-  PrintLidarBench(o, result, std::cout);
-  return 0;
-}
-
-int BenchDecode(int argc, char** argv) {
-  OptionParser p("bench decode", "Speed of the VLP-16 decoder (packets -> timed points) as a ratio to real time "
-                                 "(the time the packets span), one thread, medians of repetitions.");
-  p.Add("input", "", "-", "pcap file (or raw payloads with --raw); empty = simulate the default rig");
-  p.AddFlag("raw", "input is concatenated 1206-byte payloads");
-  p.Add("seconds", "2", "s", "length of the simulated stream");
-  p.Add("mode", "strongest", "-", "return mode of the simulated stream: strongest | last | dual");
-  p.Add("reps", "5", "-", "repetitions (median reported)");
-  p.AddFlag("split", "also cut revolutions in the timed loop");
-  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  DecodeBenchOptions o;
-  o.input = p.Get("input");
-  o.raw = p.Flag("raw");
-  o.split = p.Flag("split");
-  long reps = 0;
-  for (const Status& s : {p.GetDouble("seconds", &o.seconds), p.GetInt("reps", &reps)}) {
-    if (!s) return std::cerr << "error: " << s.message << "\n", 2;
-  }
-  if (!ParseReturnMode(p.Get("mode"), &o.mode)) {
-    return std::cerr << "error: bench decode: --mode: strongest, last or dual\n", 2;
-  }
-  o.repetitions = static_cast<int>(reps);
-  if (std::string why; !o.Validate(&why)) return std::cerr << "error: " << why << "\n", 2;
-  DecodeBenchResult result;
-  if (Status s = RunDecodeBench(o, &result); !s) return std::cerr << "error: " << s.message << "\n", 1;
-  PrintDecodeBench(o, result, std::cout);
-  return 0;
 }
 
 }  // namespace rotolidar::bench

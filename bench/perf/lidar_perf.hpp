@@ -73,12 +73,4 @@ struct DecodeBenchResult {
 Status RunDecodeBench(const DecodeBenchOptions& options, DecodeBenchResult* result);
 void PrintDecodeBench(const DecodeBenchOptions& options, const DecodeBenchResult& result, std::ostream& os);
 
-/// The CLI entry points (`rotolidar bench lidar|decode ARGS`): argc/argv are the arguments after `lidar` /
-/// `decode`. Exit codes: 0 ok, 1 failure, 2 usage error.
-int BenchLidar(int argc, char** argv);
-int BenchDecode(int argc, char** argv);
-
-/// "strongest" | "last" | "dual".
-bool ParseReturnMode(const std::string& text, Vlp16ReturnMode* mode);
-
 }  // namespace rotolidar::bench

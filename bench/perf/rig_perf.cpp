@@ -1,14 +1,12 @@
+// `rotolidar bench rig|allan`: the rig twin without the LiDAR (contract in rig_perf.hpp).
 #include "bench/perf/rig_perf.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <ctime>
-#include <fstream>
-#include <iostream>
 #include <memory>
 
-#include "bench/cli/options.hpp"
 #include "sim/rig/rig_physics.hpp"
 
 namespace rotolidar::bench {
@@ -118,75 +116,6 @@ Status RunAllanBench(const sim::SimConfig& base, double hours, AllanBenchResult*
   result->gyro = SensorFit(result->report.gyro, n.gyro_noise_density, n.gyro_random_walk);
   result->accel = SensorFit(result->report.accel, n.accel_noise_density, n.accel_random_walk);
   return Status::Ok();
-}
-
-int BenchRig(int argc, char** argv) {
-  sim::SimConfig config = sim::DefaultSimConfig();
-  OptionParser p("bench rig", "Rig twin speed without the LiDAR: MuJoCo physics + stepper drive (PID, encoder) + "
-                              "IMU model, one thread. Prints simulated seconds per CPU second (target >= 100x).");
-  p.Add("config", "", "-", "sim config YAML (carrier, motor, rig_model, imu); default: built-in");
-  p.Add("duration", "60", "s", "simulated time");
-  p.Add("repeat", "3", "-", "repetitions (the median is reported)");
-  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  long repeat = 3;
-  if (Status s = p.GetDouble("duration", &config.duration_s); !s) return std::cerr << "error: " << s.message << "\n", 2;
-  if (Status s = p.GetInt("repeat", &repeat); !s || repeat < 1) return std::cerr << "error: --repeat >= 1\n", 2;
-  if (!p.Get("config").empty()) {
-    const double duration = config.duration_s;
-    if (Status s = sim::LoadSimConfig(p.Get("config"), &config); !s) return std::cerr << "error: " << s.message << "\n", 1;
-    config.duration_s = duration;
-  }
-  std::vector<double> ratios;
-  for (long i = 0; i < repeat; ++i) {
-    RigBenchResult r;
-    if (Status s = RunRigBench(config, &r); !s) return std::cerr << "error: " << s.message << "\n", 1;
-    std::printf("run %ld: %.1f s simulated, %ld steps, %ld IMU, %ld encoder samples in %.2f s CPU (%.2f s wall): "
-                "%.1fx real time\n", i + 1, r.sim_s, r.physics_steps, r.imu_samples, r.encoder_samples, r.cpu_s,
-                r.wall_s, r.RealTimeRatio());
-    ratios.push_back(r.RealTimeRatio());
-  }
-  std::sort(ratios.begin(), ratios.end());
-  std::printf("rig physics + IMU + encoder: median %.1fx real time on 1 core\n", ratios[ratios.size() / 2]);
-  return 0;
-}
-
-int BenchAllan(int argc, char** argv) {
-  sim::SimConfig config = sim::DefaultSimConfig();
-  OptionParser p("bench allan", "Static rig through physics + IMU model; recovers the configured noise densities "
-                                "and random walks from the Allan deviation (bar: within 10 %).");
-  p.Add("hours", "24", "h", "static record length (BMI055 gyro K: 24 h gives 10 % at > 95 % confidence, docs)");
-  p.Add("seed", "1", "-", "run seed");
-  p.Add("table", "", "-", "write the tau/adev table (CSV) here");
-  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  double hours = 24;
-  long seed = 1;
-  if (Status s = p.GetDouble("hours", &hours); !s) return std::cerr << "error: " << s.message << "\n", 2;
-  if (Status s = p.GetInt("seed", &seed); !s) return std::cerr << "error: " << s.message << "\n", 2;
-  config.seed = uint64_t(seed);
-  AllanBenchResult r;
-  if (Status s = RunAllanBench(config, hours, &r); !s) return std::cerr << "error: " << s.message << "\n", 1;
-  if (!p.Get("table").empty()) {
-    std::ofstream table(p.Get("table"));
-    WriteAllanTable(table, r.report);
-  }
-  const ImuNoise& n = r.configured;
-  std::printf("%.1f h static (%ld samples) in %.1f s CPU (%.0fx real time)\n", hours, r.run.imu_samples, r.run.cpu_s,
-              r.run.RealTimeRatio());
-  for (int a = 0; a < 3; ++a)
-    std::printf("axis %c: gyro N %.4g (cfg %.4g) K %.4g (cfg %.4g) | accel N %.4g (cfg %.4g) K %.4g (cfg %.4g)\n",
-                "xyz"[a], r.report.gyro[a].fit.white_density, n.gyro_noise_density, r.report.gyro[a].fit.random_walk,
-                n.gyro_random_walk, r.report.accel[a].fit.white_density, n.accel_noise_density,
-                r.report.accel[a].fit.random_walk, n.accel_random_walk);
-  const auto row = [](const char* name, const AllanSensorFit& f, double n_cfg, double k_cfg) {
-    std::printf("%-5s (3-axis mean): N %.4g (cfg %.4g, %+.1f %%)  K %.4g (cfg %.4g, %+.1f %%)  | worst axis: N %.1f %%, "
-                "K %.1f %%\n", name, f.white_density, n_cfg, 100 * (f.white_density / n_cfg - 1), f.random_walk, k_cfg,
-                100 * (f.random_walk / k_cfg - 1), 100 * f.worst_axis_n_error, 100 * f.worst_axis_k_error);
-  };
-  row("gyro", r.gyro, n.gyro_noise_density, n.gyro_random_walk);
-  row("accel", r.accel, n.accel_noise_density, n.accel_random_walk);
-  const bool pass = r.Pass(0.1);
-  std::printf("%s\n", pass ? "PASS: each sensor's N and K within 10 %" : "FAIL: some term outside 10 %");
-  return pass ? 0 : 1;
 }
 
 }  // namespace rotolidar::bench

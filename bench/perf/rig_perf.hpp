@@ -50,7 +50,4 @@ struct AllanBenchResult {
 /// period. The first second (the hinge settling against the imbalance) is discarded.
 Status RunAllanBench(const sim::SimConfig& config, double hours, AllanBenchResult* result);
 
-int BenchRig(int argc, char** argv);
-int BenchAllan(int argc, char** argv);
-
 }  // namespace rotolidar::bench

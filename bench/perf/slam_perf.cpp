@@ -8,11 +8,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <iostream>
 
 #include <nlohmann/json.hpp>
 
-#include "bench/cli/options.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/io/recording.hpp"
 #include "core/pipeline/estimator.hpp"
@@ -231,42 +229,6 @@ Status WriteSlamBenchJson(const std::string& path, const SlamBenchOptions& o, co
   std::ofstream file(path);
   file << j.dump(2) << "\n";
   return file ? Status::Ok() : Status::Error(path + ": write failed");
-}
-
-int BenchSlam(int argc, char** argv) {
-  OptionParser p("bench slam", "Simulate a recording, run the SLAM core on it and report per-scan time per stage, "
-                               "the real-time ratio (data span / estimator CPU time), ATE and the per-point deskew "
-                               "error against truth (target: median <= 10 ms per scan on 1 core).");
-  p.Add("scene", "lab", "-", "scene name (scenes/NAME.yaml) or path");
-  p.Add("duration", "20", "s", "simulated time");
-  p.Add("seed", "1", "-", "run seed of the simulation");
-  p.Add("carrier", "handheld", "-", "handheld (the scene's default walk) | scripted_loop");
-  p.Add("reps", "2", "-", "estimator runs over the recording (the first scores deskew and ATE; the others are timed)");
-  p.Add("threads", "1", "-", "estimator threads (features, Ceres)");
-  p.Add("recording", "runs/bench_slam/recording", "-", "folder the simulated recording is written to");
-  p.Add("json", "", "-", "also write the results to this JSON file");
-  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  SlamBenchOptions o;
-  o.scene = p.Get("scene");
-  o.carrier = p.Get("carrier");
-  o.recording_dir = p.Get("recording");
-  long seed = 0, reps = 0, threads = 0;
-  for (const Status& s : {p.GetDouble("duration", &o.duration_s), p.GetInt("seed", &seed), p.GetInt("reps", &reps),
-                          p.GetInt("threads", &threads)}) {
-    if (!s) return std::cerr << "error: " << s.message << "\n", 2;
-  }
-  o.seed = static_cast<uint64_t>(seed);
-  o.repetitions = static_cast<int>(reps);
-  o.threads = static_cast<int>(threads);
-  if (std::string why; !o.Validate(&why)) return std::cerr << "error: " << why << "\n", 2;
-  SlamBenchResult result;
-  if (Status s = RunSlamBench(o, &result); !s) return std::cerr << "error: " << s.message << "\n", 1;
-  PrintSlamBench(o, result, std::cout);
-  if (const std::string json = p.Get("json"); !json.empty()) {
-    if (Status s = WriteSlamBenchJson(json, o, result); !s) return std::cerr << "error: " << s.message << "\n", 1;
-    std::cout << "wrote " << json << "\n";
-  }
-  return 0;
 }
 
 }  // namespace rotolidar::bench

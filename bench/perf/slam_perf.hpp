@@ -56,7 +56,4 @@ Status RunSlamBench(const SlamBenchOptions& options, SlamBenchResult* result);
 void PrintSlamBench(const SlamBenchOptions& options, const SlamBenchResult& result, std::ostream& os);
 Status WriteSlamBenchJson(const std::string& path, const SlamBenchOptions& options, const SlamBenchResult& result);
 
-/// `rotolidar bench slam ARGS` (arguments after `slam`). Exit codes: 0 ok, 1 failure, 2 usage error.
-int BenchSlam(int argc, char** argv);
-
 }  // namespace rotolidar::bench

@@ -6,6 +6,7 @@
 
 #include "bench/eval/alignment.hpp"
 #include "bench/eval/statistics.hpp"
+#include "bench/eval/trajectory_lookup.hpp"
 #include "bench/eval/trajectory_metrics.hpp"
 #include "bench/report/html_report.hpp"
 #include "bench/run/progress.hpp"

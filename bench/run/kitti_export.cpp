@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <optional>
 
-#include "bench/metrics/deskew_error.hpp"  // PoseAt: the truth interpolation the deskew metric uses
+#include "bench/eval/trajectory_lookup.hpp"  // PoseAt: the truth interpolation the deskew metric uses
 #include "core/io/recording.hpp"
 #include "core/wire/scan_splitter.hpp"
 #include "core/pipeline/estimator.hpp"

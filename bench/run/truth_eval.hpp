@@ -7,10 +7,6 @@
 
 namespace rotolidar::bench {
 
-/// The reference trajectory interpolated at `times` (linear position, slerp rotation). Times outside the
-/// reference's span are dropped. `ref` must be sorted.
-Trajectory InterpolateTrajectory(const Trajectory& ref, const Trajectory& at_times_of);
-
 /// APE (translation, SE(3) Umeyama) of `estimate` (T_world_base) against <recording>/truth/base.tum, with the
 /// truth interpolated at the estimate's own timestamps (exact association, no 10 ms nearest-neighbour slack).
 Status EvaluateAgainstTruth(const std::string& recording_dir, const Trajectory& estimate, EvalResult* result);

@@ -102,6 +102,15 @@ unsigned AttachInstance(RTCDevice device, RTCScene top, RTCScene child, const Ei
   return id;
 }
 
+/// rtcPointQuery's callback: hands the triangle to the caller's visitor and shrinks the search to its answer.
+bool VisitPointQueryCandidate(RTCPointQueryFunctionArguments* args) {
+  const auto& visit = *static_cast<const std::function<double(int)>*>(args->userPtr);
+  const float radius = static_cast<float>(visit(static_cast<int>(args->primID)));
+  if (!(radius < args->query->radius)) return false;
+  args->query->radius = radius;
+  return true;  // the radius shrank: Embree re-culls the remaining nodes
+}
+
 }  // namespace
 
 Status EmbreeScene::AddTriangles(RTCScene target, const TriangleMesh& mesh, Part* part) {
@@ -267,6 +276,22 @@ void EmbreeScene::IntersectBatch(const RayQuery* rays, std::size_t count, RayHit
     rtcIntersect1M(scene_, &context, scratch.data(), static_cast<unsigned>(n), sizeof(RTCRayHit));
     for (std::size_t i = 0; i < n; ++i) FillHit(scratch[i], dirs[i], &hits[begin + i]);
   }
+}
+
+void EmbreeScene::VisitStaticTrianglesNear(const Eigen::Vector3d& p, double radius_m,
+                                           const std::function<double(int)>& visit) const {
+  RTCPointQuery query;
+  query.x = static_cast<float>(p.x());
+  query.y = static_cast<float>(p.y());
+  query.z = static_cast<float>(p.z());
+  query.time = 0.0f;
+  query.radius = static_cast<float>(radius_m);
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  // With dynamic objects the static world is its own scene (instanced with identity); without, it is scene_.
+  RTCScene static_world = static_scene_ ? static_scene_ : scene_;
+  rtcPointQuery(static_world, &query, &context, VisitPointQueryCandidate,
+                const_cast<std::function<double(int)>*>(&visit));
 }
 
 }  // namespace rotolidar::sim

@@ -13,9 +13,13 @@
 // `rotolidar scene list`). Call it once per VLP-16 packet (1.33 ms of firing).
 // A scene without dynamic objects is one flat triangle geometry, as fast as before.
 //
-// Thread safety: after Create, Intersect and IntersectBatch are const and may run concurrently from any
-// threads; SetTime must not run concurrently with them (call it between packets).
+// Closest-point searches (the map-to-truth distance, bench/metrics/surface_distance.hpp) use the same BVH through
+// VisitStaticTrianglesNear, so every Embree device and scene of the project is created here.
+//
+// Thread safety: after Create, Intersect, IntersectBatch and VisitStaticTrianglesNear are const and may run
+// concurrently from any threads; SetTime must not run concurrently with them (call it between packets).
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -80,6 +84,14 @@ class EmbreeScene {
   /// The same for `count` rays at once through Embree's stream API (faster for coherent batches, e.g. a firing
   /// sequence after another). hits[i] answers rays[i]; results equal Intersect's ray for ray.
   void IntersectBatch(const RayQuery* rays, std::size_t count, RayHit* hits) const;
+
+  /// The candidates of a closest-point search around p over the static world (dynamic objects are not searched):
+  /// Embree's BVH point query calls visit(triangle_id) for each static triangle whose bounding box lies within
+  /// the current radius of p, starting at radius_m, in BVH order (a triangle may come more than once). visit
+  /// returns the radius to go on with; returning a smaller one (the best distance so far) prunes the search.
+  /// Triangle ids index the static mesh, as RayHit::triangle_id with object_id == -1.
+  void VisitStaticTrianglesNear(const Eigen::Vector3d& p, double radius_m,
+                                const std::function<double(int triangle_id)>& visit) const;
 
   const Material& material(int id) const { return materials_.at(static_cast<std::size_t>(id)); }
   const std::vector<Material>& materials() const { return materials_; }

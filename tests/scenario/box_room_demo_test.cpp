@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "bench/run/demo.hpp"
+#include "bench/demo/demo.hpp"
 
 namespace rotolidar::bench {
 namespace {

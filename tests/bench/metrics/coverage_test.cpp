@@ -9,7 +9,6 @@
 
 #include "bench/metrics/coverage.hpp"
 #include "bench/metrics/map_metrics.hpp"
-#include "bench/metrics/surface_distance.hpp"
 #include "core/util/rng.hpp"
 #include "sim/world/embree_scene.hpp"
 
@@ -243,21 +242,6 @@ TEST(MapToTruth, PointsOffsetByAKnownDistance) {
   EXPECT_NEAR(m.map_to_truth.rmse_m, 0.2 / std::sqrt(3.0), 0.005);
   EXPECT_NEAR(m.map_to_truth.fraction_within_m, 0.25, 0.03);  // <= 0.05 m: a quarter
   EXPECT_LE(m.map_to_truth.max_m, 0.2);
-}
-
-TEST(MapToTruth, ClosestPointOnTriangleMatchesADenseSearch) {
-  const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0.2), c(0.3, 0.8, -0.1);
-  RandomStream rng(3, "closest_point_test");
-  for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector3d p(3 * rng.Uniform() - 1, 3 * rng.Uniform() - 1, 2 * rng.Uniform() - 1);
-    double best = 1e9;
-    for (int u = 0; u <= 400; ++u)  // barycentric grid with step 1/400: error < edge / 400 < 3 mm
-      for (int v = 0; u + v <= 400; ++v)
-        best = std::min(best, (a + (b - a) * (u / 400.0) + (c - a) * (v / 400.0) - p).norm());
-    const double exact = (ClosestPointOnTriangle(p, a, b, c) - p).norm();
-    EXPECT_LE(exact, best + 1e-12);
-    EXPECT_GT(exact, best - 3e-3);
-  }
 }
 
 TEST(MapAlignment, FirstPoseRecoversTheGauge) {

@@ -67,18 +67,6 @@ TEST(SummarizeErrors, NearestRankQuantiles) {
   EXPECT_EQ(SummarizeErrors({}).count, 0u);
 }
 
-TEST(PoseAt, InterpolatesAndRefusesOutsideTheSpan) {
-  const DeskewTruth truth = SyntheticTruth(1.0);
-  Pose3 T;
-  ASSERT_TRUE(PoseAt(truth.T_world_lidar, 0.4567, &T));
-  EXPECT_LT((T.translation() - LidarAt(0.4567).translation()).norm(), 1e-9);
-  EXPECT_LT((T.linear() - LidarAt(0.4567).linear()).norm(), 1e-9);
-  EXPECT_TRUE(PoseAt(truth.T_world_lidar, 0.0, &T));
-  EXPECT_TRUE(PoseAt(truth.T_world_lidar, 1.0, &T));
-  EXPECT_FALSE(PoseAt(truth.T_world_lidar, -1e-6, &T));
-  EXPECT_FALSE(PoseAt(truth.T_world_lidar, 1.0 + 1e-6, &T));
-}
-
 // Injected errors of 1..1000 x 0.01 mm (0.01..10 mm) in two scans: the statistics are those of the injected list,
 // up to float rounding of positions ~5 m from the base (~1 um).
 TEST(EvaluateDeskew, RecoversInjectedErrors) {

@@ -13,8 +13,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bench/demo/demo.hpp"
 #include "bench/report/run_report.hpp"
-#include "bench/run/demo.hpp"
 #include "bench/study/study_config.hpp"
 #include "bench/study/study_runner.hpp"
 #include "core/io/trajectory_io.hpp"

@@ -12,9 +12,9 @@
 
 #include <gtest/gtest.h>
 
+#include "bench/eval/trajectory_lookup.hpp"
 #include "bench/run/kitti_export.hpp"
 #include "bench/run/kitti_run.hpp"
-#include "bench/run/truth_eval.hpp"
 #include "core/io/recording.hpp"
 #include "sim/sim_runner.hpp"
 #include "sim/truth/truth.hpp"

@@ -1,5 +1,7 @@
 // Embree ray casting: closed rooms do not leak, distances and normals match analytic geometry, the batched and
-// single-ray calls agree, concurrent calls are safe, bad meshes are refused, dynamic objects move with SetTime.
+// single-ray calls agree, concurrent calls are safe, bad meshes are refused, dynamic objects move with SetTime;
+// the point query offers the static triangles near a point.
+#include <set>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -189,6 +191,55 @@ TEST(EmbreeScene, InstancedScenesMatchFlatMeshesRayForRay) {
     on_car += a.object_id == 0;
   }
   EXPECT_GT(on_car, 30);  // some rays do see the car
+}
+
+/// The distinct static triangles VisitStaticTrianglesNear offers around p without pruning.
+std::set<int> VisitedNear(const EmbreeScene& es, const Eigen::Vector3d& p, double radius_m) {
+  std::set<int> ids;
+  es.VisitStaticTrianglesNear(p, radius_m, [&](int id) {
+    ids.insert(id);
+    return radius_m;
+  });
+  return ids;
+}
+
+TEST(EmbreeScene, PointQueryOffersEveryStaticTriangleNearThePoint) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene(testing::BoxRoomPath(), &scene).ok);
+  const TriangleMesh mesh = BuildMesh(scene);
+  const auto es = testing::MakeEmbree(scene);
+  // Unpruned, a radius beyond the scene reaches every triangle.
+  const Eigen::Vector3d centre = scene.bounds.center();
+  EXPECT_EQ(VisitedNear(*es, centre, 1e3).size(), mesh.triangles.size());
+  RandomStream rng(11, "test.point_query");
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d p = RandomInside(scene.bounds, 0.02, &rng);
+    const std::set<int> ids = VisitedNear(*es, p, 1.0);
+    for (int id : ids) ASSERT_TRUE(id >= 0 && id < static_cast<int>(mesh.triangles.size())) << id;
+    // A triangle with a vertex inside the sphere reaches into it: it must be offered (float bounds: 1e-4 m slack).
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      bool near = false;
+      for (int k = 0; k < 3; ++k) near |= (mesh.vertices_m[mesh.triangles[t][k]] - p).norm() < 1.0 - 1e-4;
+      if (near) EXPECT_TRUE(ids.count(static_cast<int>(t))) << "point " << i << ", triangle " << t;
+    }
+  }
+  // A visitor that answers 0 prunes the search to the triangles whose bounds touch the point itself.
+  std::size_t pruned = 0;
+  es->VisitStaticTrianglesNear(centre, 1e3, [&](int) { return ++pruned, 0.0; });
+  EXPECT_LT(pruned, mesh.triangles.size());
+}
+
+TEST(EmbreeScene, PointQueryIgnoresDynamicObjects) {
+  // The instanced static world offers what the same scene without its car offers, point for point.
+  const Scene with_car = testing::RoomWithCar();
+  std::unique_ptr<EmbreeScene> instanced;
+  ASSERT_TRUE(EmbreeScene::Create(with_car, &instanced, 0.0).ok);
+  const auto flat = testing::MakeEmbree(testing::PlainRoom());
+  RandomStream rng(13, "test.point_query_dynamic");
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d p = RandomInside(with_car.bounds, 0.02, &rng);
+    EXPECT_EQ(VisitedNear(*instanced, p, 1.5), VisitedNear(*flat, p, 1.5)) << "point " << i;
+  }
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "bench/run/demo.hpp"
+#include "bench/demo/demo.hpp"
 
 #include <cstdio>
 #include <filesystem>

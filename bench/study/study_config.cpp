@@ -58,7 +58,8 @@ void ParseSweep(const yaml::Section& at, const YAML::Node& n, const sim::SimConf
 
 void CheckMetric(const std::string& file, const YAML::Node& at, const std::string& metric) {
   if (!FindStudyMetric(metric))
-    throw yaml::ParseError(yaml::Where(file, at) + "plots: unknown metric '" + metric + "' (docs/studies.md lists them)");
+    throw yaml::ParseError(yaml::Where(file, at) + "plots: unknown metric '" + metric +
+                           "' (docs/studies.md lists them)");
 }
 
 /// `metric: NAME`, the one-metric spelling of `metrics`.

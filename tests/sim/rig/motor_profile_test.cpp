@@ -211,8 +211,9 @@ TEST(MotorDriveYaml, EmitParseRoundTripIsExact) {
 std::string ParseError(const std::string& text) {
   MotorDriveConfig c;
   const Status s = ParseMotorDriveConfig("rig/motor.yaml", YAML::Load(text), &c);
-  if (!s.ok) EXPECT_TRUE(c == MotorDriveConfig()) << "a failed parse must leave the config untouched";
-  return s.ok ? "" : s.message;
+  if (s.ok) return "";
+  EXPECT_TRUE(c == MotorDriveConfig()) << "a failed parse must leave the config untouched";
+  return s.message;
 }
 
 TEST(MotorDriveYaml, ErrorsNameFileLineAndField) {

@@ -20,7 +20,7 @@
 // holds), Path (a file path, resolved against the YAML file's folder), Required (an error when missing),
 // Fixed (a key whose only allowed value is a given word).
 //
-// Define each struct's Visit exactly once in the program (in the .cpp that owns its YAML), before the first
+// Define each struct's Visit exactly once in the program (in the file that owns its YAML), before the first
 // Parse/Emit/Equal of any struct that contains it.
 #include <array>
 #include <filesystem>

@@ -1,6 +1,7 @@
 #pragma once
-// Helpers for parsing YAML at the edges: strict key checking and messages that name file:line and the key.
-// Only .cpp files in io/ and bench/ include this (yaml-cpp stays out of the estimator's headers).
+// Helpers for parsing YAML at the edges: strict key checking and messages that name file:line and the key. The
+// field-list idiom every config uses (core/io/yaml_fields.hpp) is built on them. Only .cpp files at the YAML
+// edges (core/io, sim's parsers, bench) include this: yaml-cpp stays out of the estimator's headers.
 #include <set>
 #include <string>
 

@@ -1,3 +1,5 @@
+// SimConfig: YAML with the project's one idiom (core/io/yaml_fields.hpp; each section a field list or another
+// module's own parser), validation, the true calibration and scene lookup.
 #include "sim/sim_config.hpp"
 
 #include <algorithm>
@@ -12,9 +14,6 @@
 #endif
 
 namespace rotolidar::sim {
-
-// ---- the field lists (in the structs' namespace, so the generic visitors find them) ----
-
 namespace {
 
 /// lidar.material_transmittance: a mapping material name -> fraction, kept in file order.
@@ -54,6 +53,8 @@ auto Module(T* value, Status (*parse)(const std::string&, const YAML::Node&, T*)
 }
 
 }  // namespace
+
+// ---- the field lists (in the structs' namespace, so the generic visitors find them) ----
 
 template <class V>
 void Visit(V& v, Vlp16CasterConfig& c) {

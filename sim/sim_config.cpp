@@ -1,3 +1,5 @@
+// SimConfig: YAML with the project's one idiom (core/io/yaml_fields.hpp; each section a field list or another
+// module's own parser), validation, the true calibration and scene lookup.
 #include "sim/sim_config.hpp"
 
 #include <algorithm>
@@ -5,7 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "core/io/yaml_util.hpp"
+#include "core/io/yaml_fields.hpp"
 
 #ifndef ROTOLIDAR_SOURCE_DIR
 #define ROTOLIDAR_SOURCE_DIR "."
@@ -14,107 +16,81 @@
 namespace rotolidar::sim {
 namespace {
 
-const char* ReturnModeName(Vlp16ReturnMode mode) {
-  switch (mode) {
-    case Vlp16ReturnMode::kLast: return "last";
-    case Vlp16ReturnMode::kDual: return "dual";
-    default: return "strongest";
+/// lidar.material_transmittance: a mapping material name -> fraction, kept in file order.
+void ReadTransmittance(const yaml::Section& at, const YAML::Node& m, std::vector<std::pair<std::string, double>>* out) {
+  if (!m.IsMap()) throw yaml::ParseError(yaml::Where(at.file, m) + at.path + ": a map name -> fraction");
+  out->clear();
+  for (const auto& kv : m) {
+    const std::string name = kv.first.as<std::string>();
+    double fraction = 0.0;
+    yaml::ReadAs(at.file, kv.second, at.Field(name), &fraction);
+    out->emplace_back(name, fraction);
   }
 }
 
-void ParseLidar(const std::string& path, const YAML::Node& n, Vlp16CasterConfig* c) {
-  using yaml::Get;
-  yaml::CheckKeys(path, n,
-                  {"rpm", "rpm_jitter_frac", "rpm_jitter_tau_s", "range_noise_sigma_m", "min_range_m", "max_range_m",
-                   "grazing_cutoff_deg", "min_intensity_for_return", "intensity_attenuation_per_m", "beam_rings",
-                   "beam_divergence_horizontal_mrad", "beam_divergence_vertical_mrad", "echo_separation_m",
-                   "material_transmittance", "max_surfaces_per_ray", "pose_per_firing"},
-                  "lidar");
-  Get(path, n, "rpm", &c->rpm);
-  Get(path, n, "rpm_jitter_frac", &c->rpm_jitter_frac);
-  Get(path, n, "rpm_jitter_tau_s", &c->rpm_jitter_tau_s);
-  Get(path, n, "range_noise_sigma_m", &c->range_noise_sigma_m);
-  Get(path, n, "min_range_m", &c->min_range_m);
-  Get(path, n, "max_range_m", &c->max_range_m);
-  Get(path, n, "grazing_cutoff_deg", &c->grazing_cutoff_deg);
-  Get(path, n, "min_intensity_for_return", &c->min_intensity_for_return);
-  Get(path, n, "intensity_attenuation_per_m", &c->intensity_attenuation_per_m);
-  Get(path, n, "beam_rings", &c->beam_rings);
-  Get(path, n, "beam_divergence_horizontal_mrad", &c->beam_divergence_horizontal_mrad);
-  Get(path, n, "beam_divergence_vertical_mrad", &c->beam_divergence_vertical_mrad);
-  Get(path, n, "echo_separation_m", &c->echo_separation_m);
-  Get(path, n, "max_surfaces_per_ray", &c->max_surfaces_per_ray);
-  Get(path, n, "pose_per_firing", &c->pose_per_firing);
-  if (const YAML::Node m = n["material_transmittance"]) {
-    if (!m.IsMap()) throw yaml::ParseError(yaml::Where(path, m) + "lidar.material_transmittance: a map name -> fraction");
-    c->material_transmittance.clear();
-    for (const auto& kv : m) {
-      double fraction = 0.0;
-      Get(path, m, kv.first.as<std::string>(), &fraction);
-      c->material_transmittance.emplace_back(kv.first.as<std::string>(), fraction);
-    }
-  }
-}
-
-void EmitLidar(YAML::Emitter& out, const Vlp16CasterConfig& c) {
+void EmitTransmittance(YAML::Emitter& out, const std::vector<std::pair<std::string, double>>& m) {
   out << YAML::BeginMap;
-  out << YAML::Key << "rpm" << YAML::Value << c.rpm;
-  out << YAML::Key << "rpm_jitter_frac" << YAML::Value << c.rpm_jitter_frac;
-  out << YAML::Key << "rpm_jitter_tau_s" << YAML::Value << c.rpm_jitter_tau_s;
-  out << YAML::Key << "range_noise_sigma_m" << YAML::Value << c.range_noise_sigma_m;
-  out << YAML::Key << "min_range_m" << YAML::Value << c.min_range_m;
-  out << YAML::Key << "max_range_m" << YAML::Value << c.max_range_m;
-  out << YAML::Key << "grazing_cutoff_deg" << YAML::Value << c.grazing_cutoff_deg;
-  out << YAML::Key << "min_intensity_for_return" << YAML::Value << c.min_intensity_for_return;
-  out << YAML::Key << "intensity_attenuation_per_m" << YAML::Value << c.intensity_attenuation_per_m;
-  out << YAML::Key << "beam_rings" << YAML::Value << c.beam_rings;
-  out << YAML::Key << "beam_divergence_horizontal_mrad" << YAML::Value << c.beam_divergence_horizontal_mrad;
-  out << YAML::Key << "beam_divergence_vertical_mrad" << YAML::Value << c.beam_divergence_vertical_mrad;
-  out << YAML::Key << "echo_separation_m" << YAML::Value << c.echo_separation_m;
-  out << YAML::Key << "material_transmittance" << YAML::Value << YAML::BeginMap;
-  for (const auto& [name, fraction] : c.material_transmittance) out << YAML::Key << name << YAML::Value << fraction;
-  out << YAML::EndMap;
-  out << YAML::Key << "max_surfaces_per_ray" << YAML::Value << c.max_surfaces_per_ray;
-  out << YAML::Key << "pose_per_firing" << YAML::Value << c.pose_per_firing;
+  for (const auto& [name, fraction] : m) out << YAML::Key << name << YAML::Value << fraction;
   out << YAML::EndMap;
 }
 
-void ParseRigModelSection(const std::string& path, const YAML::Node& n, RigModelConfig* c) {
-  if (!n.IsScalar()) {
-    ParseRigModelConfig(path, n, c);
-    return;
-  }
+/// rig_model: a mapping of overrides, or the path of a rig parameter file (relative to the config's folder).
+Status ReadRigModel(const yaml::Section& at, const YAML::Node& n, RigModelConfig* c) {
+  if (!n.IsScalar()) return ParseRigModelConfig(at.file, n, c);
   std::filesystem::path file = n.as<std::string>();
-  if (file.is_relative()) file = std::filesystem::path(path).parent_path() / file;
+  if (file.is_relative()) file = std::filesystem::path(at.file).parent_path() / file;
   if (Status s = LoadRigModelConfig(file.string(), c); !s)
-    throw yaml::ParseError(yaml::Where(path, n) + "rig_model: " + s.message);
+    return Status::Error(yaml::Where(at.file, n) + "rig_model: " + s.message);
+  return Status::Ok();
 }
 
-void ParseTop(const std::string& path, const YAML::Node& root, SimConfig* c) {
-  using yaml::Get;
-  yaml::CheckKeys(path, root,
-                  {"seed", "duration_s", "scene", "truth_rate_hz", "return_mode", "rig_model", "carrier", "motor",
-                   "imu", "lidar", "clocks", "camera"},
-                  "sim");
-  Get(path, root, "seed", &c->seed);
-  Get(path, root, "duration_s", &c->duration_s);
-  Get(path, root, "scene", &c->scene);
-  Get(path, root, "truth_rate_hz", &c->truth_rate_hz);
-  std::string mode = ReturnModeName(c->return_mode);
-  Get(path, root, "return_mode", &mode);
-  if (mode == "strongest") c->return_mode = Vlp16ReturnMode::kStrongest;
-  else if (mode == "last") c->return_mode = Vlp16ReturnMode::kLast;
-  else if (mode == "dual") c->return_mode = Vlp16ReturnMode::kDual;
-  else throw yaml::ParseError(yaml::Where(path, root["return_mode"]) + "return_mode: strongest, last or dual");
-  c->lidar.return_mode = c->return_mode;
-  if (const YAML::Node n = root["clocks"]) {
-    yaml::CheckKeys(path, n, {"lidar_offset_s", "encoder_offset_s"}, "clocks");
-    Get(path, n, "lidar_offset_s", &c->clocks.lidar_offset_s);
-    Get(path, n, "encoder_offset_s", &c->clocks.encoder_offset_s);
-  }
+/// A section another module parses (with its own validation) and emits.
+template <class T>
+auto Module(T* value, Status (*parse)(const std::string&, const YAML::Node&, T*),
+            void (*emit)(YAML::Emitter&, const T&)) {
+  return yaml::Custom(
+      value, [parse](const yaml::Section& at, const YAML::Node& n, T* v) { return parse(at.file, n, v); }, emit);
 }
 
 }  // namespace
+
+// ---- the field lists (in the structs' namespace, so the generic visitors find them) ----
+
+template <class V>
+void Visit(V& v, Vlp16CasterConfig& c) {
+  v("rpm", &c.rpm), v("rpm_jitter_frac", &c.rpm_jitter_frac), v("rpm_jitter_tau_s", &c.rpm_jitter_tau_s);
+  v("range_noise_sigma_m", &c.range_noise_sigma_m), v("min_range_m", &c.min_range_m);
+  v("max_range_m", &c.max_range_m), v("grazing_cutoff_deg", &c.grazing_cutoff_deg);
+  v("min_intensity_for_return", &c.min_intensity_for_return);
+  v("intensity_attenuation_per_m", &c.intensity_attenuation_per_m), v("beam_rings", &c.beam_rings);
+  v("beam_divergence_horizontal_mrad", &c.beam_divergence_horizontal_mrad);
+  v("beam_divergence_vertical_mrad", &c.beam_divergence_vertical_mrad);
+  v("echo_separation_m", &c.echo_separation_m);
+  v("material_transmittance", yaml::Custom(&c.material_transmittance, ReadTransmittance, EmitTransmittance));
+  v("max_surfaces_per_ray", &c.max_surfaces_per_ray), v("pose_per_firing", &c.pose_per_firing);
+}
+
+template <class V>
+void Visit(V& v, ClockConfig& c) {
+  v("lidar_offset_s", &c.lidar_offset_s), v("encoder_offset_s", &c.encoder_offset_s);
+}
+
+/// A config file that names carrier.type clears carrier_from_scene (the file chose the carrier).
+template <class V>
+void Visit(V& v, SimConfig& c) {
+  v("seed", &c.seed), v("duration_s", &c.duration_s), v("scene", &c.scene), v("truth_rate_hz", &c.truth_rate_hz);
+  v("return_mode", &c.return_mode);
+  v("rig_model", yaml::Custom(&c.rig_model, ReadRigModel, EmitRigModelConfig));
+  const auto read_carrier = [&c](const yaml::Section& at, const YAML::Node& n, CarrierConfig* carrier) {
+    if (Status s = ParseCarrierConfig(at.file, n, carrier); !s) return s;
+    if (n.IsMap() && n["type"]) c.carrier_from_scene = false;
+    return Status::Ok();
+  };
+  v("carrier", yaml::Custom(&c.carrier, read_carrier, EmitCarrierConfig));
+  v("motor", Module(&c.motor, ParseMotorDriveConfig, EmitMotorDriveConfig));
+  v("imu", Module(&c.imu, ParseImuConfig, EmitImuConfig)), v("lidar", &c.lidar), v("clocks", &c.clocks);
+  v("camera", Module(&c.camera, ParseCameraConfig, EmitCameraConfig));
+}
 
 bool ClockConfig::Validate(std::string* error) const {
   for (const auto& [name, v] : {std::pair{"lidar_offset_s", lidar_offset_s}, {"encoder_offset_s", encoder_offset_s}}) {
@@ -222,16 +198,8 @@ Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig
   try {
     if (!root.IsMap() && !root.IsNull())
       throw yaml::ParseError(yaml::Where(path, root) + "sim config: expected a mapping");
-    ParseTop(path, root, &c);
-    if (const YAML::Node n = root["rig_model"]) ParseRigModelSection(path, n, &c.rig_model);
-    if (const YAML::Node n = root["carrier"]) {
-      ParseCarrierConfig(path, n, &c.carrier);
-      if (n.IsMap() && n["type"]) c.carrier_from_scene = false;  // the file names the carrier
-    }
-    if (const YAML::Node n = root["motor"]) ParseMotorDriveConfig(path, n, &c.motor);
-    if (const YAML::Node n = root["imu"]) ParseImuConfig(path, n, &c.imu);
-    if (const YAML::Node n = root["lidar"]) ParseLidar(path, n, &c.lidar);
-    if (const YAML::Node n = root["camera"]) ParseCameraConfig(path, n, &c.camera);
+    yaml::Parse(yaml::Section(path, "", "sim"), root, &c);
+    c.lidar.return_mode = c.return_mode;  // the caster's echoes follow the encoder's mode
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   }
@@ -241,29 +209,6 @@ Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig
   return Status::Ok();
 }
 
-void EmitSimConfig(YAML::Emitter& out, const SimConfig& c) {
-  out << YAML::BeginMap;
-  out << YAML::Key << "seed" << YAML::Value << c.seed;
-  out << YAML::Key << "duration_s" << YAML::Value << c.duration_s;
-  out << YAML::Key << "scene" << YAML::Value << c.scene;
-  out << YAML::Key << "truth_rate_hz" << YAML::Value << c.truth_rate_hz;
-  out << YAML::Key << "return_mode" << YAML::Value << ReturnModeName(c.return_mode);
-  out << YAML::Key << "rig_model" << YAML::Value;
-  EmitRigModelConfig(out, c.rig_model);
-  out << YAML::Key << "carrier" << YAML::Value;
-  EmitCarrierConfig(out, c.carrier);
-  out << YAML::Key << "motor" << YAML::Value;
-  EmitMotorDriveConfig(out, c.motor);
-  out << YAML::Key << "imu" << YAML::Value;
-  EmitImuConfig(out, c.imu);
-  out << YAML::Key << "lidar" << YAML::Value;
-  EmitLidar(out, c.lidar);
-  out << YAML::Key << "clocks" << YAML::Value << YAML::BeginMap << YAML::Key << "lidar_offset_s" << YAML::Value
-      << c.clocks.lidar_offset_s << YAML::Key << "encoder_offset_s" << YAML::Value << c.clocks.encoder_offset_s
-      << YAML::EndMap;
-  out << YAML::Key << "camera" << YAML::Value;
-  EmitCameraConfig(out, c.camera);
-  out << YAML::EndMap;
-}
+void EmitSimConfig(YAML::Emitter& out, const SimConfig& c) { yaml::Emit(out, c); }
 
 }  // namespace rotolidar::sim

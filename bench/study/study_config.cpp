@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <set>
 
-#include "core/io/yaml_util.hpp"
+#include "core/io/yaml_fields.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -25,46 +25,6 @@ std::string Relative(const std::string& study_path, const std::string& path) {
   return p.lexically_normal().string();
 }
 
-template <typename T>
-std::vector<T> GetList(const std::string& file, const YAML::Node& sweep, const std::string& key) {
-  std::vector<T> out;
-  const YAML::Node n = sweep[key];
-  if (!n) return out;
-  if (!n.IsSequence() || n.size() == 0)
-    throw yaml::ParseError(yaml::Where(file, n) + "sweep." + key + ": expected a non-empty list of values");
-  for (size_t i = 0; i < n.size(); ++i) {
-    try {
-      out.push_back(n[i].as<T>());
-    } catch (const YAML::Exception&) {
-      throw yaml::ParseError(yaml::Where(file, n[i]) + "sweep." + key + ": cannot read value '" +
-                             (n[i].IsScalar() ? n[i].Scalar() : std::string("<non-scalar>")) + "'");
-    }
-  }
-  return out;
-}
-
-/// A list of names mapped through `parse` (false = unknown name, reported with `allowed`).
-template <typename T, typename Parse>
-std::vector<T> GetNamed(const std::string& file, const YAML::Node& sweep, const std::string& key, Parse parse,
-                        const std::string& allowed) {
-  std::vector<T> out;
-  const std::vector<std::string> names = GetList<std::string>(file, sweep, key);
-  for (size_t i = 0; i < names.size(); ++i) {
-    T value{};
-    if (!parse(names[i], &value))
-      throw yaml::ParseError(yaml::Where(file, sweep[key][i]) + "sweep." + key + ": unknown value '" + names[i] +
-                             "' (" + allowed + ")");
-    out.push_back(value);
-  }
-  return out;
-}
-
-bool ParseAxis(const std::string& name, sim::MotorAxis* axis) {
-  for (sim::MotorAxis a : {sim::MotorAxis::kHorizontal, sim::MotorAxis::kVertical, sim::MotorAxis::kTilted})
-    if (name == sim::MotorAxisName(a)) return *axis = a, true;
-  return false;
-}
-
 void ThrowIfError(const Status& s) {
   if (!s) throw yaml::ParseError(s.message);
 }
@@ -82,68 +42,98 @@ void ParseVariants(const std::string& file, const YAML::Node& n, const sim::SimC
   }
 }
 
-StudySweep ParseSweep(const std::string& file, const YAML::Node& n, const sim::SimConfig& base) {
-  yaml::CheckKeys(file, n, {"variant", "motor_speed_radps", "profile", "axis", "scene", "carrier", "seed"}, "sweep");
+/// The sweep replaces *sweep: its typed axes from the field list (every axis a non-empty list), its variants
+/// (named sim configs over `base`) by hand.
+void ParseSweep(const yaml::Section& at, const YAML::Node& n, const sim::SimConfig& base, StudySweep* sweep) {
   StudySweep s;
-  if (const YAML::Node v = n["variant"]) ParseVariants(file, v, base, &s);
-  s.motor_speed_radps = GetList<double>(file, n, "motor_speed_radps");
-  s.profiles = GetNamed<sim::MotorProfileType>(file, n, "profile", sim::ParseMotorProfileType,
-                                               "constant, trapezoid, nodding or stop_and_go");
-  s.axes = GetNamed<sim::MotorAxis>(file, n, "axis", ParseAxis, "horizontal, vertical or tilted");
-  s.scenes = GetList<std::string>(file, n, "scene");
-  s.carriers = GetNamed<sim::CarrierType>(file, n, "carrier", sim::CarrierTypeFromName,
-                                          "scripted_loop, handheld, wheeled, car or kitti");
-  s.seeds = GetList<uint64_t>(file, n, "seed");
-  return s;
+  yaml::Parse(at, n, &s, {"variant"});
+  for (const auto& kv : n) {
+    const std::string key = kv.first.as<std::string>();
+    if (key != "variant" && (!kv.second.IsSequence() || kv.second.size() == 0))
+      throw yaml::ParseError(yaml::Where(at.file, kv.second) + at.Field(key) + ": expected a non-empty list of values");
+  }
+  if (const YAML::Node v = n["variant"]) ParseVariants(at.file, v, base, &s);
+  *sweep = std::move(s);
 }
 
-StudyPlot ParsePlot(const std::string& file, const YAML::Node& n) {
+void CheckMetric(const std::string& file, const YAML::Node& at, const std::string& metric) {
+  if (!FindStudyMetric(metric))
+    throw yaml::ParseError(yaml::Where(file, at) + "plots: unknown metric '" + metric +
+                           "' (docs/studies.md lists them)");
+}
+
+/// `metric: NAME`, the one-metric spelling of `metrics`.
+void ReadOneMetric(const yaml::Section& at, const YAML::Node& n, std::vector<std::string>* metrics) {
+  metrics->assign(1, std::string());
+  yaml::ReadAs(at.file, n, at.path, &metrics->front());
+}
+
+/// A plot entry: a metric name (a line plot against motor speed) or a mapping of StudyPlot's fields.
+StudyPlot ParsePlot(const yaml::Section& at, const YAML::Node& n) {
   StudyPlot p;
   if (n.IsScalar()) {
     p.metrics = {n.as<std::string>()};
-    if (!FindStudyMetric(p.metrics[0]))
-      throw yaml::ParseError(yaml::Where(file, n) + "plots: unknown metric '" + p.metrics[0] +
-                             "' (docs/studies.md lists them)");
+    CheckMetric(at.file, n, p.metrics[0]);
     return p;
   }
-  if (!n.IsMap()) throw yaml::ParseError(yaml::Where(file, n) + "plots: an entry is a metric name or a mapping");
-  yaml::CheckKeys(file, n, {"kind", "metric", "metrics", "x", "title"}, "plots");
-  std::string kind = "line";
-  yaml::Get(file, n, "kind", &kind);
-  if (kind == "bars") p.kind = StudyPlotKind::kBars;
-  else if (kind != "line") throw yaml::ParseError(yaml::Where(file, n["kind"]) + "plots.kind: line or bars");
+  if (!n.IsMap()) throw yaml::ParseError(yaml::Where(at.file, n) + "plots: an entry is a metric name or a mapping");
   if (n["metric"] && n["metrics"])
-    throw yaml::ParseError(yaml::Where(file, n) + "plots: give either metric or metrics, not both");
-  if (n["metric"]) p.metrics = {std::string()}, yaml::Get(file, n, "metric", &p.metrics[0]);
-  yaml::Get(file, n, "metrics", &p.metrics);
-  yaml::Get(file, n, "x", &p.x);
-  yaml::Get(file, n, "title", &p.title);
-  for (const std::string& m : p.metrics)
-    if (!FindStudyMetric(m))
-      throw yaml::ParseError(yaml::Where(file, n) + "plots: unknown metric '" + m + "' (docs/studies.md lists them)");
+    throw yaml::ParseError(yaml::Where(at.file, n) + "plots: give either metric or metrics, not both");
+  yaml::Parse(at, n, &p);
+  for (const std::string& m : p.metrics) CheckMetric(at.file, n, m);
   return p;
 }
 
-void ParseStudy(const std::string& file, const YAML::Node& root, StudyConfig* c) {
-  yaml::CheckKeys(file, root, {"name", "sim", "duration_s", "slam_config", "sweep", "plots"}, "study");
-  yaml::Get(file, root, "name", &c->name);
-  if (const YAML::Node n = root["sim"]) {
-    if (n.IsScalar()) ThrowIfError(sim::LoadSimConfig(Relative(file, n.as<std::string>()), &c->base));
-    else ThrowIfError(sim::ParseSimConfig(file, n, &c->base));
-  }
-  yaml::Get(file, root, "duration_s", &c->base.duration_s);
-  if (root["slam_config"]) {
-    yaml::Get(file, root, "slam_config", &c->slam_config_path);
-    c->slam_config_path = Relative(file, c->slam_config_path);
-  }
-  // Variants start from the base with the study's duration already applied.
-  if (const YAML::Node n = root["sweep"]) c->sweep = ParseSweep(file, n, c->base);
-  if (const YAML::Node n = root["plots"]) {
-    if (!n.IsSequence()) throw yaml::ParseError(yaml::Where(file, n) + "plots: expected a list");
-    c->plots.clear();
-    for (const YAML::Node& p : n) c->plots.push_back(ParsePlot(file, p));
-  }
+void ReadPlots(const yaml::Section& at, const YAML::Node& n, std::vector<StudyPlot>* plots) {
+  if (!n.IsSequence()) throw yaml::ParseError(yaml::Where(at.file, n) + "plots: expected a list");
+  plots->clear();
+  for (const YAML::Node& p : n) plots->push_back(ParsePlot(at, p));
 }
+
+/// sim: a sim config file (relative to the study file) or an inline mapping, over the base.
+Status ReadBaseSim(const yaml::Section& at, const YAML::Node& n, sim::SimConfig* base) {
+  if (n.IsScalar()) return sim::LoadSimConfig(Relative(at.file, n.as<std::string>()), base);
+  return sim::ParseSimConfig(at.file, n, base);
+}
+
+void ReadRelativePath(const yaml::Section& at, const YAML::Node& n, std::string* path) {
+  yaml::ReadAs(at.file, n, at.path, path);
+  *path = Relative(at.file, *path);
+}
+
+}  // namespace
+
+// ---- the field lists (in the structs' namespace, so the generic visitors find them) ----
+
+const yaml::EnumWordList<StudyPlotKind>& EnumWords(StudyPlotKind*) {
+  static const yaml::EnumWordList<StudyPlotKind> words{{"line", StudyPlotKind::kLine}, {"bars", StudyPlotKind::kBars}};
+  return words;
+}
+
+template <class V>
+void Visit(V& v, StudySweep& s) {
+  v("motor_speed_radps", &s.motor_speed_radps), v("profile", &s.profiles), v("axis", &s.axes);
+  v("scene", &s.scenes), v("carrier", &s.carriers), v("seed", &s.seeds);
+}
+
+template <class V>
+void Visit(V& v, StudyPlot& p) {
+  v("kind", &p.kind), v("metric", yaml::Custom(&p.metrics, ReadOneMetric)), v("metrics", &p.metrics);
+  v("x", &p.x), v("title", &p.title);
+}
+
+/// In this order: the base sim config, the study's duration over it, then the sweep's variants start from it.
+template <class V>
+void Visit(V& v, StudyConfig& c) {
+  v("name", &c.name), v("sim", yaml::Custom(&c.base, ReadBaseSim)), v("duration_s", &c.base.duration_s);
+  v("slam_config", yaml::Custom(&c.slam_config_path, ReadRelativePath));
+  const auto read_sweep = [&c](const yaml::Section& at, const YAML::Node& n, StudySweep* sweep) {
+    ParseSweep(at, n, c.base, sweep);
+  };
+  v("sweep", yaml::Custom(&c.sweep, read_sweep)), v("plots", yaml::Custom(&c.plots, ReadPlots));
+}
+
+namespace {
 
 bool Swept(const StudySweep& s, const std::string& x) {
   if (x == "motor_speed_radps") return !s.motor_speed_radps.empty();
@@ -239,7 +229,7 @@ Status LoadStudyConfig(const std::string& path, StudyConfig* config) {
   try {
     const YAML::Node root = yaml::LoadFile(path);
     if (!root.IsMap()) throw yaml::ParseError(yaml::Where(path, root) + "study: expected a mapping");
-    ParseStudy(path, root, &c);
+    yaml::Parse(yaml::Section(path, "", "study"), root, &c);
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   } catch (const YAML::Exception& e) {  // e.g. a map key that is not a scalar

@@ -1,26 +1,41 @@
-// EstimatorConfig <-> YAML. Every section is described once, as a list of (key, field) pairs visited by a key
-// collector (strict key check), a parser and an emitter, so parsing and the resolved-config output cannot drift.
+// EstimatorConfig <-> YAML with the project's one idiom (core/io/yaml_fields.hpp): every section is described
+// once, as a list of (key, field) pairs, and the generic visitors parse (strict keys), emit and name fields in
+// messages from it, so parsing and the resolved-config output cannot drift.
 #include "core/io/config_yaml.hpp"
 
-#include <map>
-#include <set>
-
-#include "core/io/yaml_util.hpp"
+#include "core/io/yaml_fields.hpp"
 
 namespace rotolidar {
-namespace {
+
+// Enum words and field lists live in namespace rotolidar, beside the types, so the generic visitors find them.
+const yaml::EnumWordList<RobustLoss>& EnumWords(RobustLoss*) {
+  static const yaml::EnumWordList<RobustLoss> words{
+      {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
+  return words;
+}
+const yaml::EnumWordList<BackendLoss>& EnumWords(BackendLoss*) {
+  static const yaml::EnumWordList<BackendLoss> words{
+      {"none", BackendLoss::kNone}, {"huber", BackendLoss::kHuber}, {"cauchy", BackendLoss::kCauchy}};
+  return words;
+}
+const yaml::EnumWordList<MarginalizationScheme>& EnumWords(MarginalizationScheme*) {
+  static const yaml::EnumWordList<MarginalizationScheme> words{
+      {"schur_complement", MarginalizationScheme::kSchurComplement},
+      {"drop_oldest", MarginalizationScheme::kDropOldest}};
+  return words;
+}
 
 // ---- the field lists ----
 
 template <class V>
-void VisitPreprocess(V& v, PreprocessConfig& c) {
+void Visit(V& v, PreprocessConfig& c) {
   v("enable_range", &c.enable_range), v("min_range_m", &c.min_range_m), v("max_range_m", &c.max_range_m);
   v("enable_sor", &c.enable_sor), v("sor_k", &c.sor_k), v("sor_std_mul", &c.sor_std_mul);
   v("sor_range_normalized", &c.sor_range_normalized), v("enable_voxel", &c.enable_voxel), v("voxel_m", &c.voxel_m);
 }
 
 template <class V>
-void VisitFeatures(V& v, FeatureConfig& c) {
+void Visit(V& v, FeatureConfig& c) {
   v("sectors", &c.sectors), v("edges_per_sector", &c.edges_per_sector);
   v("planars_per_sector", &c.planars_per_sector), v("less_sharp_per_sector", &c.less_sharp_per_sector);
   v("planar_voxel_m", &c.planar_voxel_m);
@@ -34,7 +49,7 @@ void VisitFeatures(V& v, FeatureConfig& c) {
 }
 
 template <class V>
-void VisitRegistration(V& v, ScanToMapConfig& c) {
+void Visit(V& v, ScanToMapConfig& c) {
   v("max_solver_iterations", &c.max_solver_iterations), v("max_correspondence_rebuilds", &c.max_correspondence_rebuilds);
   v("num_neighbours", &c.num_neighbours), v("max_neighbour_distance_m", &c.max_neighbour_distance_m);
   v("neighbour_reuse_m", &c.neighbour_reuse_m);
@@ -49,14 +64,14 @@ void VisitRegistration(V& v, ScanToMapConfig& c) {
 }
 
 template <class V>
-void VisitLocalMap(V& v, LocalMapConfig& c) {
+void Visit(V& v, LocalMapConfig& c) {
   v("keyframe_distance_m", &c.keyframe_distance_m), v("keyframe_angle_rad", &c.keyframe_angle_rad);
   v("max_keyframes", &c.max_keyframes), v("max_distance_m", &c.max_distance_m);
   v("edge_voxel_m", &c.edge_voxel_m), v("planar_voxel_m", &c.planar_voxel_m);
 }
 
 template <class V>
-void VisitWindow(V& v, SlidingWindowConfig& c) {
+void Visit(V& v, SlidingWindowConfig& c) {
   v("window_size", &c.window_size), v("marginalization", &c.marginalization);
   v("estimate_gravity", &c.estimate_gravity);
   v("gravity_random_walk_rad_per_sqrt_s", &c.gravity_random_walk_rad_per_sqrt_s);
@@ -76,7 +91,7 @@ void VisitWindow(V& v, SlidingWindowConfig& c) {
 }
 
 template <class V>
-void VisitImuInit(V& v, ImuInitConfig& c) {
+void Visit(V& v, ImuInitConfig& c) {
   v("gravity_mps2", &c.gravity_mps2), v("static_window_s", &c.static_window_s);
   v("static_min_samples", &c.static_min_samples), v("static_max_gyro_std_radps", &c.static_max_gyro_std_radps);
   v("static_max_accel_std_mps2", &c.static_max_accel_std_mps2);
@@ -87,7 +102,7 @@ void VisitImuInit(V& v, ImuInitConfig& c) {
 }
 
 template <class V>
-void VisitTop(V& v, EstimatorConfig& c) {
+void Visit(V& v, EstimatorConfig& c) {
   v("cut_azimuth_deg", &c.cut_azimuth_deg), v("keyframe_every_scans", &c.keyframe_every_scans);
   v("initial_keyframes", &c.initial_keyframes);
   v("use_imu", &c.use_imu), v("lidar_point_sigma_m", &c.lidar_point_sigma_m);
@@ -95,111 +110,13 @@ void VisitTop(V& v, EstimatorConfig& c) {
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
   v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);
   v("output_map_max_range_m", &c.output_map_max_range_m), v("keep_deskewed", &c.keep_deskewed);
+  v("preprocess", &c.preprocess), v("features", &c.features), v("registration", &c.registration);
+  v("local_map", &c.local_map), v("window", &c.window), v("imu_init", &c.imu_init);
 }
-
-/// Calls fn(section name, visit function) for each sub-section.
-template <class Fn>
-void ForEachSection(EstimatorConfig& c, Fn fn) {
-  fn("preprocess", [&](auto& v) { VisitPreprocess(v, c.preprocess); });
-  fn("features", [&](auto& v) { VisitFeatures(v, c.features); });
-  fn("registration", [&](auto& v) { VisitRegistration(v, c.registration); });
-  fn("local_map", [&](auto& v) { VisitLocalMap(v, c.local_map); });
-  fn("window", [&](auto& v) { VisitWindow(v, c.window); });
-  fn("imu_init", [&](auto& v) { VisitImuInit(v, c.imu_init); });
-}
-
-// ---- enums as words ----
-
-template <class E>
-const std::map<std::string, E>& EnumWords();
-template <>
-const std::map<std::string, RobustLoss>& EnumWords() {
-  static const std::map<std::string, RobustLoss> m{
-      {"none", RobustLoss::kNone}, {"huber", RobustLoss::kHuber}, {"cauchy", RobustLoss::kCauchy}};
-  return m;
-}
-template <>
-const std::map<std::string, BackendLoss>& EnumWords() {
-  static const std::map<std::string, BackendLoss> m{
-      {"none", BackendLoss::kNone}, {"huber", BackendLoss::kHuber}, {"cauchy", BackendLoss::kCauchy}};
-  return m;
-}
-template <>
-const std::map<std::string, MarginalizationScheme>& EnumWords() {
-  static const std::map<std::string, MarginalizationScheme> m{
-      {"schur_complement", MarginalizationScheme::kSchurComplement},
-      {"drop_oldest", MarginalizationScheme::kDropOldest}};
-  return m;
-}
-
-template <class T>
-constexpr bool kIsEnum = std::is_enum<T>::value;
-
-// ---- visitors ----
-
-struct KeyCollector {
-  std::set<std::string> keys;
-  template <class T>
-  void operator()(const char* key, T*) { keys.insert(key); }
-};
-
-struct Parser {
-  const std::string& file;
-  const YAML::Node& node;
-  template <class T>
-  void operator()(const char* key, T* value) {
-    if constexpr (kIsEnum<T>) {
-      std::string word;
-      yaml::Get(file, node, key, &word);
-      if (word.empty()) return;
-      const auto& words = EnumWords<T>();
-      const auto it = words.find(word);
-      if (it == words.end()) {
-        std::string allowed;
-        for (const auto& w : words) allowed += (allowed.empty() ? "" : ", ") + w.first;
-        throw yaml::ParseError(yaml::Where(file, node[key]) + "field '" + key + "': unknown value '" + word +
-                               "' (one of: " + allowed + ")");
-      }
-      *value = it->second;
-    } else {
-      yaml::Get(file, node, key, value);
-    }
-  }
-};
-
-struct Emitter {
-  YAML::Emitter& out;
-  template <class T>
-  void operator()(const char* key, T* value) {
-    out << YAML::Key << key << YAML::Value;
-    if constexpr (kIsEnum<T>) {
-      for (const auto& w : EnumWords<T>())
-        if (w.second == *value) out << w.first;
-    } else {
-      out << *value;
-    }
-  }
-};
-
-}  // namespace
 
 Status ParseEstimatorConfig(const std::string& f, const YAML::Node& n, EstimatorConfig* c) {
   try {
-    KeyCollector top;
-    VisitTop(top, *c);
-    ForEachSection(*c, [&](const char* name, auto) { top.keys.insert(name); });
-    yaml::CheckKeys(f, n, top.keys, "slam");
-    Parser parse{f, n};
-    VisitTop(parse, *c);
-    ForEachSection(*c, [&](const char* name, auto visit) {
-      const YAML::Node section = n[name];
-      if (!section) return;
-      KeyCollector keys;
-      visit(keys);
-      yaml::CheckKeys(f, section, keys.keys, std::string("slam.") + name);
-      Parser p{f, section};
-      visit(p);
-    });
+    yaml::Parse(yaml::Section{f, "slam"}, n, c);
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   }
@@ -208,17 +125,6 @@ Status ParseEstimatorConfig(const std::string& f, const YAML::Node& n, Estimator
   return Status::Ok();
 }
 
-void EmitEstimatorConfig(YAML::Emitter& out, const EstimatorConfig& config) {
-  EstimatorConfig c = config;  // the visitors take non-const fields
-  Emitter emit{out};
-  out << YAML::BeginMap;
-  VisitTop(emit, c);
-  ForEachSection(c, [&](const char* name, auto visit) {
-    out << YAML::Key << name << YAML::Value << YAML::BeginMap;
-    visit(emit);
-    out << YAML::EndMap;
-  });
-  out << YAML::EndMap;
-}
+void EmitEstimatorConfig(YAML::Emitter& out, const EstimatorConfig& config) { yaml::Emit(out, config); }
 
 }  // namespace rotolidar

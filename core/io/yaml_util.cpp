@@ -22,24 +22,31 @@ void CheckKeys(const std::string& file, const YAML::Node& node, const std::set<s
 }
 
 void GetPose(const std::string& file, const YAML::Node& node, const std::string& key, Pose3* pose) {
-  const YAML::Node p = node[key];
-  if (!p) return;
-  CheckKeys(file, p, {"translation_m", "rotation_wxyz"}, key);
+  if (const YAML::Node p = node[key]) ReadPose(file, p, key, pose);
+}
+
+void ReadPose(const std::string& file, const YAML::Node& p, const std::string& field, Pose3* pose) {
+  CheckKeys(file, p, {"translation_m", "rotation_wxyz"}, field);
   std::vector<double> t{0, 0, 0}, q{1, 0, 0, 0};
   Get(file, p, "translation_m", &t);
   Get(file, p, "rotation_wxyz", &q);
-  if (t.size() != 3) throw ParseError(Where(file, p) + key + ".translation_m: expected 3 numbers");
-  if (q.size() != 4) throw ParseError(Where(file, p) + key + ".rotation_wxyz: expected 4 numbers");
+  if (t.size() != 3) throw ParseError(Where(file, p) + field + ".translation_m: expected 3 numbers");
+  if (q.size() != 4) throw ParseError(Where(file, p) + field + ".rotation_wxyz: expected 4 numbers");
   const Eigen::Quaterniond quat(q[0], q[1], q[2], q[3]);
   if (std::abs(quat.norm() - 1.0) > 1e-3)
-    throw ParseError(Where(file, p) + key + ".rotation_wxyz: not a unit quaternion");
+    throw ParseError(Where(file, p) + field + ".rotation_wxyz: not a unit quaternion");
   *pose = MakePose({t[0], t[1], t[2]}, quat);
 }
 
 void EmitPose(YAML::Emitter& out, const std::string& key, const Pose3& pose) {
+  out << YAML::Key << key << YAML::Value;
+  EmitPoseValue(out, pose);
+}
+
+void EmitPoseValue(YAML::Emitter& out, const Pose3& pose) {
   const Eigen::Quaterniond q(pose.linear());
   const Eigen::Vector3d t = pose.translation();
-  out << YAML::Key << key << YAML::Value << YAML::BeginMap;
+  out << YAML::BeginMap;
   out << YAML::Key << "translation_m" << YAML::Value << YAML::Flow << std::vector<double>{t.x(), t.y(), t.z()};
   out << YAML::Key << "rotation_wxyz" << YAML::Value << YAML::Flow
       << std::vector<double>{q.w(), q.x(), q.y(), q.z()};

@@ -1,6 +1,7 @@
 #pragma once
-// Helpers for parsing YAML at the edges: strict key checking and messages that name file:line and the key.
-// Only .cpp files in io/ and bench/ include this (yaml-cpp stays out of the estimator's headers).
+// Helpers for parsing YAML at the edges: strict key checking and messages that name file:line and the key. The
+// field-list idiom every config uses (core/io/yaml_fields.hpp) is built on them. Only .cpp files at the YAML
+// edges (core/io, sim's parsers, bench) include this: yaml-cpp stays out of the estimator's headers.
 #include <set>
 #include <string>
 
@@ -23,24 +24,32 @@ std::string Where(const std::string& file, const YAML::Node& node);
 void CheckKeys(const std::string& file, const YAML::Node& node, const std::set<std::string>& allowed,
                const std::string& context);
 
-/// Reads node[key] into *value when present (keeps the default otherwise); wrong types name the key and line.
+/// Reads `node` (present) into *value; a wrong type names file:line and `field`.
 template <typename T>
-void Get(const std::string& file, const YAML::Node& node, const std::string& key, T* value) {
-  const YAML::Node child = node[key];
-  if (!child) return;
+void ReadAs(const std::string& file, const YAML::Node& node, const std::string& field, T* value) {
   try {
-    *value = child.as<T>();
+    *value = node.as<T>();
   } catch (const YAML::Exception&) {
-    throw ParseError(Where(file, child) + "field '" + key + "': cannot read value '" +
-                     (child.IsScalar() ? child.Scalar() : std::string("<non-scalar>")) + "'");
+    throw ParseError(Where(file, node) + "field '" + field + "': cannot read value '" +
+                     (node.IsScalar() ? node.Scalar() : std::string("<non-scalar>")) + "'");
   }
 }
 
-/// Reads a pose {translation_m: [x,y,z], rotation_wxyz: [w,x,y,z]} (either key optional).
-void GetPose(const std::string& file, const YAML::Node& node, const std::string& key, Pose3* pose);
+/// Reads node[key] into *value when present (keeps the default otherwise); wrong types name the key and line.
+template <typename T>
+void Get(const std::string& file, const YAML::Node& node, const std::string& key, T* value) {
+  if (const YAML::Node child = node[key]) ReadAs(file, child, key, value);
+}
 
-/// Emits a pose in the same layout.
+/// Reads a pose {translation_m: [x,y,z], rotation_wxyz: [w,x,y,z]} (either key optional) from node[key].
+void GetPose(const std::string& file, const YAML::Node& node, const std::string& key, Pose3* pose);
+/// The same from the pose's own mapping `p`; messages name `field`.
+void ReadPose(const std::string& file, const YAML::Node& p, const std::string& field, Pose3* pose);
+
+/// Emits a pose in the same layout, as key: mapping.
 void EmitPose(YAML::Emitter& out, const std::string& key, const Pose3& pose);
+/// Emits only the pose's mapping (the caller wrote the key).
+void EmitPoseValue(YAML::Emitter& out, const Pose3& pose);
 
 /// Loads a YAML file; parse errors name file:line.
 YAML::Node LoadFile(const std::string& path);

@@ -66,6 +66,12 @@ Status ParseBlock(const uint8_t* p, std::size_t offset, int index, Vlp16RawBlock
 
 }  // namespace
 
+const std::vector<std::pair<const char*, Vlp16ReturnMode>>& EnumWords(Vlp16ReturnMode*) {
+  static const std::vector<std::pair<const char*, Vlp16ReturnMode>> words{
+      {"strongest", Vlp16ReturnMode::kStrongest}, {"last", Vlp16ReturnMode::kLast}, {"dual", Vlp16ReturnMode::kDual}};
+  return words;
+}
+
 Status ParseVlp16DataPacket(const uint8_t* data, std::size_t size, Vlp16RawPacket* out) {
   if (data == nullptr || size != kVlp16PacketBytes) {
     return FieldError(0, "packet size " + std::to_string(size) + " bytes (expected " +

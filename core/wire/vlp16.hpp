@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/types/calib.hpp"
@@ -17,6 +18,9 @@
 namespace rotolidar {
 
 enum class Vlp16ReturnMode : uint8_t { kStrongest = 0x37, kLast = 0x38, kDual = 0x39 };
+/// The modes' words in configs: "strongest", "last", "dual" (core/io/yaml_fields.hpp finds it by
+/// argument-dependent lookup).
+const std::vector<std::pair<const char*, Vlp16ReturnMode>>& EnumWords(Vlp16ReturnMode*);
 inline constexpr uint8_t kVlp16ProductId = 0x22;
 inline constexpr double kVlp16FiringPeriodS = 2.304e-6;   ///< between consecutive lasers
 inline constexpr double kVlp16SequencePeriodS = 55.296e-6;  ///< one firing sequence of 16 lasers

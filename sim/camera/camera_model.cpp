@@ -11,17 +11,6 @@
 namespace rotolidar::sim {
 namespace {
 
-constexpr struct {
-  CameraRendererKind kind;
-  const char* name;
-} kRendererNames[] = {{CameraRendererKind::kEmbree, "embree"}, {CameraRendererKind::kOsmesa, "osmesa"}};
-
-constexpr struct {
-  MotionBlurKind kind;
-  const char* name;
-} kBlurNames[] = {
-    {MotionBlurKind::kNone, "none"}, {MotionBlurKind::kVelocity, "velocity"}, {MotionBlurKind::kSubframes, "subframes"}};
-
 /// Distortion of normalised coordinates and its 2x2 Jacobian.
 Eigen::Vector2d Distort(const rotolidar::CameraIntrinsics& k, const Eigen::Vector2d& p, Eigen::Matrix2d* J) {
   const double x = p.x(), y = p.y(), r2 = x * x + y * y;
@@ -68,27 +57,40 @@ bool LensInvertibleOnBorder(const rotolidar::CameraIntrinsics& k, double* r_max)
 
 }  // namespace
 
+const std::vector<std::pair<const char*, CameraRendererKind>>& EnumWords(CameraRendererKind*) {
+  static const std::vector<std::pair<const char*, CameraRendererKind>> words{
+      {"embree", CameraRendererKind::kEmbree}, {"osmesa", CameraRendererKind::kOsmesa}};
+  return words;
+}
+
+const std::vector<std::pair<const char*, MotionBlurKind>>& EnumWords(MotionBlurKind*) {
+  static const std::vector<std::pair<const char*, MotionBlurKind>> words{
+      {"none", MotionBlurKind::kNone}, {"velocity", MotionBlurKind::kVelocity},
+      {"subframes", MotionBlurKind::kSubframes}};
+  return words;
+}
+
 bool ParseCameraRendererKind(const std::string& name, CameraRendererKind* kind) {
-  for (const auto& e : kRendererNames)
-    if (name == e.name) return *kind = e.kind, true;
+  for (const auto& [word, k] : EnumWords(kind))
+    if (name == word) return *kind = k, true;
   return false;
 }
 
 const char* CameraRendererName(CameraRendererKind kind) {
-  for (const auto& e : kRendererNames)
-    if (kind == e.kind) return e.name;
+  for (const auto& [word, k] : EnumWords(&kind))
+    if (kind == k) return word;
   return "?";
 }
 
 bool ParseMotionBlurKind(const std::string& name, MotionBlurKind* kind) {
-  for (const auto& e : kBlurNames)
-    if (name == e.name) return *kind = e.kind, true;
+  for (const auto& [word, k] : EnumWords(kind))
+    if (name == word) return *kind = k, true;
   return false;
 }
 
 const char* MotionBlurName(MotionBlurKind kind) {
-  for (const auto& e : kBlurNames)
-    if (kind == e.kind) return e.name;
+  for (const auto& [word, k] : EnumWords(&kind))
+    if (kind == k) return word;
   return "?";
 }
 

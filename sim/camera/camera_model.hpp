@@ -16,11 +16,13 @@
 // Units: SI (s, m), pixels [px], electrons [e-], 8-bit digital numbers [DN].
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "core/types/calib.hpp"
+#include "core/util/log.hpp"
 
 namespace YAML {
 class Emitter;
@@ -42,6 +44,10 @@ enum class MotionBlurKind {
   kSubframes,  ///< blur_subframes renders spread over the exposure, averaged (exact; blur_subframes x slower)
 };
 
+/// The words of the kinds in YAML and on the command line (core/io/yaml_fields.hpp finds them by argument-dependent
+/// lookup), and lookups both ways ("?" for a value outside the enum).
+const std::vector<std::pair<const char*, CameraRendererKind>>& EnumWords(CameraRendererKind*);
+const std::vector<std::pair<const char*, MotionBlurKind>>& EnumWords(MotionBlurKind*);
 bool ParseCameraRendererKind(const std::string& name, CameraRendererKind* kind);  ///< "embree" | "osmesa"
 const char* CameraRendererName(CameraRendererKind kind);
 bool ParseMotionBlurKind(const std::string& name, MotionBlurKind* kind);  ///< "none" | "velocity" | "subframes"
@@ -105,9 +111,9 @@ PixelRayTable MakePixelRayTable(const rotolidar::CameraIntrinsics& k);
 /// YAML (sim/camera/camera_yaml.cpp), the `camera:` section of a sim config. Keys (all optional; absent keys keep
 /// *config's values): enabled, rate_hz, width_px, height_px, fx_px, fy_px, cx_px, cy_px, k1, k2, p1, p2,
 /// exposure_s, readout_s, quantum_rate_e_per_s, full_well_e, read_noise_e, gain, gamma, renderer, motion_blur,
-/// blur_subframes, threads, shadows, max_range_m. Unknown keys and invalid values throw yaml::ParseError naming
-/// file:line and the key.
-void ParseCameraConfig(const std::string& file, const YAML::Node& node, CameraConfig* config);
+/// blur_subframes, threads, shadows, max_range_m. Unknown keys, unreadable and invalid values give an error naming
+/// file:line and the field (*config untouched then); a missing node changes nothing.
+Status ParseCameraConfig(const std::string& file, const YAML::Node& node, CameraConfig* config);
 void EmitCameraConfig(YAML::Emitter& out, const CameraConfig& config);
 
 }  // namespace rotolidar::sim

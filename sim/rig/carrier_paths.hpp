@@ -30,7 +30,10 @@ class Emitter;
 namespace rotolidar::sim {
 
 enum class CarrierType { kScriptedLoop, kHandheld, kWheeled, kCar, kKitti };
-/// "scripted_loop", "handheld", "wheeled", "car", "kitti".
+/// The words of the types in YAML and on the command line: "scripted_loop", "handheld", "wheeled", "car", "kitti"
+/// (core/io/yaml_fields.hpp finds it by argument-dependent lookup).
+const std::vector<std::pair<const char*, CarrierType>>& EnumWords(CarrierType*);
+/// The type's word ("unknown" outside the enum).
 const char* CarrierTypeName(CarrierType type);
 /// Inverse of CarrierTypeName; false for an unknown name.
 bool CarrierTypeFromName(const std::string& name, CarrierType* type);
@@ -147,10 +150,11 @@ Pose3 KittiPoseToWorldBase(const KittiPathConfig& config, const Pose3& T_cam0sta
 ///   car: {waypoints_file, height_m, cruise_speed_mps, max_lateral_accel_mps2, max_accel_mps2, max_decel_mps2,
 ///         smoothing_s}
 ///   kitti: {poses_file, times_file, rate_hz, height_m, smoothing_s, start_x_m, start_y_m, start_yaw_rad}
-/// Relative file paths are resolved against the directory of `file`. Throws yaml::ParseError naming file:line
-/// for unknown keys, wrong types and an invalid active section (handheld/wheeled may leave waypoints empty: the
-/// scene's default path fills them); *config is untouched on error.
-void ParseCarrierConfig(const std::string& file, const YAML::Node& node, CarrierConfig* config);
+/// Relative file paths read from the node are resolved against the directory of `file`. Unknown keys, wrong
+/// types and an invalid active section give an error naming file:line and the field (handheld/wheeled/car may
+/// leave waypoints empty: the scene's default path fills them); *config is untouched on error. A missing node
+/// changes nothing.
+Status ParseCarrierConfig(const std::string& file, const YAML::Node& node, CarrierConfig* config);
 /// Emits `type` and the active type's section (every field), as one mapping.
 void EmitCarrierConfig(YAML::Emitter& out, const CarrierConfig& config);
 

@@ -1,20 +1,14 @@
-// CarrierConfig: type names, validation and YAML I/O (declared in sim/rig/carrier_paths.hpp).
+// CarrierConfig: type words, validation and YAML I/O (declared in sim/rig/carrier_paths.hpp). The YAML uses the
+// project's one idiom (core/io/yaml_fields.hpp): the field lists below drive parse and emit.
 #include <cmath>
-#include <filesystem>
 #include <sstream>
 #include <utility>
 
-#include "core/io/yaml_util.hpp"
+#include "core/io/yaml_fields.hpp"
 #include "sim/rig/carrier_paths.hpp"
 
 namespace rotolidar::sim {
 namespace {
-
-constexpr std::pair<CarrierType, const char*> kTypeNames[] = {{CarrierType::kScriptedLoop, "scripted_loop"},
-                                                              {CarrierType::kHandheld, "handheld"},
-                                                              {CarrierType::kWheeled, "wheeled"},
-                                                              {CarrierType::kCar, "car"},
-                                                              {CarrierType::kKitti, "kitti"}};
 
 bool Fail(std::string* error, const std::string& message) {
   if (error) *error = message;
@@ -44,56 +38,9 @@ bool ValidWaypoints(std::string* error, const std::string& section, const std::v
   return true;
 }
 
-/// The plain numeric fields of each config, by YAML key (C may be const).
-template <class C>
-auto Fields(C& c) {
-  using P = decltype(&c.height_m);
-  if constexpr (std::is_same_v<std::remove_const_t<C>, HandheldWalkConfig>)
-    return std::vector<std::pair<const char*, P>>{
-        {"height_m", &c.height_m},       {"speed_mps", &c.speed_mps},
-        {"smoothing_s", &c.smoothing_s}, {"step_hz", &c.step_hz},
-        {"bounce_amplitude_m", &c.bounce_amplitude_m}, {"sway_amplitude_m", &c.sway_amplitude_m},
-        {"roll_amplitude_rad", &c.roll_amplitude_rad}, {"pitch_amplitude_rad", &c.pitch_amplitude_rad}};
-  else if constexpr (std::is_same_v<std::remove_const_t<C>, WheeledConfig>)
-    return std::vector<std::pair<const char*, P>>{
-        {"height_m", &c.height_m}, {"speed_mps", &c.speed_mps}, {"smoothing_s", &c.smoothing_s}};
-  else if constexpr (std::is_same_v<std::remove_const_t<C>, CarConfig>)
-    return std::vector<std::pair<const char*, P>>{{"height_m", &c.height_m},
-                                                  {"cruise_speed_mps", &c.cruise_speed_mps},
-                                                  {"max_lateral_accel_mps2", &c.max_lateral_accel_mps2},
-                                                  {"max_accel_mps2", &c.max_accel_mps2},
-                                                  {"max_decel_mps2", &c.max_decel_mps2},
-                                                  {"smoothing_s", &c.smoothing_s}};
-  else if constexpr (std::is_same_v<std::remove_const_t<C>, KittiPathConfig>)
-    return std::vector<std::pair<const char*, P>>{{"rate_hz", &c.rate_hz},     {"height_m", &c.height_m},
-                                                  {"smoothing_s", &c.smoothing_s},
-                                                  {"start_x_m", &c.start_x_m}, {"start_y_m", &c.start_y_m},
-                                                  {"start_yaw_rad", &c.start_yaw_rad}};
-  else
-    return std::vector<std::pair<const char*, P>>{
-        {"center_x_m", &c.center_x_m},   {"center_y_m", &c.center_y_m},     {"radius_x_m", &c.radius_x_m},
-        {"radius_y_m", &c.radius_y_m},   {"shape_harmonic_m", &c.shape_harmonic_m},
-        {"height_m", &c.height_m},       {"loop_period_s", &c.loop_period_s}, {"phase0_rad", &c.phase0_rad},
-        {"bounce_amplitude_m", &c.bounce_amplitude_m}, {"bounce_hz", &c.bounce_hz},
-        {"roll_amplitude_rad", &c.roll_amplitude_rad}, {"roll_hz", &c.roll_hz},
-        {"pitch_amplitude_rad", &c.pitch_amplitude_rad}, {"pitch_hz", &c.pitch_hz},
-        {"duration_s", &c.duration_s},   {"room_min_x_m", &c.room_min_x_m}, {"room_max_x_m", &c.room_max_x_m},
-        {"room_min_y_m", &c.room_min_y_m}, {"room_max_y_m", &c.room_max_y_m}, {"margin_m", &c.margin_m},
-        {"min_speed_mps", &c.min_speed_mps}, {"max_speed_mps", &c.max_speed_mps}};
-}
-
-std::string ResolvePath(const std::string& yaml_file, const std::string& path) {
-  namespace fs = std::filesystem;
-  if (path.empty() || fs::path(path).is_absolute()) return path;
-  const fs::path dir = fs::path(yaml_file).parent_path();
-  return dir.empty() ? path : (dir / path).lexically_normal().string();
-}
-
-void ParseWaypoints(const std::string& file, const YAML::Node& section, const std::string& name,
-                    std::vector<Waypoint2d>* out) {
-  const YAML::Node list = section["waypoints"];
-  if (!list) return;
-  if (!list.IsSequence()) throw yaml::ParseError(yaml::Where(file, list) + name + ".waypoints: expected a list");
+/// A waypoint list [[x_m, y_m], [x_m, y_m, dwell_s], ...]; messages name the item's line and index.
+void ReadWaypoints(const yaml::Section& at, const YAML::Node& list, std::vector<Waypoint2d>* out) {
+  if (!list.IsSequence()) throw yaml::ParseError(yaml::Where(at.file, list) + at.path + ": expected a list");
   std::vector<Waypoint2d> points;
   for (size_t i = 0; i < list.size(); ++i) {
     const YAML::Node item = list[i];
@@ -104,75 +51,93 @@ void ParseWaypoints(const std::string& file, const YAML::Node& section, const st
       v.clear();
     }
     if (v.size() != 2 && v.size() != 3)
-      throw yaml::ParseError(yaml::Where(file, item) + name + ".waypoints[" + std::to_string(i) +
+      throw yaml::ParseError(yaml::Where(at.file, item) + at.path + "[" + std::to_string(i) +
                              "]: expected [x_m, y_m] or [x_m, y_m, dwell_s]");
     points.push_back({v[0], v[1], v.size() == 3 ? v[2] : 0.0});
   }
   *out = std::move(points);
 }
 
-template <class C>
-void ParseSection(const std::string& file, const YAML::Node& node, const std::string& name, C* c) {
-  const YAML::Node n = node[name];
-  if (!n) return;
-  std::set<std::string> keys;
-  for (const auto& [key, ptr] : Fields(*c)) keys.insert(key), yaml::Get(file, n, key, ptr);
-  if constexpr (std::is_same_v<C, HandheldWalkConfig> || std::is_same_v<C, WheeledConfig>) {
-    keys.insert({"waypoints", "closed_loop", "laps"});
-    ParseWaypoints(file, n, name, &c->waypoints);
-    yaml::Get(file, n, "closed_loop", &c->closed_loop);
-    yaml::Get(file, n, "laps", &c->laps);
-  } else if constexpr (std::is_same_v<C, CarConfig>) {
-    keys.insert({"waypoints_file", "waypoints"});
-    yaml::Get(file, n, "waypoints_file", &c->waypoints_file);
-    ParseWaypoints(file, n, name, &c->waypoints);
-    c->waypoints_file = ResolvePath(file, c->waypoints_file);
-  } else if constexpr (std::is_same_v<C, KittiPathConfig>) {
-    keys.insert({"poses_file", "times_file"});
-    yaml::Get(file, n, "poses_file", &c->poses_file);
-    yaml::Get(file, n, "times_file", &c->times_file);
-    c->poses_file = ResolvePath(file, c->poses_file);
-    c->times_file = ResolvePath(file, c->times_file);
-  }
-  yaml::CheckKeys(file, n, keys, "carrier." + name);
-}
-
 void EmitWaypoints(YAML::Emitter& out, const std::vector<Waypoint2d>& waypoints) {
-  out << YAML::Key << "waypoints" << YAML::Value << YAML::BeginSeq;
+  out << YAML::BeginSeq;
   for (const Waypoint2d& w : waypoints) out << YAML::Flow << std::vector<double>{w.x_m, w.y_m, w.dwell_s};
   out << YAML::EndSeq;
 }
 
-template <class C>
-void EmitSection(YAML::Emitter& out, const std::string& name, const C& c) {
-  out << YAML::Key << name << YAML::Value << YAML::BeginMap;
-  if constexpr (std::is_same_v<C, HandheldWalkConfig> || std::is_same_v<C, WheeledConfig>) {
-    EmitWaypoints(out, c.waypoints);
-    out << YAML::Key << "closed_loop" << YAML::Value << c.closed_loop << YAML::Key << "laps" << YAML::Value << c.laps;
-  } else if constexpr (std::is_same_v<C, CarConfig>) {
-    out << YAML::Key << "waypoints_file" << YAML::Value << c.waypoints_file;
-    if (c.waypoints_file.empty()) EmitWaypoints(out, c.waypoints);
-  } else if constexpr (std::is_same_v<C, KittiPathConfig>) {
-    out << YAML::Key << "poses_file" << YAML::Value << c.poses_file << YAML::Key << "times_file" << YAML::Value
-        << c.times_file;
-  }
-  for (const auto& [key, ptr] : Fields(c)) out << YAML::Key << key << YAML::Value << *ptr;
-  out << YAML::EndMap;
-}
+auto Waypoints(std::vector<Waypoint2d>* w) { return yaml::Custom(w, ReadWaypoints, EmitWaypoints); }
 
 }  // namespace
 
-const char* CarrierTypeName(CarrierType type) {
-  for (const auto& [t, name] : kTypeNames)
-    if (t == type) return name;
-  return "unknown";
+// ---- the field lists (in the structs' namespace, so the generic visitors find them) ----
+
+template <class V>
+void Visit(V& v, ScriptedBaseMotionConfig& c) {
+  v("center_x_m", &c.center_x_m), v("center_y_m", &c.center_y_m), v("radius_x_m", &c.radius_x_m);
+  v("radius_y_m", &c.radius_y_m), v("shape_harmonic_m", &c.shape_harmonic_m), v("height_m", &c.height_m);
+  v("loop_period_s", &c.loop_period_s), v("phase0_rad", &c.phase0_rad);
+  v("bounce_amplitude_m", &c.bounce_amplitude_m), v("bounce_hz", &c.bounce_hz);
+  v("roll_amplitude_rad", &c.roll_amplitude_rad), v("roll_hz", &c.roll_hz);
+  v("pitch_amplitude_rad", &c.pitch_amplitude_rad), v("pitch_hz", &c.pitch_hz), v("duration_s", &c.duration_s);
+  v("room_min_x_m", &c.room_min_x_m), v("room_max_x_m", &c.room_max_x_m), v("room_min_y_m", &c.room_min_y_m);
+  v("room_max_y_m", &c.room_max_y_m), v("margin_m", &c.margin_m), v("min_speed_mps", &c.min_speed_mps);
+  v("max_speed_mps", &c.max_speed_mps);
 }
 
-bool CarrierTypeFromName(const std::string& name, CarrierType* type) {
-  for (const auto& [t, n] : kTypeNames)
-    if (name == n) return *type = t, true;
-  return false;
+template <class V>
+void Visit(V& v, HandheldWalkConfig& c) {
+  v("waypoints", Waypoints(&c.waypoints)), v("closed_loop", &c.closed_loop), v("laps", &c.laps);
+  v("height_m", &c.height_m), v("speed_mps", &c.speed_mps), v("smoothing_s", &c.smoothing_s);
+  v("step_hz", &c.step_hz), v("bounce_amplitude_m", &c.bounce_amplitude_m);
+  v("sway_amplitude_m", &c.sway_amplitude_m), v("roll_amplitude_rad", &c.roll_amplitude_rad);
+  v("pitch_amplitude_rad", &c.pitch_amplitude_rad);
 }
+
+template <class V>
+void Visit(V& v, WheeledConfig& c) {
+  v("waypoints", Waypoints(&c.waypoints)), v("closed_loop", &c.closed_loop), v("laps", &c.laps);
+  v("height_m", &c.height_m), v("speed_mps", &c.speed_mps), v("smoothing_s", &c.smoothing_s);
+}
+
+/// Inline waypoints are written only without a waypoints file (which the sim reads instead).
+template <class V>
+void Visit(V& v, CarConfig& c) {
+  v("waypoints_file", yaml::Path(&c.waypoints_file));
+  v("waypoints", yaml::EmitIf(c.waypoints_file.empty(), Waypoints(&c.waypoints)));
+  v("height_m", &c.height_m), v("cruise_speed_mps", &c.cruise_speed_mps);
+  v("max_lateral_accel_mps2", &c.max_lateral_accel_mps2), v("max_accel_mps2", &c.max_accel_mps2);
+  v("max_decel_mps2", &c.max_decel_mps2), v("smoothing_s", &c.smoothing_s);
+}
+
+template <class V>
+void Visit(V& v, KittiPathConfig& c) {
+  v("poses_file", yaml::Path(&c.poses_file)), v("times_file", yaml::Path(&c.times_file));
+  v("rate_hz", &c.rate_hz), v("height_m", &c.height_m), v("smoothing_s", &c.smoothing_s);
+  v("start_x_m", &c.start_x_m), v("start_y_m", &c.start_y_m), v("start_yaw_rad", &c.start_yaw_rad);
+}
+
+/// Every section is read when present; only the active type's is written.
+template <class V>
+void Visit(V& v, CarrierConfig& c) {
+  v("type", &c.type);
+  v("scripted_loop", yaml::EmitIf(c.type == CarrierType::kScriptedLoop, &c.scripted_loop));
+  v("handheld", yaml::EmitIf(c.type == CarrierType::kHandheld, &c.handheld));
+  v("wheeled", yaml::EmitIf(c.type == CarrierType::kWheeled, &c.wheeled));
+  v("car", yaml::EmitIf(c.type == CarrierType::kCar, &c.car));
+  v("kitti", yaml::EmitIf(c.type == CarrierType::kKitti, &c.kitti));
+}
+
+const std::vector<std::pair<const char*, CarrierType>>& EnumWords(CarrierType*) {
+  static const std::vector<std::pair<const char*, CarrierType>> words{{"scripted_loop", CarrierType::kScriptedLoop},
+                                                                      {"handheld", CarrierType::kHandheld},
+                                                                      {"wheeled", CarrierType::kWheeled},
+                                                                      {"car", CarrierType::kCar},
+                                                                      {"kitti", CarrierType::kKitti}};
+  return words;
+}
+
+const char* CarrierTypeName(CarrierType type) { return yaml::EnumWord(type); }
+
+bool CarrierTypeFromName(const std::string& name, CarrierType* type) { return yaml::EnumFromWord(name, type); }
 
 bool HandheldWalkConfig::Validate(std::string* error) const {
   return ValidWaypoints(error, "handheld", waypoints, closed_loop, laps) &&
@@ -233,40 +198,23 @@ bool CarrierConfig::Validate(std::string* error) const {
   return Fail(error, "carrier.type: unknown");
 }
 
-void ParseCarrierConfig(const std::string& file, const YAML::Node& node, CarrierConfig* config) {
-  if (!node) return;
-  yaml::CheckKeys(file, node, {"type", "scripted_loop", "handheld", "wheeled", "car", "kitti"}, "carrier");
+Status ParseCarrierConfig(const std::string& file, const YAML::Node& node, CarrierConfig* config) {
+  if (!node) return Status::Ok();
   CarrierConfig c = *config;
-  if (const YAML::Node type = node["type"]) {
-    std::string name;
-    yaml::Get(file, node, "type", &name);
-    if (!CarrierTypeFromName(name, &c.type))
-      throw yaml::ParseError(yaml::Where(file, type) + "carrier.type: unknown '" + name +
-                             "' (scripted_loop, handheld, wheeled, car, kitti)");
+  try {
+    yaml::Parse(yaml::Section(file, "carrier"), node, &c);
+  } catch (const yaml::ParseError& e) {
+    return Status::Error(e.what());
   }
-  ParseSection(file, node, "scripted_loop", &c.scripted_loop);
-  ParseSection(file, node, "handheld", &c.handheld);
-  ParseSection(file, node, "wheeled", &c.wheeled);
-  ParseSection(file, node, "car", &c.car);
-  ParseSection(file, node, "kitti", &c.kitti);
   std::string why;
   const YAML::Node active = node[CarrierTypeName(c.type)];
   // Handheld/wheeled/car without waypoints follow the scene's default path; the sim validates them after loading it.
   if (!UsesSceneDefaultPath(c) && !c.Validate(&why))
-    throw yaml::ParseError(yaml::Where(file, active ? active : node) + "carrier." + why);
+    return Status::Error(yaml::Where(file, active ? active : node) + "carrier." + why);
   *config = c;
+  return Status::Ok();
 }
 
-void EmitCarrierConfig(YAML::Emitter& out, const CarrierConfig& c) {
-  out << YAML::BeginMap << YAML::Key << "type" << YAML::Value << CarrierTypeName(c.type);
-  switch (c.type) {
-    case CarrierType::kScriptedLoop: EmitSection(out, "scripted_loop", c.scripted_loop); break;
-    case CarrierType::kHandheld: EmitSection(out, "handheld", c.handheld); break;
-    case CarrierType::kWheeled: EmitSection(out, "wheeled", c.wheeled); break;
-    case CarrierType::kCar: EmitSection(out, "car", c.car); break;
-    case CarrierType::kKitti: EmitSection(out, "kitti", c.kitti); break;
-  }
-  out << YAML::EndMap;
-}
+void EmitCarrierConfig(YAML::Emitter& out, const CarrierConfig& c) { yaml::Emit(out, c); }
 
 }  // namespace rotolidar::sim

@@ -56,24 +56,24 @@ double Sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 
 }  // namespace
 
+const std::vector<std::pair<const char*, MotorProfileType>>& EnumWords(MotorProfileType*) {
+  static const std::vector<std::pair<const char*, MotorProfileType>> words{
+      {"constant", MotorProfileType::kConstant},
+      {"trapezoid", MotorProfileType::kTrapezoid},
+      {"nodding", MotorProfileType::kNodding},
+      {"stop_and_go", MotorProfileType::kStopAndGo}};
+  return words;
+}
+
 const char* ToString(MotorProfileType type) {
-  switch (type) {
-    case MotorProfileType::kConstant: return "constant";
-    case MotorProfileType::kTrapezoid: return "trapezoid";
-    case MotorProfileType::kNodding: return "nodding";
-    case MotorProfileType::kStopAndGo: return "stop_and_go";
-  }
+  for (const auto& [word, t] : EnumWords(static_cast<MotorProfileType*>(nullptr)))
+    if (t == type) return word;
   return "unknown";
 }
 
 bool ParseMotorProfileType(const std::string& name, MotorProfileType* type) {
-  for (MotorProfileType t : {MotorProfileType::kConstant, MotorProfileType::kTrapezoid, MotorProfileType::kNodding,
-                             MotorProfileType::kStopAndGo}) {
-    if (name == ToString(t)) {
-      *type = t;
-      return true;
-    }
-  }
+  for (const auto& [word, t] : EnumWords(static_cast<MotorProfileType*>(nullptr)))
+    if (name == word) return *type = t, true;
   return false;
 }
 

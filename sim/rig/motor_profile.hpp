@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/types/time.hpp"
 #include "sim/rig/motor.hpp"
@@ -21,7 +23,10 @@ enum class MotorProfileType {
   kStopAndGo,  ///< from rest at theta0: dwell, trapezoidal move of move_angle, dwell, move, ... forever
 };
 
-/// "constant", "trapezoid", "nodding", "stop_and_go".
+/// The words of the types, in declaration order: "constant", "trapezoid", "nodding", "stop_and_go" (YAML and the
+/// command line; core/io/yaml_fields.hpp finds it by argument-dependent lookup).
+const std::vector<std::pair<const char*, MotorProfileType>>& EnumWords(MotorProfileType*);
+/// The type's word ("unknown" outside the enum).
 const char* ToString(MotorProfileType type);
 /// Inverse of ToString; false (and *type untouched) for any other name.
 bool ParseMotorProfileType(const std::string& name, MotorProfileType* type);

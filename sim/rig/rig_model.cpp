@@ -51,20 +51,28 @@ std::string Quat(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
+const std::vector<std::pair<const char*, PlatformType>>& EnumWords(PlatformType*) {
+  static const std::vector<std::pair<const char*, PlatformType>> words{
+      {"handheld", PlatformType::kHandheld}, {"wheeled", PlatformType::kWheeled}, {"car", PlatformType::kCar}};
+  return words;
+}
+
+const std::vector<std::pair<const char*, MotorAxis>>& EnumWords(MotorAxis*) {
+  static const std::vector<std::pair<const char*, MotorAxis>> words{
+      {"horizontal", MotorAxis::kHorizontal}, {"vertical", MotorAxis::kVertical}, {"tilted", MotorAxis::kTilted}};
+  return words;
+}
+
 const char* PlatformTypeName(PlatformType type) {
-  switch (type) {
-    case PlatformType::kWheeled: return "wheeled";
-    case PlatformType::kCar: return "car";
-    default: return "handheld";
-  }
+  for (const auto& [word, t] : EnumWords(&type))
+    if (t == type) return word;
+  return "unknown";
 }
 
 const char* MotorAxisName(MotorAxis axis) {
-  switch (axis) {
-    case MotorAxis::kVertical: return "vertical";
-    case MotorAxis::kTilted: return "tilted";
-    default: return "horizontal";
-  }
+  for (const auto& [word, a] : EnumWords(&axis))
+    if (a == axis) return word;
+  return "unknown";
 }
 
 PlatformConfig DefaultPlatform(PlatformType type) {

@@ -9,6 +9,8 @@
 // site `lidar`). Actuator `rotor_motor` (torque on the hinge, gear 1); sensors `imu_accel`, `imu_gyro` at `imu`.
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -30,6 +32,10 @@ enum class MotorAxis {
   kVertical,    ///< motor z along base +z
   kTilted,      ///< motor z in the base x-z plane, tilt_deg above base +x towards +z
 };
+/// The words of the enums in YAML and on the command line (core/io/yaml_fields.hpp finds them by
+/// argument-dependent lookup), and a value's word ("unknown" outside the enum).
+const std::vector<std::pair<const char*, PlatformType>>& EnumWords(PlatformType*);
+const std::vector<std::pair<const char*, MotorAxis>>& EnumWords(MotorAxis*);
 const char* PlatformTypeName(PlatformType type);  ///< "handheld", "wheeled", "car"
 const char* MotorAxisName(MotorAxis axis);      ///< "horizontal", "vertical", "tilted"
 
@@ -128,9 +134,9 @@ std::string BuildRigMjcf(const RigModelConfig& config, std::string* error, doubl
 
 /// YAML (rig_model/rig.yaml layout, docs/rig_model.md). Unknown keys are errors naming file:line. Setting
 /// `carrier:` resets `platform` to DefaultPlatform(carrier) before `platform:` overrides are read.
-/// ParseRigModelConfig reads `node` (a map, e.g. nested in the sim config; null = keep *config) over *config and
-/// throws yaml::ParseError naming `file`:line; it does not Validate.
-void ParseRigModelConfig(const std::string& file, const YAML::Node& node, RigModelConfig* config);
+/// ParseRigModelConfig reads `node` (a map, e.g. nested in the sim config; null = keep *config) over *config; an
+/// error names `file`:line and the field (*config untouched then); it does not Validate.
+Status ParseRigModelConfig(const std::string& file, const YAML::Node& node, RigModelConfig* config);
 Status LoadRigModelConfig(const std::string& path, RigModelConfig* config);  ///< reads, parses and Validates
 void EmitRigModelConfig(YAML::Emitter& out, const RigModelConfig& config);   ///< a map (all fields)
 

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/types/calib.hpp"
+#include "core/util/log.hpp"
 #include "core/util/rng.hpp"
 #include "sim/rig/motor.hpp"
 #include "sim/rig/motor_profile.hpp"
@@ -187,9 +188,9 @@ class StepperDrive final : public RotorDrive {
 
 /// Parses a motor-drive mapping {profile, stepper, pid, encoder} (each optional; keys as the struct fields,
 /// profile.type one of constant|trapezoid|nodding|stop_and_go) over the values already in *config, then
-/// Validates. Throws yaml::ParseError naming file:line and the key for unknown keys, unreadable values and
-/// invalid configs. Defined in motor_yaml.cpp (needs yaml-cpp).
-void ParseMotorDriveConfig(const std::string& file, const YAML::Node& node, MotorDriveConfig* config);
+/// Validates. Unknown keys, unreadable values and invalid configs give an error naming file:line and the field;
+/// *config is untouched then. Defined in motor_yaml.cpp (needs yaml-cpp).
+Status ParseMotorDriveConfig(const std::string& file, const YAML::Node& node, MotorDriveConfig* config);
 /// Emits every field as one mapping (the value; the caller writes the key): ParseMotorDriveConfig of the output
 /// gives back an equal config (doubles are written round-trip exact; infinity as .inf).
 void EmitMotorDriveConfig(YAML::Emitter& out, const MotorDriveConfig& config);

@@ -26,6 +26,7 @@
 
 #include "core/types/calib.hpp"
 #include "core/types/messages.hpp"
+#include "core/util/log.hpp"
 #include "core/util/rng.hpp"
 #include "sim/rig/base_motion.hpp"
 
@@ -120,8 +121,9 @@ bool ValidateImuNoise(const ImuNoise& noise, std::string* error);
 ///   rate_hz, gyro_noise_density, gyro_random_walk, accel_noise_density, accel_random_walk,
 ///   gyro_turn_on_sigma_radps, accel_turn_on_sigma_mps2, gyro_scale_sigma, accel_scale_sigma,
 ///   gyro_misalignment_sigma_rad, accel_misalignment_sigma_rad, imu_clock_offset_s
-/// Throws yaml::ParseError naming file:line for unknown keys, wrong types and invalid values (Validate).
-void ParseImuConfig(const std::string& file, const YAML::Node& node, ImuConfig* config);
+/// Unknown keys, wrong types and invalid values (Validate) give an error naming file:line and the field; *config
+/// is untouched then. A missing node changes nothing.
+Status ParseImuConfig(const std::string& file, const YAML::Node& node, ImuConfig* config);
 /// Emits every key above except preset, as one mapping (a value of the caller's key).
 void EmitImuConfig(YAML::Emitter& out, const ImuConfig& config);
 

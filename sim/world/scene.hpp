@@ -9,6 +9,7 @@
 #include <array>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -33,6 +34,9 @@ struct Material {
 };
 
 enum class PrimitiveType { kBox, kQuad, kCylinder, kMesh };
+/// The types' words in scene files: "box", "quad" (or "plane"), "cylinder", "mesh" (core/io/yaml_fields.hpp finds
+/// it by argument-dependent lookup).
+const std::vector<std::pair<const char*, PrimitiveType>>& EnumWords(PrimitiveType*);
 
 /// One solid or surface. Orientation R = Rz(yaw) * Ry(pitch) * Rx(roll) maps primitive axes to world axes.
 struct Primitive {

@@ -10,17 +10,6 @@
 namespace rotolidar::sim {
 namespace {
 
-constexpr struct {
-  TexturePattern pattern;
-  const char* name;
-} kPatternNames[] = {
-    {TexturePattern::kFlat, "flat"},       {TexturePattern::kNoise, "noise"},
-    {TexturePattern::kChecker, "checker"}, {TexturePattern::kBricks, "bricks"},
-    {TexturePattern::kTiles, "tiles"},     {TexturePattern::kPlanks, "planks"},
-    {TexturePattern::kStripes, "stripes"}, {TexturePattern::kFacade, "facade"},
-    {TexturePattern::kMarkings, "markings"},
-};
-
 /// Tileable multi-octave value noise on [0,1)^2 with values in [0, 1]: random lattices of 4, 8, 16 and 32
 /// cells per image (wrapping at the borders), smoothstep-interpolated, weights halving per octave.
 class TileNoise {
@@ -118,20 +107,26 @@ TextureSpec Builtin(const std::string& name, TexturePattern p, Eigen::Vector3d a
 
 }  // namespace
 
+const std::vector<std::pair<const char*, TexturePattern>>& EnumWords(TexturePattern*) {
+  static const std::vector<std::pair<const char*, TexturePattern>> words{
+      {"flat", TexturePattern::kFlat},       {"noise", TexturePattern::kNoise},
+      {"checker", TexturePattern::kChecker}, {"bricks", TexturePattern::kBricks},
+      {"tiles", TexturePattern::kTiles},     {"planks", TexturePattern::kPlanks},
+      {"stripes", TexturePattern::kStripes}, {"facade", TexturePattern::kFacade},
+      {"markings", TexturePattern::kMarkings},
+  };
+  return words;
+}
+
 bool ParseTexturePattern(const std::string& name, TexturePattern* pattern) {
-  for (const auto& entry : kPatternNames) {
-    if (name == entry.name) {
-      *pattern = entry.pattern;
-      return true;
-    }
-  }
+  for (const auto& [word, p] : EnumWords(pattern))
+    if (name == word) return *pattern = p, true;
   return false;
 }
 
 const char* TexturePatternName(TexturePattern pattern) {
-  for (const auto& entry : kPatternNames) {
-    if (entry.pattern == pattern) return entry.name;
-  }
+  for (const auto& [word, p] : EnumWords(&pattern))
+    if (p == pattern) return word;
   return "?";
 }
 

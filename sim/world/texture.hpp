@@ -8,6 +8,7 @@
 // white when textured).
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -26,8 +27,10 @@ enum class TexturePattern {
   kMarkings,  ///< asphalt (color_a) with `cells` painted bay lines (color_b) across the image, parking bays
 };
 
-/// Parses "flat", "noise", "checker", "bricks", "tiles", "planks", "stripes", "facade", "markings";
-/// false for anything else.
+/// The patterns' words in scene files: "flat", "noise", "checker", "bricks", "tiles", "planks", "stripes",
+/// "facade", "markings" (core/io/yaml_fields.hpp finds it by argument-dependent lookup).
+const std::vector<std::pair<const char*, TexturePattern>>& EnumWords(TexturePattern*);
+/// Parses one of those words; false for anything else.
 bool ParseTexturePattern(const std::string& name, TexturePattern* pattern);
 const char* TexturePatternName(TexturePattern pattern);
 

@@ -12,7 +12,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "core/io/yaml_util.hpp"
 
 #include "tests/sim/rig/carrier_test_util.hpp"
 
@@ -126,12 +125,13 @@ TEST(CarrierYaml, RoundTripOfEveryType) {
   for (const CarrierConfig& c : configs) {
     const std::string text = Emit(c);
     CarrierConfig back;
-    ParseCarrierConfig("/cfg/sim.yaml", YAML::Load(text), &back);
+    const Status s = ParseCarrierConfig("/cfg/sim.yaml", YAML::Load(text), &back);
+    ASSERT_TRUE(s.ok) << s.message;
     EXPECT_EQ(back.type, c.type);
     EXPECT_EQ(Emit(back), text);
   }
   CarrierConfig back;
-  ParseCarrierConfig("/cfg/sim.yaml", YAML::Load(Emit(configs[1])), &back);
+  ASSERT_TRUE(ParseCarrierConfig("/cfg/sim.yaml", YAML::Load(Emit(configs[1])), &back).ok);
   ASSERT_EQ(back.handheld.waypoints.size(), 4u);
   EXPECT_EQ(back.handheld.waypoints[1].dwell_s, 3.0);
   EXPECT_EQ(back.handheld.laps, 3);
@@ -140,13 +140,10 @@ TEST(CarrierYaml, RoundTripOfEveryType) {
 
 std::string ParseCarrierError(const std::string& text) {
   CarrierConfig c;
-  try {
-    ParseCarrierConfig("/cfg/sim.yaml", YAML::Load(text), &c);
-  } catch (const yaml::ParseError& e) {
-    EXPECT_EQ(c.type, CarrierType::kScriptedLoop) << "a failed parse must leave the config untouched";
-    return e.what();
-  }
-  return "";
+  const Status s = ParseCarrierConfig("/cfg/sim.yaml", YAML::Load(text), &c);
+  if (s.ok) return "";
+  EXPECT_EQ(c.type, CarrierType::kScriptedLoop) << "a failed parse must leave the config untouched";
+  return s.message;
 }
 
 TEST(CarrierYaml, ErrorsNameFileLineAndFieldAndPathsResolve) {
@@ -165,10 +162,10 @@ TEST(CarrierYaml, ErrorsNameFileLineAndFieldAndPathsResolve) {
   e = ParseCarrierError("type: car\ncar: {waypoints_file: r.csv, height_m: high}\n");
   EXPECT_NE(e.find("height_m"), std::string::npos) << e;
   CarrierConfig c;
-  ParseCarrierConfig("/cfg/sim.yaml", YAML::Load("type: kitti\nkitti: {poses_file: ../data/00.txt}\n"), &c);
+  ASSERT_TRUE(ParseCarrierConfig("/cfg/sim.yaml", YAML::Load("type: kitti\nkitti: {poses_file: ../data/00.txt}\n"), &c).ok);
   EXPECT_EQ(c.kitti.poses_file, "/data/00.txt");
   EXPECT_EQ(c.kitti.times_file, "");
-  ParseCarrierConfig("/cfg/sim.yaml", YAML::Load("type: car\ncar: {waypoints_file: /abs/r.csv}\n"), &c);
+  ASSERT_TRUE(ParseCarrierConfig("/cfg/sim.yaml", YAML::Load("type: car\ncar: {waypoints_file: /abs/r.csv}\n"), &c).ok);
   EXPECT_EQ(c.car.waypoints_file, "/abs/r.csv");
   EXPECT_EQ(c.type, CarrierType::kCar);
 }

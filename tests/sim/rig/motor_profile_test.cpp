@@ -9,7 +9,6 @@
 #include <limits>
 #include <string>
 
-#include "core/io/yaml_util.hpp"
 #include "core/util/log.hpp"
 #include "sim/rig/stepper.hpp"
 
@@ -200,21 +199,21 @@ TEST(MotorDriveYaml, EmitParseRoundTripIsExact) {
     EmitMotorDriveConfig(out, c);
     ASSERT_TRUE(out.good()) << out.GetLastError();
     MotorDriveConfig back;
-    ParseMotorDriveConfig("motor.yaml", YAML::Load(out.c_str()), &back);
+    const Status parsed = ParseMotorDriveConfig("motor.yaml", YAML::Load(out.c_str()), &back);
+    ASSERT_TRUE(parsed.ok) << parsed.message;
     EXPECT_TRUE(back == c) << out.c_str();
     MotorDriveConfig defaults;
     EXPECT_FALSE(back == defaults);
   }
 }
 
+/// The error message of parsing `text` ("" when it parses); a failed parse leaves the config untouched.
 std::string ParseError(const std::string& text) {
   MotorDriveConfig c;
-  try {
-    ParseMotorDriveConfig("rig/motor.yaml", YAML::Load(text), &c);
-  } catch (const yaml::ParseError& e) {
-    return e.what();
-  }
-  return "";
+  const Status s = ParseMotorDriveConfig("rig/motor.yaml", YAML::Load(text), &c);
+  if (s.ok) return "";
+  EXPECT_TRUE(c == MotorDriveConfig()) << "a failed parse must leave the config untouched";
+  return s.message;
 }
 
 TEST(MotorDriveYaml, ErrorsNameFileLineAndField) {
@@ -235,7 +234,7 @@ TEST(MotorDriveYaml, ErrorsNameFileLineAndField) {
   EXPECT_NE(e.find("microsteps"), std::string::npos) << e;
   // Partial files keep the defaults of everything they do not name.
   MotorDriveConfig c;
-  ParseMotorDriveConfig("m.yaml", YAML::Load("profile:\n  type: constant\n"), &c);
+  ASSERT_TRUE(ParseMotorDriveConfig("m.yaml", YAML::Load("profile:\n  type: constant\n"), &c).ok);
   MotorDriveConfig expected;
   expected.profile.type = MotorProfileType::kConstant;
   EXPECT_TRUE(c == expected);

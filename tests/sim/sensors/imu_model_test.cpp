@@ -8,7 +8,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "core/io/yaml_util.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -291,7 +290,8 @@ TEST(ImuYaml, RoundTripKeepsEveryField) {
   c.errors.imu_clock_offset_s = 0.0035;
   const std::string text = Emit(c);
   ImuConfig back;
-  ParseImuConfig("mem.yaml", YAML::Load(text), &back);
+  const Status s = ParseImuConfig("mem.yaml", YAML::Load(text), &back);
+  ASSERT_TRUE(s.ok) << s.message;
   EXPECT_EQ(Emit(back), text);
   EXPECT_EQ(back.noise.gyro_noise_density, c.noise.gyro_noise_density);
   EXPECT_EQ(back.noise.accel_random_walk, c.noise.accel_random_walk);
@@ -303,7 +303,7 @@ TEST(ImuYaml, RoundTripKeepsEveryField) {
 TEST(ImuYaml, PresetThenOverrides) {
   ImuConfig c;
   c.noise = ImuNoise{};
-  ParseImuConfig("mem.yaml", YAML::Load("preset: bmi055\nrate_hz: 100\n"), &c);
+  ASSERT_TRUE(ParseImuConfig("mem.yaml", YAML::Load("preset: bmi055\nrate_hz: 100\n"), &c).ok);
   EXPECT_EQ(c.noise.rate_hz, 100.0);
   EXPECT_EQ(c.noise.gyro_noise_density, Bmi055Noise().gyro_noise_density);
   EXPECT_EQ(c.noise.accel_noise_density, Bmi055Noise().accel_noise_density);
@@ -311,12 +311,8 @@ TEST(ImuYaml, PresetThenOverrides) {
 
 std::string ParseError(const std::string& text) {
   ImuConfig c;
-  try {
-    ParseImuConfig("imu.yaml", YAML::Load(text), &c);
-  } catch (const yaml::ParseError& e) {
-    return e.what();
-  }
-  return "";
+  const Status s = ParseImuConfig("imu.yaml", YAML::Load(text), &c);
+  return s.ok ? "" : s.message;
 }
 
 TEST(ImuYaml, ErrorsNameFileLineAndField) {
@@ -333,10 +329,7 @@ TEST(ImuYaml, ErrorsNameFileLineAndField) {
   EXPECT_NE(e.find("preset"), std::string::npos) << e;
   ImuConfig unchanged;
   unchanged.noise.rate_hz = 123;
-  try {
-    ParseImuConfig("imu.yaml", YAML::Load("rate_hz: -5\n"), &unchanged);
-  } catch (const yaml::ParseError&) {
-  }
+  EXPECT_FALSE(ParseImuConfig("imu.yaml", YAML::Load("rate_hz: -5\n"), &unchanged).ok);
   EXPECT_EQ(unchanged.noise.rate_hz, 123) << "a failed parse must leave the config untouched";
 }
 

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/world/embree_scene.hpp"
 #include "sim/world/scene.hpp"

@@ -12,7 +12,7 @@
 #include "bench/report/run_report.hpp"
 #include "bench/run/progress.hpp"
 #include "bench/run/truth_eval.hpp"
-#include "core/io/config_yaml.hpp"
+#include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/yaml_util.hpp"
 #include "sim/sim_runner.hpp"
 

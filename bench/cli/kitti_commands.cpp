@@ -7,7 +7,7 @@
 #include "bench/run/kitti_export.hpp"
 #include "bench/run/kitti_run.hpp"
 #include "bench/run/progress.hpp"
-#include "core/io/config_yaml.hpp"
+#include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/yaml_util.hpp"
 
 namespace rotolidar::bench {

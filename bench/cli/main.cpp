@@ -4,7 +4,6 @@
 #include <string>
 
 #include "bench/cli/commands.hpp"
-#include "core/util/log.hpp"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/wire/vlp16.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/types/trajectory.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

@@ -15,7 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/scene.hpp"
 
 namespace rotolidar::bench {

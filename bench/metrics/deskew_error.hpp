@@ -17,7 +17,7 @@
 
 #include "core/pipeline/estimator.hpp"
 #include "core/types/trajectory.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

@@ -19,7 +19,7 @@
 #include "bench/metrics/coverage.hpp"
 #include "bench/metrics/geometry_accuracy.hpp"
 #include "core/types/trajectory.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/scene.hpp"
 
 namespace rotolidar::bench {

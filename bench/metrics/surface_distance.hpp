@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/scene.hpp"
 
 namespace rotolidar::sim {

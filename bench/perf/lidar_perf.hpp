@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/wire/vlp16.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "bench/eval/allan.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/sim_config.hpp"
 
 namespace rotolidar::bench {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "bench/metrics/deskew_error.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

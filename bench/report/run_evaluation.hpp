@@ -19,7 +19,7 @@
 #include "bench/run/eval_run.hpp"
 #include "bench/run/slam_run.hpp"
 #include "core/types/trajectory.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

@@ -19,7 +19,7 @@
 #include "bench/eval/trajectory_metrics.hpp"
 #include "core/io/trajectory_io.hpp"
 #include "core/types/trajectory.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

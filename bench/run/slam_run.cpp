@@ -8,7 +8,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "core/io/config_yaml.hpp"
+#include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/io/recording.hpp"

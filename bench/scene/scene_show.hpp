@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 

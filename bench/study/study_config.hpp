@@ -27,7 +27,7 @@
 #include <string>
 #include <vector>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/sim_config.hpp"
 
 namespace rotolidar::bench {

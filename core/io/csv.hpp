@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

@@ -30,7 +30,7 @@
 #include "core/preprocess/filters.hpp"
 #include "core/types/geometry.hpp"
 #include "core/types/time.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

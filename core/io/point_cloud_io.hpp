@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

@@ -12,7 +12,7 @@
 
 #include "core/types/calib.hpp"
 #include "core/types/messages.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

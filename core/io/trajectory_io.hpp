@@ -18,7 +18,7 @@
 #include <string>
 
 #include "core/types/trajectory.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

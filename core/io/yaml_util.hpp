@@ -8,7 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "core/types/geometry.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::yaml {
 

@@ -1,7 +1,7 @@
 #pragma once
 // Configuration of the estimator (plain structs, defaults in-class, units in comments): one sub-config per
 // pipeline stage (each module's own struct) plus the estimator's glue parameters. docs/estimator.md.
-// YAML I/O lives at the edge: core/io/config_yaml.hpp.
+// YAML I/O lives at the edge: core/pipeline/estimator_config_yaml.hpp.
 #include <string>
 
 #include "core/backend/imu_init.hpp"

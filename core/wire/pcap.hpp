@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "core/types/messages.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

@@ -13,7 +13,7 @@
 
 #include "core/wire/udp_sender.hpp"
 #include "core/types/messages.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar {
 

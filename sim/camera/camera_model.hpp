@@ -22,7 +22,7 @@
 #include <Eigen/Core>
 
 #include "core/types/calib.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace YAML {
 class Emitter;

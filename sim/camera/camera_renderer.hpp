@@ -5,7 +5,7 @@
 
 #include "core/types/geometry.hpp"
 #include "core/types/time.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/camera/image_effects.hpp"
 
 namespace rotolidar::sim {

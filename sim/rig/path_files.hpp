@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/types/geometry.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace rotolidar::sim {
 

@@ -16,7 +16,7 @@
 
 #include "core/types/calib.hpp"
 #include "core/types/geometry.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 typedef struct mjModel_ mjModel;  // MuJoCo's model (mujoco/mjmodel.h); this header stays MuJoCo-free
 namespace YAML {

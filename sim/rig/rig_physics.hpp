@@ -20,7 +20,7 @@
 
 #include "core/types/geometry.hpp"
 #include "core/types/time.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/rig/base_motion.hpp"
 #include "sim/rig/rig_model.hpp"
 #include "sim/rig/rotor_drive.hpp"

@@ -28,7 +28,7 @@
 #include <Eigen/Geometry>
 
 #include "core/types/time.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/scene.hpp"
 
 namespace rotolidar::sim {

@@ -3,7 +3,7 @@
 // elements (what a tape measure would give: name, type, frame, width, height).
 #include <string>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/scene.hpp"
 
 namespace rotolidar::sim {

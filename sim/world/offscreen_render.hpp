@@ -19,7 +19,7 @@
 #include <mujoco/mujoco.h>
 #include <Eigen/Geometry>
 
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/texture.hpp"
 
 namespace rotolidar::sim {

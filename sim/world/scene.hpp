@@ -16,7 +16,7 @@
 #include <Eigen/Geometry>
 
 #include "core/types/time.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/rig/waypoint.hpp"
 #include "sim/world/texture.hpp"
 

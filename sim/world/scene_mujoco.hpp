@@ -23,7 +23,7 @@
 #include <Eigen/Core>
 
 #include "core/types/time.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 #include "sim/world/scene.hpp"
 
 namespace rotolidar::sim {

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/io/config_yaml.hpp"
+#include "core/pipeline/estimator_config_yaml.hpp"
 
 namespace rotolidar {
 namespace {

@@ -1,7 +1,7 @@
 // EstimatorConfig <-> YAML with the project's one idiom (core/io/yaml_fields.hpp): every section is described
 // once, as a list of (key, field) pairs, and the generic visitors parse (strict keys), emit and name fields in
 // messages from it, so parsing and the resolved-config output cannot drift.
-#include "core/io/config_yaml.hpp"
+#include "core/pipeline/estimator_config_yaml.hpp"
 
 #include "core/io/yaml_fields.hpp"
 

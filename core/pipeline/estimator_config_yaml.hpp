@@ -3,7 +3,7 @@
 #include <string>
 
 #include "core/pipeline/estimator_config.hpp"
-#include "core/util/log.hpp"
+#include "core/util/status.hpp"
 
 namespace YAML {
 class Node;

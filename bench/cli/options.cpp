@@ -1,4 +1,5 @@
 #include "bench/cli/options.hpp"
+#include "core/util/log.hpp"
 
 #include <algorithm>
 #include <cstdlib>

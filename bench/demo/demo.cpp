@@ -9,6 +9,7 @@
 #include "bench/report/html_report.hpp"
 #include "bench/report/run_report.hpp"
 #include "bench/run/progress.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::bench {
 namespace {

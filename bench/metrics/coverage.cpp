@@ -16,6 +16,7 @@
 #include <pcl/point_types.h>
 
 #include "sim/world/embree_scene.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::bench {
 namespace {

@@ -10,6 +10,7 @@
 #include "sim/sim_config.hpp"
 #include "sim/world/embree_scene.hpp"
 #include "sim/world/scene.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

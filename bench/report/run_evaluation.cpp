@@ -13,6 +13,7 @@
 #include "bench/run/truth_eval.hpp"
 #include "core/io/trajectory_io.hpp"
 #include "sim/sim_config.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::bench {
 namespace {

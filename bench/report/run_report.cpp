@@ -7,6 +7,7 @@
 
 #include "bench/report/html_report.hpp"
 #include "bench/report/run_report_sections.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::bench {
 namespace {

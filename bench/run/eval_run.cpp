@@ -41,8 +41,7 @@ std::string MakeTitle(const EvalOptions& o) {
   const std::string unit = ErrorUnit(o);
   std::string title = MetricLabel(o.metric) + " w.r.t. " + PoseRelationName(o.pose_relation) +
                       (unit.empty() ? "" : " (" + unit + ")");
-  if (o.metric == EvalMetric::kKitti) title += "
-over 100, 200, ..., 800 m segments from every 10th pose (devkit)";
+  if (o.metric == EvalMetric::kKitti) title += "\nover 100, 200, ..., 800 m segments from every 10th pose (devkit)";
   if (o.metric == EvalMetric::kRpe) {
     std::ostringstream d;
     d << o.delta;

@@ -13,6 +13,7 @@
 #include "core/io/point_cloud_io.hpp"
 #include "core/io/recording.hpp"
 #include "core/io/trajectory_io.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::bench {
 namespace {

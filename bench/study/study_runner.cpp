@@ -212,7 +212,7 @@ Status PreparePoints(const std::vector<StudyPoint>& points, const std::string& o
     if (ec) return Status::Error(dir + ": cannot create: " + ec.message());
     if (IsFinished(dir, text)) {
       r.state = PointState::kResumed;
-      ReadPointMetrics(dir + "/metrics.json", &r.metrics);
+      if (Status s = ReadPointMetrics(dir + "/metrics.json", &r.metrics); !s) return s;
       r.runtime_s = ReadRecordedRuntime(dir);
     } else {
       fs::remove(dir + "/metrics.json", ec);  // stale results of an older config

@@ -1,4 +1,5 @@
 #include "core/backend/sliding_window.hpp"
+#include "core/util/log.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,5 @@
 #include "core/deskew/deskew.hpp"
+#include "core/util/log.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,5 @@
 #include "core/imu/imu_factor.hpp"
+#include "core/util/log.hpp"
 
 #include <ceres/product_manifold.h>
 #include <ceres/sphere_manifold.h>

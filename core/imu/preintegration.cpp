@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "core/types/geometry.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 

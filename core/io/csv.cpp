@@ -1,4 +1,5 @@
 #include "core/io/csv.hpp"
+#include "core/util/log.hpp"
 
 #include <cerrno>
 #include <cstdio>

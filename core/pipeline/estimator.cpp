@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/pipeline/estimator_internal.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 namespace {

@@ -7,6 +7,7 @@
 
 #include "core/backend/pose_factors.hpp"
 #include "core/pipeline/estimator_internal.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 namespace {

@@ -3,6 +3,7 @@
 // estimated in it and handed to the sliding window.
 #include "core/backend/imu_init.hpp"
 #include "core/pipeline/estimator_internal.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 

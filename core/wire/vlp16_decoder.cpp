@@ -4,6 +4,7 @@
 #include <numeric>
 
 #include "core/wire/vlp16.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 namespace {

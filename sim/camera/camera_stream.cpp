@@ -5,6 +5,7 @@
 
 #include "sim/camera/embree_camera.hpp"
 #include "sim/camera/osmesa_camera.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

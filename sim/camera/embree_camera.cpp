@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sim/world/scene_dynamic.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -9,6 +9,7 @@
 
 #include "sim/world/offscreen_render.hpp"
 #include "sim/world/scene_mujoco.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 

@@ -1,5 +1,6 @@
 // VLP-16 position packets on the sim clock (contract in position_source.hpp).
 #include "sim/lidar/position_source.hpp"
+#include "core/util/log.hpp"
 
 #include <cmath>
 

@@ -1,5 +1,6 @@
 // Simulated VLP-16 head: schedule, ray casting in batches, beam/echo, range and intensity model (see the header).
 #include "sim/lidar/vlp16_caster.hpp"
+#include "core/util/log.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sim/rig/path_math.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -1,4 +1,5 @@
 #include "sim/rig/mujoco_util.hpp"
+#include "core/util/log.hpp"
 
 #include <cstring>
 #include <memory>

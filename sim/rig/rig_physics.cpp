@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "sim/rig/mujoco_util.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "sim/world/scene_dynamic.hpp"
+#include "core/util/log.hpp"
 #include <sstream>
 
 namespace rotolidar::sim {

@@ -1,5 +1,6 @@
 // Mesh files through PCL's readers, and the element truth file.
 #include "sim/world/mesh_io.hpp"
+#include "core/util/log.hpp"
 
 #include <algorithm>
 #include <cctype>

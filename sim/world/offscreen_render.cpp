@@ -1,5 +1,6 @@
 // OSMesa context + MuJoCo offscreen framebuffer; the camera frustum comes from pinhole intrinsics.
 #include "sim/world/offscreen_render.hpp"
+#include "core/util/log.hpp"
 
 #include <GL/osmesa.h>
 

@@ -9,6 +9,7 @@
 #include "sim/world/scene.hpp"
 #include "sim/world/scene_dynamic.hpp"
 #include "sim/world/scene_fields.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 

@@ -1,5 +1,6 @@
 // Dynamic objects: pose along their paths and default bodies.
 #include "sim/world/scene_dynamic.hpp"
+#include "core/util/log.hpp"
 
 #include <cmath>
 

@@ -4,6 +4,7 @@
 
 #include "sim/world/scene.hpp"
 #include "sim/world/scene_dynamic.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

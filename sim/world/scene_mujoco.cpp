@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "sim/world/scene_dynamic.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -11,6 +11,7 @@
 #include "sim/scene_carrier.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/sim_runner.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -8,6 +8,7 @@
 #include "core/imu/preintegration.hpp"
 #include "core/types/geometry.hpp"
 #include "core/util/rng.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar {
 namespace {
@@ -205,8 +206,8 @@ TEST(PreintegratedImu, CovarianceMatchesMonteCarlo) {
       const Eigen::Vector3d ng(rng.Normal(), rng.Normal(), rng.Normal()), na(rng.Normal(), rng.Normal(), rng.Normal());
       const ImuSample& a = samples[k];
       const ImuSample& b = samples[k + 1];
-      noisy.Integrate(0.5 * (a.gyro_radps + b.gyro_radps) + sg * ng,
-                      0.5 * (a.accel_mps2 + b.accel_mps2) + sa * na, dt);
+      ASSERT_TRUE(noisy.Integrate(0.5 * (a.gyro_radps + b.gyro_radps) + sg * ng,
+                                  0.5 * (a.accel_mps2 + b.accel_mps2) + sa * na, dt));
     }
     Eigen::Matrix<double, 9, 1> e;  // Forster's error convention: dR_meas = dR_true Exp(dphi)
     e << LogSO3(clean.delta_R().transpose() * noisy.delta_R()), noisy.delta_v_mps() - clean.delta_v_mps(),

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/pipeline/voxel_map.hpp"
+#include "core/registration/gicp_matcher.hpp"
 
 namespace rotolidar {
 namespace {

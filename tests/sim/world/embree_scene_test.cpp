@@ -220,7 +220,9 @@ TEST(EmbreeScene, PointQueryOffersEveryStaticTriangleNearThePoint) {
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       bool near = false;
       for (int k = 0; k < 3; ++k) near |= (mesh.vertices_m[mesh.triangles[t][k]] - p).norm() < 1.0 - 1e-4;
-      if (near) EXPECT_TRUE(ids.count(static_cast<int>(t))) << "point " << i << ", triangle " << t;
+      if (near) {
+        EXPECT_TRUE(ids.count(static_cast<int>(t))) << "point " << i << ", triangle " << t;
+      }
     }
   }
   // A visitor that answers 0 prunes the search to the triangles whose bounds touch the point itself.

@@ -13,6 +13,7 @@
 #include "sim/world/mesh_io.hpp"
 #include "sim/world/scene_dynamic.hpp"
 #include "tests/sim/world/world_fixtures.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
 namespace {

@@ -8,6 +8,7 @@
 #include "core/util/rng.hpp"
 #include "sim/world/embree_scene.hpp"
 #include "sim/world/scene.hpp"
+#include "core/util/log.hpp"
 
 namespace rotolidar::sim::testing {
 

@@ -72,7 +72,11 @@ void Visit(V& v, Vlp16CasterConfig& c) {
 
 template <class V>
 void Visit(V& v, ClockConfig& c) {
-  v("lidar_offset_s", &c.lidar_offset_s), v("encoder_offset_s", &c.encoder_offset_s);
+  v("lidar_offset_s", &c.lidar_offset_s), v("lidar_drift_ppm", &c.lidar_drift_ppm);
+  v("lidar_pps_synced", &c.lidar_pps_synced), v("encoder_offset_s", &c.encoder_offset_s);
+  v("encoder_drift_ppm", &c.encoder_drift_ppm), v("camera_offset_s", &c.camera_offset_s);
+  v("camera_drift_ppm", &c.camera_drift_ppm), v("lidar_capture_latency_s", &c.lidar_capture.latency_s);
+  v("lidar_capture_jitter_scale_s", &c.lidar_capture.jitter_scale_s);
 }
 
 /// A config file that names carrier.type clears carrier_from_scene (the file chose the carrier).
@@ -93,13 +97,21 @@ void Visit(V& v, SimConfig& c) {
 }
 
 bool ClockConfig::Validate(std::string* error) const {
-  for (const auto& [name, v] : {std::pair{"lidar_offset_s", lidar_offset_s}, {"encoder_offset_s", encoder_offset_s}}) {
-    if (!std::isfinite(v) || std::abs(v) > 1.0) {
-      if (error) *error = std::string("clocks.") + name + " must be finite with |offset| <= 1 s";
-      return false;
-    }
-  }
-  return true;
+  // The raw lidar drift is checked even when the PPS makes it inert: a bad value is a bad file either way.
+  return SensorClock{lidar_offset_s, lidar_drift_ppm}.Validate("clocks.lidar", error) &&
+         Encoder().Validate("clocks.encoder", error) && Camera().Validate("clocks.camera", error) &&
+         lidar_capture.Validate("clocks.lidar_capture", error);
+}
+
+ClockTruth SimConfig::TrueClocks() const {
+  ClockTruth t;
+  t.lidar = clocks.Lidar();
+  t.lidar_pps_synced = clocks.lidar_pps_synced;
+  t.imu = {imu.errors.imu_clock_offset_s, imu.errors.imu_clock_drift_ppm};
+  t.encoder = clocks.Encoder();
+  t.camera = clocks.Camera();
+  t.lidar_capture = clocks.lidar_capture;
+  return t;
 }
 
 RigCalib DefaultRigCalib() {
@@ -118,7 +130,7 @@ RigCalib SimConfig::TrueCalib() const {
   c.imu = imu.noise;
   c.encoder = motor.encoder.ToCalib();
   c.motor_speed_radps = motor.profile.speed_radps;
-  c.lidar_clock_offset_s = clocks.lidar_offset_s;
+  c.lidar_clock_offset_s = clocks.lidar_offset_s;  // nominal: the drift and capture jitter are not known
   c.camera = camera.Intrinsics();
   return c;
 }

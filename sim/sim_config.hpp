@@ -14,6 +14,8 @@
 #include "sim/rig/rig_model.hpp"
 #include "sim/rig/stepper.hpp"
 #include "sim/sensors/imu_model.hpp"
+#include "sim/sensors/sensor_clock.hpp"
+#include "sim/truth/clock_truth.hpp"
 
 namespace YAML {
 class Emitter;
@@ -22,11 +24,27 @@ class Node;
 
 namespace rotolidar::sim {
 
-/// Sensor clock errors for fault studies (all 0 by default). The IMU's own offset lives in ImuErrorConfig.
+/// Sensor clocks relative to the rig clock, for fault studies (all off by default: no offset, no drift, PPS
+/// synced, no capture jitter). Each clock stamps t + offset + drift_ppm * 1e-6 * t (SensorClock); the IMU's clock
+/// lives in ImuErrorConfig (imu_clock_offset_s, imu_clock_drift_ppm). calib.yaml holds only lidar_offset_s (the
+/// nominal value the rig's owner knows); truth/clocks.yaml holds every clock as run (TrueClocks()).
 struct ClockConfig {
   double lidar_offset_s = 0.0;    ///< VLP-16 clock: sensor time = rig time - lidar_offset_s (calib.yaml's sign)
-  double encoder_offset_s = 0.0;  ///< encoder stamps written = true rig time + encoder_offset_s
-  bool Validate(std::string* error) const;  ///< finite, |offset| <= 1 s
+  double lidar_drift_ppm = 0.0;   ///< VLP-16 clock rate error [ppm]; applies only when !lidar_pps_synced
+  bool lidar_pps_synced = true;   ///< true: the PPS disciplines the head's clock (no drift); false: free-running
+  double encoder_offset_s = 0.0;  ///< encoder stamps written = true rig time + encoder_offset_s (+ drift)
+  double encoder_drift_ppm = 0.0;
+  double camera_offset_s = 0.0;   ///< camera.csv stamps = true mid-exposure time + camera_offset_s (+ drift)
+  double camera_drift_ppm = 0.0;
+  CaptureJitterConfig lidar_capture;  ///< host receive latency and jitter of the pcap capture times
+
+  /// The head's clock in SensorClock's sign (0.0 - x: a zero offset is +0, not -0).
+  SensorClock Lidar() const { return {0.0 - lidar_offset_s, lidar_pps_synced ? 0.0 : lidar_drift_ppm}; }
+  SensorClock Encoder() const { return {encoder_offset_s, encoder_drift_ppm}; }
+  SensorClock Camera() const { return {camera_offset_s, camera_drift_ppm}; }
+  /// False naming the field ("clocks.<key>") unless finite, |offset| <= 1 s, |drift| <= 1000 ppm and the
+  /// capture latency and jitter scale in [0, 0.01] s.
+  bool Validate(std::string* error) const;
 };
 
 struct SimConfig {
@@ -51,9 +69,11 @@ struct SimConfig {
 
   bool Validate(std::string* error) const;
   /// The rig's TRUE calibration, as written to calib.yaml: geometry from rig_model, IMU noise, encoder
-  /// resolution and zero, the nominal motor speed (the uniform-rotation fallback), the LiDAR clock offset and
+  /// resolution and zero, the nominal motor speed (the uniform-rotation fallback), the nominal LiDAR clock offset and
   /// the camera's lens and rate (T_base_cam is the rig model's `cam` site).
   RigCalib TrueCalib() const;
+  /// Every sensor clock as the run applies it (written to truth/clocks.yaml).
+  ClockTruth TrueClocks() const;
 };
 
 /// The built-in default: the seed's forward-scanning rig (motor axis along base +x, the VLP-16's spin axis

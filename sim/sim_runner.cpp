@@ -92,8 +92,9 @@ class LidarStream {
         calib_(calib),
         embree_(*world.embree),
         caster_(*world.embree, calib.lidar, config.lidar, config.seed),
-        encoder_(config.return_mode, calib.lidar_clock_offset_s),
-        positions_(PositionConfig(calib)) {}
+        encoder_(config.return_mode, calib.lidar_clock_offset_s, config.clocks.Lidar().drift_ppm),
+        positions_(PositionConfig(calib, config.clocks)),
+        capture_(config.clocks.lidar_capture, config.seed) {}
 
   Status FireCovered(const RigTrace& trace, RecordingWriter* writer, SimSummary* summary) {
     const int per_packet = encoder_.SequencesPerPacket();
@@ -113,6 +114,7 @@ class LidarStream {
         summary->lidar_rays += 16;
         if (auto packet = encoder_.Add(seq)) {
           if (Status s = WritePositionsUntil(packet->t_capture_s, writer); !s) return s;
+          packet->t_capture_s = capture_.Apply(packet->t_capture_s);
           if (Status s = writer->Write(*packet); !s) return s;
           ++summary->lidar_packets;
         }
@@ -123,10 +125,11 @@ class LidarStream {
   Seconds NextFiringTime() const { return caster_.FiringTime(caster_.sequences_fired(), 0); }
 
  private:
-  static Vlp16PositionConfig PositionConfig(const RigCalib& calib) {
+  static Vlp16PositionConfig PositionConfig(const RigCalib& calib, const ClockConfig& clocks) {
     Vlp16PositionConfig c;
     c.epoch_unix_s = calib.epoch_unix_s;
     c.lidar_clock_offset_s = calib.lidar_clock_offset_s;
+    c.clock_drift_ppm = clocks.Lidar().drift_ppm;
     c.pps_status = 0;  // the twin's VLP-16 has no GPS receiver wired: its clock free-runs (no PPS)
     c.gps_fix = false;
     return c;
@@ -134,8 +137,10 @@ class LidarStream {
   Status WritePositionsUntil(Seconds t_s, RecordingWriter* writer) {
     position_packets_.clear();
     positions_.EmitUntil(t_s - Vlp16PositionConfig{}.transmit_latency_s, &position_packets_);
-    for (const LidarPacket& p : position_packets_)
+    for (LidarPacket& p : position_packets_) {
+      p.t_capture_s = capture_.Apply(p.t_capture_s);  // in write order: capture times stay monotonic
       if (Status s = writer->Write(p); !s) return s;
+    }
     return Status::Ok();
   }
 
@@ -145,6 +150,7 @@ class LidarStream {
   Vlp16Caster caster_;
   Vlp16PacketEncoder encoder_;
   Vlp16PositionSource positions_;
+  CaptureJitter capture_;  // host receive delay of every packet written
   std::vector<Vlp16FiringSequence> sequences_;
   std::vector<LidarPacket> position_packets_;
 };
@@ -182,7 +188,7 @@ Status MakeCameraStream(const SimConfig& config, SimWorld& world, const RigCalib
   std::unique_ptr<CameraSimulator> camera;
   if (Status s = CameraSimulator::Create(config.camera, config.seed, world.scene, world.embree.get(), &camera); !s)
     return s;
-  *out = std::make_unique<CameraStream>(std::move(camera), calib.T_base_cam);
+  *out = std::make_unique<CameraStream>(std::move(camera), calib.T_base_cam, config.clocks.Camera());
   return Status::Ok();
 }
 
@@ -223,7 +229,7 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
     drive.DrainEncoderSamples(&encoder_samples);
     for (EncoderSample e : encoder_samples) {
       if (e.t_s > config.duration_s) continue;
-      e.t_s += config.clocks.encoder_offset_s;
+      e.t_s = config.clocks.Encoder().Stamp(e.t_s);
       if (Status s = writer->Write(e); !s) return s;
       ++summary->encoder_samples;
     }
@@ -282,6 +288,7 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
   if (Status s = writer.Open(recording_dir, calib); !s) return s;
   TruthWriter truth;
   if (Status s = truth.Open(recording_dir); !s) return s;
+  if (Status s = WriteClockTruth(recording_dir, config.TrueClocks()); !s) return s;
   if (Status s = WriteResolvedConfig(config, world, recording_dir); !s) return s;
   if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress); !s) return s;
   if (Status s = writer.Close(); !s) return s;

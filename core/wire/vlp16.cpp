@@ -254,8 +254,8 @@ Status ParseVlp16PositionPacket(const uint8_t* data, std::size_t size, Vlp16Posi
   return Status::Ok();
 }
 
-Vlp16PacketEncoder::Vlp16PacketEncoder(Vlp16ReturnMode mode, double lidar_clock_offset_s)
-    : mode_(mode), lidar_clock_offset_s_(lidar_clock_offset_s) {
+Vlp16PacketEncoder::Vlp16PacketEncoder(Vlp16ReturnMode mode, double lidar_clock_offset_s, double clock_drift_ppm)
+    : mode_(mode), lidar_clock_offset_s_(lidar_clock_offset_s), clock_drift_ppm_(clock_drift_ppm) {
   packet_.return_mode = static_cast<uint8_t>(mode);
   packet_.product_id = kVlp16ProductId;
 }
@@ -263,7 +263,10 @@ Vlp16PacketEncoder::Vlp16PacketEncoder(Vlp16ReturnMode mode, double lidar_clock_
 std::optional<LidarPacket> Vlp16PacketEncoder::Add(const Vlp16FiringSequence& sequence) {
   const int i = pending_;
   const int firing = i % 2;
-  if (i == 0) packet_.timestamp_us = Vlp16TimestampUs(sequence.t_s, lidar_clock_offset_s_);
+  if (i == 0) {  // the drift as an offset that grows with rig time (exactly the constant offset at drift 0)
+    const double offset_s = lidar_clock_offset_s_ - clock_drift_ppm_ * 1e-6 * sequence.t_s;
+    packet_.timestamp_us = Vlp16TimestampUs(sequence.t_s, offset_s);
+  }
   const bool dual = mode_ == Vlp16ReturnMode::kDual;
   const int block = dual ? 2 * (i / 2) : i / 2;
   for (int laser = 0; laser < 16; ++laser) {

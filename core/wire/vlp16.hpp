@@ -137,7 +137,10 @@ int64_t UnixDaysFromCivil(int year, int month, int day);
 /// t_capture_s = (last sequence's t_s + 15 * kVlp16FiringPeriodS) + kVlp16TransmitLatencyS.
 class Vlp16PacketEncoder {
  public:
-  Vlp16PacketEncoder(Vlp16ReturnMode mode, double lidar_clock_offset_s);
+  /// Stamps each packet with the sensor clock read at its first firing (rig time t):
+  /// t - lidar_clock_offset_s + clock_drift_ppm * 1e-6 * t [s] (the drift of a head whose clock free-runs;
+  /// 0 leaves the stamps exactly as the offset alone makes them).
+  Vlp16PacketEncoder(Vlp16ReturnMode mode, double lidar_clock_offset_s, double clock_drift_ppm = 0.0);
 
   /// Adds one sequence; returns the finished 1206-byte packet (udp_port 2368) after every 24th (dual: 12th).
   std::optional<LidarPacket> Add(const Vlp16FiringSequence& sequence);
@@ -148,6 +151,7 @@ class Vlp16PacketEncoder {
  private:
   Vlp16ReturnMode mode_;
   double lidar_clock_offset_s_;
+  double clock_drift_ppm_;
   Vlp16RawPacket packet_;
   int pending_ = 0;
 };

@@ -106,7 +106,7 @@ Status CameraStream::RenderCovered(const RigTrace& trace, Seconds duration_s, Re
     total_.blur_s += stats.blur_s;
     total_.sensor_s += stats.sensor_s;
     total_.blur_px = std::max(total_.blur_px, stats.blur_px);
-    if (Status s = writer->Write(CameraFrame{t, image_}); !s) return s;
+    if (Status s = writer->Write(CameraFrame{clock_.Stamp(t), image_}); !s) return s;
     if (Status s = truth->WriteCam({t, T_world_cam_at(t)}); !s) return s;
     ++next_;
   }

@@ -23,6 +23,7 @@
 #include "sim/camera/camera_renderer.hpp"
 #include "sim/camera/image_effects.hpp"
 #include "sim/rig/rig_trace.hpp"
+#include "sim/sensors/sensor_clock.hpp"
 #include "sim/truth/truth.hpp"
 #include "sim/world/embree_scene.hpp"
 #include "sim/world/scene.hpp"
@@ -74,8 +75,9 @@ class CameraSimulator {
 /// The camera's frames along the physics trace (the LidarStream's counterpart in sim_runner.cpp).
 class CameraStream {
  public:
-  CameraStream(std::unique_ptr<CameraSimulator> camera, const Pose3& T_base_cam)
-      : camera_(std::move(camera)), T_base_cam_(T_base_cam) {}
+  /// `clock` stamps the frames written (camera.csv); cam.tum keeps the true rig time.
+  CameraStream(std::unique_ptr<CameraSimulator> camera, const Pose3& T_base_cam, const SensorClock& clock = {})
+      : camera_(std::move(camera)), T_base_cam_(T_base_cam), clock_(clock) {}
 
   /// Renders, writes (image + camera.csv row + cam.tum line) every frame whose exposure lies within the trace
   /// and ends by duration_s. Fails with the writer's message.
@@ -89,6 +91,7 @@ class CameraStream {
  private:
   std::unique_ptr<CameraSimulator> camera_;
   Pose3 T_base_cam_;
+  SensorClock clock_;  // stamps camera.csv
   long next_ = 0;
   cv::Mat image_;
   CameraFrameStats total_;

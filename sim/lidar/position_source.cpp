@@ -24,6 +24,7 @@ bool Vlp16PositionConfig::Validate(std::string* error) const {
   if (!std::isfinite(t0_s)) return Fail(error, "t0_s must be finite");
   if (!(epoch_unix_s >= 0.0 && std::isfinite(epoch_unix_s))) return Fail(error, "epoch_unix_s must be >= 0");
   if (!std::isfinite(lidar_clock_offset_s)) return Fail(error, "lidar_clock_offset_s must be finite");
+  if (!std::isfinite(clock_drift_ppm)) return Fail(error, "clock_drift_ppm must be finite");
   if (pps_status > 3) return Fail(error, "pps_status must be 0..3");
   if (!(latitude_deg >= -90.0 && latitude_deg <= 90.0)) return Fail(error, "latitude_deg must be in [-90, 90]");
   if (!(longitude_deg >= -180.0 && longitude_deg <= 180.0)) {
@@ -60,7 +61,8 @@ std::size_t Vlp16PositionSource::EmitUntil(Seconds t_s, std::vector<LidarPacket>
   for (Seconds t = next_time_s(); t <= t_s; t = next_time_s()) {
     const std::string nmea =
         FormatGprmc(config_.epoch_unix_s + t, config_.gps_fix, config_.latitude_deg, config_.longitude_deg);
-    LidarPacket packet = EncodeVlp16PositionPacket(t, config_.lidar_clock_offset_s, config_.pps_status, nmea);
+    const double offset_s = config_.lidar_clock_offset_s - config_.clock_drift_ppm * 1e-6 * t;  // drift as offset
+    LidarPacket packet = EncodeVlp16PositionPacket(t, offset_s, config_.pps_status, nmea);
     packet.t_capture_s = t + config_.transmit_latency_s;
     out->push_back(std::move(packet));
     ++next_index_;

@@ -25,6 +25,7 @@ struct Vlp16PositionConfig {
   double t0_s = 0.0;                   ///< rig time of the first packet [s]
   double epoch_unix_s = 0.0;           ///< Unix time of rig time 0 [s] (calib.yaml epoch_unix_s)
   double lidar_clock_offset_s = 0.0;   ///< calib.yaml lidar_clock_offset_s [s]
+  double clock_drift_ppm = 0.0;        ///< sensor clock = t - lidar_clock_offset_s + this * 1e-6 * t [ppm]
   uint8_t pps_status = 2;              ///< 0 none, 1 synchronizing, 2 locked, 3 error
   bool gps_fix = true;                 ///< $GPRMC status A (fix) or V (no fix)
   double latitude_deg = 0.0;           ///< antenna position the sentences report [deg]; the twin models no

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/util/log.hpp"
+#include "sim/sensors/sensor_clock.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -55,6 +56,8 @@ bool ImuErrorConfig::Validate(std::string* error) const {
       return fail(std::string(s.name) + " must be finite and in [0, " + std::to_string(s.max) + "]");
   if (!std::isfinite(imu_clock_offset_s) || std::abs(imu_clock_offset_s) > 1.0)
     return fail("imu_clock_offset_s must be finite and within +-1 s");
+  if (!std::isfinite(imu_clock_drift_ppm) || std::abs(imu_clock_drift_ppm) > 1000.0)
+    return fail("imu_clock_drift_ppm must be finite and within +-1000 ppm");
   return true;
 }
 
@@ -133,7 +136,7 @@ ImuSample ImuModel::SampleFromTruth(const Eigen::Vector3d& gyro_true_radps, cons
   last_t_ = t;
   const double sqrt_rate = std::sqrt(noise_.rate_hz);  // 1 / sqrt(dt_nominal)
   ImuSample s;
-  s.t_s = t + errors_.imu_clock_offset_s;
+  s.t_s = SensorClock{errors_.imu_clock_offset_s, errors_.imu_clock_drift_ppm}.Stamp(t);
   s.gyro_radps = M_gyro_ * gyro_true_radps + bias_.gyro_radps +
                  NormalVector(gyro_white_, noise_.gyro_noise_density * sqrt_rate);
   s.accel_mps2 = M_accel_ * accel_true_mps2 + bias_.accel_mps2 +

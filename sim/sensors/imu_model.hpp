@@ -14,7 +14,7 @@
 //   b[k]  = b[k-1] + sigma_b * sqrt(t_k - t_(k-1)) * N(0, I)           (random walk, actual step)
 //   b[0]  = turn-on bias ~ N(0, sigma_turn_on^2 I)
 //   M     = (I + diag(s)) * (I + A),  s_i ~ N(0, scale_sigma^2), A off-diagonal ~ N(0, misalignment_sigma^2)
-//   stamp = t + imu_clock_offset_s
+//   stamp = t + imu_clock_offset_s + imu_clock_drift_ppm * 1e-6 * t   (SensorClock, sim/sensors/sensor_clock.hpp)
 // White noise uses the nominal step dt = 1 / rate_hz (Kalibr's discretisation), the walk the actual step.
 // Random streams (RandomStream(run_seed, name)): "imu.gyro", "imu.accel" (white), "imu.gyro_bias",
 // "imu.accel_bias" (random walks), "imu.turn_on" (turn-on biases), "imu.gyro_scale", "imu.accel_scale",
@@ -55,9 +55,11 @@ struct ImuErrorConfig {
   /// Reported stamp = true rig time + imu_clock_offset_s [s]. Note the sign: calib's lidar_clock_offset_s
   /// maps sensor time to rig time; this one maps rig time to the (wrong) IMU stamp.
   double imu_clock_offset_s = 0.0;
+  /// The IMU clock's rate error: stamp = t + imu_clock_offset_s + imu_clock_drift_ppm * 1e-6 * t [ppm].
+  double imu_clock_drift_ppm = 0.0;
 
   /// False with a message naming the field when a value is non-finite, a sigma is negative, a scale or
-  /// misalignment sigma exceeds 0.2, or |imu_clock_offset_s| exceeds 1 s.
+  /// misalignment sigma exceeds 0.2, |imu_clock_offset_s| exceeds 1 s or |imu_clock_drift_ppm| 1000 ppm.
   bool Validate(std::string* error) const;
 };
 
@@ -88,7 +90,7 @@ class ImuModel {
   ImuSample Sample(const BaseKinematics& k, Seconds t);
   /// Turns true signals at the IMU (imu frame: angular rate [rad/s], specific force [m/s^2]) at true time t
   /// into a measurement: advances the bias walk to t, applies scale/misalignment, biases and white noise, and
-  /// stamps it t + imu_clock_offset_s.
+  /// stamps it on the IMU clock (t + imu_clock_offset_s + imu_clock_drift_ppm * 1e-6 * t).
   ImuSample SampleFromTruth(const Eigen::Vector3d& gyro_true_radps, const Eigen::Vector3d& accel_true_mps2,
                             Seconds t);
   /// The noise- and error-free signals (specific force and rate in the imu frame), stamped t. Pure.

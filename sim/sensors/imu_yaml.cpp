@@ -21,7 +21,7 @@ void Visit(V& v, ImuConfig& c) {
   v("gyro_scale_sigma", &e.gyro_scale_sigma), v("accel_scale_sigma", &e.accel_scale_sigma);
   v("gyro_misalignment_sigma_rad", &e.gyro_misalignment_sigma_rad);
   v("accel_misalignment_sigma_rad", &e.accel_misalignment_sigma_rad);
-  v("imu_clock_offset_s", &e.imu_clock_offset_s);
+  v("imu_clock_offset_s", &e.imu_clock_offset_s), v("imu_clock_drift_ppm", &e.imu_clock_drift_ppm);
 }
 
 namespace {

@@ -215,6 +215,31 @@ TEST(Vlp16Codec, DualDuplicateReturnsBecomeOnePointFlaggedBoth) {
 }
 
 // The head's clock passes the top of the hour mid-stream: rig times must continue smoothly.
+// A free-running head's clock: the packet stamp at rig time t reads t - offset + D * 1e-6 * t. Against the same
+// encoder without drift it differs by D * 1e-6 * t (D us per s), to the 1 us the wire holds; at two times.
+TEST(Vlp16Codec, ClockDriftMovesPacketStampsLinearly) {
+  const double offset_s = 0.25, drift_ppm = 80.0;
+  for (const double t0 : {10.0, 1000.0}) {
+    Vlp16PacketEncoder plain(Vlp16ReturnMode::kStrongest, offset_s);
+    Vlp16PacketEncoder drifting(Vlp16ReturnMode::kStrongest, offset_s, drift_ppm);
+    std::optional<LidarPacket> a, b;
+    for (int i = 0; i < plain.SequencesPerPacket(); ++i) {
+      Vlp16FiringSequence s;
+      s.t_s = t0 + i * 55.296e-6;
+      a = plain.Add(s);
+      b = drifting.Add(s);
+    }
+    ASSERT_TRUE(a && b);
+    EXPECT_EQ(a->t_capture_s, b->t_capture_s);  // the host's capture time does not follow the sensor clock
+    Vlp16RawPacket ra, rb;
+    ASSERT_TRUE(ParseVlp16DataPacket(a->payload.data(), a->payload.size(), &ra).ok);
+    ASSERT_TRUE(ParseVlp16DataPacket(b->payload.data(), b->payload.size(), &rb).ok);
+    const double gained_us = double(rb.timestamp_us) - double(ra.timestamp_us);
+    EXPECT_NEAR(gained_us, drift_ppm * t0, 1.0) << "t0 " << t0;  // 800 us at 10 s, 80000 us at 1000 s
+    EXPECT_NEAR(double(rb.timestamp_us), std::floor((t0 - offset_s + drift_ppm * 1e-6 * t0) * 1e6), 1.0);
+  }
+}
+
 TEST(Vlp16Codec, HourRolloverIsUnwrapped) {
   const double offset_s = -3599.99;  // rig t = 0 is 10 ms before the top of the hour
   std::vector<Commanded> truth;

@@ -242,6 +242,25 @@ TEST(ImuModel, ClockOffsetShiftsOnlyTheStamp) {
   }
 }
 
+// The IMU clock's drift of D ppm moves the stamp at true time t by D * 1e-6 * t (checked at two times), on top
+// of the offset; the values stay those of a model with a perfect clock.
+TEST(ImuModel, ClockDriftGrowsWithTime) {
+  ImuErrorConfig drifting;
+  drifting.imu_clock_offset_s = 0.002;
+  drifting.imu_clock_drift_ppm = -40.0;
+  ImuModel a(Bmi055Noise(), TiltedImuMount(), 3), b(Bmi055Noise(), TiltedImuMount(), 3, drifting);
+  for (const double t : {5.0, 500.0}) {
+    const ImuSample sa = a.Sample(StaticBase(), t), sb = b.Sample(StaticBase(), t);
+    EXPECT_EQ(sa.t_s, t);
+    EXPECT_NEAR(sb.t_s - t, 0.002 - 40e-6 * t, 1e-12);  // -0.2 ms + 2 ms at 5 s; -20 ms + 2 ms at 500 s
+    EXPECT_EQ(sa.gyro_radps, sb.gyro_radps);
+  }
+  drifting.imu_clock_drift_ppm = 1500.0;
+  std::string error;
+  EXPECT_FALSE(drifting.Validate(&error));
+  EXPECT_NE(error.find("imu_clock_drift_ppm"), std::string::npos) << error;
+}
+
 TEST(ImuModel, ValidationNamesTheField) {
   std::string error;
   ImuNoise noise;
@@ -288,6 +307,7 @@ TEST(ImuYaml, RoundTripKeepsEveryField) {
   c.errors.accel_scale_sigma = 0.013;
   c.errors.gyro_misalignment_sigma_rad = 0.0021;
   c.errors.imu_clock_offset_s = 0.0035;
+  c.errors.imu_clock_drift_ppm = -12.5;
   const std::string text = Emit(c);
   ImuConfig back;
   const Status s = ParseImuConfig("mem.yaml", YAML::Load(text), &back);
@@ -298,6 +318,7 @@ TEST(ImuYaml, RoundTripKeepsEveryField) {
   EXPECT_EQ(back.noise.rate_hz, 400.0);
   EXPECT_EQ(back.errors.accel_scale_sigma, 0.013);
   EXPECT_EQ(back.errors.imu_clock_offset_s, 0.0035);
+  EXPECT_EQ(back.errors.imu_clock_drift_ppm, -12.5);
 }
 
 TEST(ImuYaml, PresetThenOverrides) {

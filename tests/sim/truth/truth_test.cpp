@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "sim/rig/base_motion.hpp"
+#include "sim/truth/clock_truth.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -131,6 +132,31 @@ TEST_F(TruthTest, MalformedLinesReportFileLineAndField) {
   ASSERT_FALSE(s.ok);
   EXPECT_NE(s.message.find("bad.tum:3"), std::string::npos) << s.message;
   EXPECT_NE(s.message.find("8 fields"), std::string::npos) << s.message;
+}
+
+// truth/clocks.yaml reads back every clock bit for bit (17 significant digits).
+TEST_F(TruthTest, ClockTruthRoundTrips) {
+  fs::create_directories(dir_ / "truth");
+  ClockTruth c;
+  c.lidar = {-0.1234567890123, 17.25};
+  c.lidar_pps_synced = false;
+  c.imu = {0.0035, -3.3};
+  c.encoder = {1e-4, 0.0};
+  c.camera = {-0.02, 99.9};
+  c.lidar_capture = {2e-5, 1.5e-4};
+  ASSERT_TRUE(WriteClockTruth(dir_.string(), c).ok);
+  ClockTruth back;
+  const Status s = ReadClockTruth(dir_.string(), &back);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(back.lidar.offset_s, c.lidar.offset_s);
+  EXPECT_EQ(back.lidar.drift_ppm, c.lidar.drift_ppm);
+  EXPECT_FALSE(back.lidar_pps_synced);
+  EXPECT_EQ(back.imu.drift_ppm, c.imu.drift_ppm);
+  EXPECT_EQ(back.encoder.offset_s, c.encoder.offset_s);
+  EXPECT_EQ(back.camera.drift_ppm, c.camera.drift_ppm);
+  EXPECT_EQ(back.lidar_capture.latency_s, c.lidar_capture.latency_s);
+  EXPECT_EQ(back.lidar_capture.jitter_scale_s, c.lidar_capture.jitter_scale_s);
+  EXPECT_FALSE(ReadClockTruth((dir_ / "missing").string(), &back).ok);
 }
 
 }  // namespace

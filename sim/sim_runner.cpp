@@ -130,7 +130,9 @@ class LidarStream {
     c.epoch_unix_s = calib.epoch_unix_s;
     c.lidar_clock_offset_s = calib.lidar_clock_offset_s;
     c.clock_drift_ppm = clocks.Lidar().drift_ppm;
-    c.pps_status = 0;  // the twin's VLP-16 has no GPS receiver wired: its clock free-runs (no PPS)
+    // The twin's VLP-16 has no GPS receiver wired: the packets report no PPS. clocks.lidar_pps_synced only decides
+    // whether clocks.lidar_drift_ppm applies (a disciplined head has none).
+    c.pps_status = 0;
     c.gps_fix = false;
     return c;
   }

@@ -266,6 +266,27 @@ TEST(Vlp16Caster, PoseQueriesStayWithinEachCallsFirings) {
 // ---------------------------------------------------------------------------------------------------------------
 // Position packets.
 
+// A free-running head's clock drift reaches the position packets' stamps too: sensor time = t - offset +
+// D * 1e-6 * t (to the wire's 1 us), over 30 s (6 ms gained at 200 ppm); the host's capture time does not drift.
+TEST(Vlp16PositionSource, FreeRunningClockDriftMovesTheStamps) {
+  Vlp16PositionConfig config;
+  config.pps_status = 0;
+  config.gps_fix = false;
+  config.lidar_clock_offset_s = -0.1;
+  config.clock_drift_ppm = 200.0;
+  Vlp16PositionSource source(config);
+  std::vector<LidarPacket> packets;
+  source.EmitUntil(30.0, &packets);
+  ASSERT_GT(packets.size(), 1600u);
+  for (std::size_t k = 0; k < packets.size(); ++k) {
+    const double t = k / config.rate_hz;
+    EXPECT_NEAR(packets[k].t_capture_s, t + config.transmit_latency_s, 1e-12);
+    Vlp16PositionPacket fields;
+    ASSERT_TRUE(ParseVlp16PositionPacket(packets[k].payload.data(), packets[k].payload.size(), &fields).ok);
+    ASSERT_NEAR(double(fields.timestamp_us), (t + 0.1 + 200e-6 * t) * 1e6, 1.0) << k;
+  }
+}
+
 TEST(Vlp16PositionSource, EmitsLockedUtcPacketsAtTheManualsRate) {
   Vlp16PositionConfig config;
   config.epoch_unix_s = 1709211600.0 - 0.4;  // 12:59:59.6 UTC: the stream crosses a UTC hour

@@ -168,7 +168,7 @@ bool SimConfig::Validate(std::string* error) const {
 
 std::string ResolveScenePath(const std::string& scene) {
   namespace fs = std::filesystem;
-  if (fs::exists(scene)) return scene;
+  if (fs::is_regular_file(scene)) return scene;  // a folder named like a scene (a recording) is not one
   const char* env = std::getenv("ROTOLIDAR_SCENES");
   const std::string dir = env ? env : std::string(ROTOLIDAR_SOURCE_DIR) + "/scenes";
   return dir + "/" + scene + ".yaml";

@@ -83,7 +83,7 @@ SimConfig DefaultSimConfig();
 /// The rig geometry of the default rig (docs/frames.md draws it).
 RigCalib DefaultRigCalib();
 
-/// Resolves `scene` to a file: an existing path is used as is; otherwise <scenes_dir>/<scene>.yaml, with
+/// Resolves `scene` to a file: an existing regular file is used as is; otherwise <scenes_dir>/<scene>.yaml, with
 /// scenes_dir from $ROTOLIDAR_SCENES or the source tree's scenes/.
 std::string ResolveScenePath(const std::string& scene);
 

@@ -152,6 +152,23 @@ TEST(SceneFiles, AnUnknownSceneListsTheAvailableOnes) {
   EXPECT_TRUE(std::filesystem::is_regular_file(path));
 }
 
+// A recording folder named like a scene (`rotolidar sim lab ...` writes ./lab) must not hide the scene `lab`.
+TEST(SceneFiles, AFolderNamedLikeASceneDoesNotHideIt) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "rotolidar_scene_shadow_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "lab");
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir);
+  std::string path;
+  const Status s = FindSceneFile("lab", &path);
+  fs::current_path(cwd);
+  fs::remove_all(dir);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(fs::path(path).filename(), "lab.yaml");
+  EXPECT_TRUE(fs::is_regular_file(path));
+}
+
 TEST(RecordingDir, ANonEmptyFolderIsRefusedUnlessForced) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / "rotolidar_prepare_recording_dir_test";

@@ -3,22 +3,15 @@
 #include <algorithm>
 #include <cmath>
 
+#include "bench/eval/trajectory_metrics.hpp"
+
 namespace rotolidar::bench {
 namespace {
 
-/// Path length travelled on `poses` up to each pose [m] (the devkit's trajectoryDistances).
-std::vector<double> PathDistances(const Trajectory& poses) {
-  std::vector<double> dist(poses.size(), 0.0);
-  for (size_t i = 1; i < poses.size(); ++i)
-    dist[i] = dist[i - 1] + (poses[i].T_ref_body.translation() - poses[i - 1].T_ref_body.translation()).norm();
-  return dist;
-}
-
-/// The first pose whose path from `first` exceeds `length_m`; poses.size() when none (lastFrameFromSegmentLength).
+/// The first pose whose path from `first` exceeds `length_m`; dist.size() when none (the devkit's
+/// lastFrameFromSegmentLength; the path length never decreases, so a binary search finds it).
 size_t LastOfSegment(const std::vector<double>& dist, size_t first, double length_m) {
-  for (size_t i = first; i < dist.size(); ++i)
-    if (dist[i] > dist[first] + length_m) return i;
-  return dist.size();
+  return size_t(std::upper_bound(dist.begin() + first, dist.end(), dist[first] + length_m) - dist.begin());
 }
 
 /// The devkit's rotationError: the angle of R(E), with the cosine clamped to [-1, 1] [rad].
@@ -28,7 +21,6 @@ double RotationAngle(const Pose3& E) {
 }
 
 void SummariseByLength(const KittiOdometryOptions& options, KittiOdometryErrors* out) {
-  constexpr double kDegPer100mPerRadPerM = 100.0 * 180.0 / M_PI;
   double t_sum = 0.0, r_sum = 0.0;
   for (double length : options.lengths_m) {
     KittiLengthError e;
@@ -73,7 +65,7 @@ Status ComputeKittiOdometryErrors(const Trajectory& ref, const Trajectory& est, 
   if (ref.size() != est.size())
     return Status::Error("KITTI segment errors need associated trajectories of equal size (reference " +
                          std::to_string(ref.size()) + " poses, estimate " + std::to_string(est.size()) + ")");
-  const std::vector<double> dist = PathDistances(ref);
+  const std::vector<double> dist = AccumulatedDistances(ref);
   for (size_t first = 0; first < ref.size(); first += options.step_frames) {
     for (double length : options.lengths_m) {
       const size_t last = LastOfSegment(dist, first, length);

@@ -5,6 +5,7 @@
 // pose whose reference path from i exceeds L) gives a translation error ||t(E)|| / L and a rotation error
 // angle(R(E)) / L. The benchmark's numbers are their means over all segments: t_rel [%] and r_rel [deg/100 m],
 // the numbers KISS-ICP, LOAM and ORB-SLAM2 report on KITTI. Alignment-free (relative), but not scale-free.
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -13,6 +14,9 @@
 #include "core/util/status.hpp"
 
 namespace rotolidar::bench {
+
+/// r_rel's unit: rad/m -> deg/100 m.
+constexpr double kDegPer100mPerRadPerM = 100.0 * 180.0 / M_PI;
 
 struct KittiOdometryOptions {
   std::vector<double> lengths_m{100, 200, 300, 400, 500, 600, 700, 800};  ///< segment lengths [m] (devkit)

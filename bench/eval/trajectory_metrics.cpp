@@ -32,15 +32,6 @@ double ErrorOf(const Pose3& E, PoseRelation relation) {
   return 0.0;
 }
 
-/// evo's geometry.accumulated_distances: 0, then the running sum of step lengths.
-std::vector<double> AccumulatedDistances(const Trajectory& poses) {
-  std::vector<double> acc(poses.size(), 0.0);
-  for (size_t i = 1; i < poses.size(); ++i) {
-    acc[i] = acc[i - 1] + (poses[i].T_ref_body.translation() - poses[i - 1].T_ref_body.translation()).norm();
-  }
-  return acc;
-}
-
 void PairsByIndex(size_t n, size_t delta, bool all_pairs, std::vector<IdPair>* pairs) {
   if (all_pairs) {
     for (size_t i = 0; i + delta < n; ++i) pairs->emplace_back(i, i + delta);
@@ -86,6 +77,14 @@ void PairsByPathAll(const Trajectory& poses, double delta, double tol, std::vect
 }
 
 }  // namespace
+
+std::vector<double> AccumulatedDistances(const Trajectory& poses) {
+  std::vector<double> acc(poses.size(), 0.0);
+  for (size_t i = 1; i < poses.size(); ++i) {
+    acc[i] = acc[i - 1] + (poses[i].T_ref_body.translation() - poses[i - 1].T_ref_body.translation()).norm();
+  }
+  return acc;
+}
 
 bool ParsePoseRelation(const std::string& name, PoseRelation* out) {
   if (name == "trans_part" || name == "trans") *out = PoseRelation::kTranslation;

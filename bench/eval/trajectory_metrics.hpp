@@ -40,6 +40,10 @@ using IdPair = std::pair<size_t, size_t>;  ///< (i, j) with i < j, indices into 
 Status AssociateTrajectories(const Trajectory& ref, const Trajectory& est, double max_diff_s, Trajectory* ref_out,
                              Trajectory* est_out);
 
+/// evo's geometry.accumulated_distances: path length travelled up to each pose [m] (0, then the running sum of
+/// step lengths; also the KITTI devkit's trajectoryDistances).
+std::vector<double> AccumulatedDistances(const Trajectory& poses);
+
 /// APE per pose of already associated (and aligned) trajectories of equal size:
 /// E_i = est_i^-1 * ref_i; kTranslation uses ||p_est_i - p_ref_i|| (= ||t(E_i)||), as evo does.
 Status ComputeApeErrors(const Trajectory& ref, const Trajectory& est, PoseRelation relation,

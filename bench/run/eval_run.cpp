@@ -125,7 +125,7 @@ EvalResult EvaluateTrajectories(const Trajectory& ref, const Trajectory& est, co
     s = ComputeKittiOdometryErrors(ref_a, est_a, KittiOdometryOptions(), &r.kitti);
     const bool translation = options.pose_relation == PoseRelation::kTranslation;
     for (const KittiSegmentError& e : r.kitti.segments)
-      r.errors.push_back(translation ? 100.0 * e.t_err_per_m : e.r_err_rad_per_m * 100.0 * 180.0 / M_PI);
+      r.errors.push_back(translation ? 100.0 * e.t_err_per_m : e.r_err_rad_per_m * kDegPer100mPerRadPerM);
   } else {
     RpeOptions rpe;
     rpe.relation = options.pose_relation;

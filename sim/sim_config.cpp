@@ -82,7 +82,7 @@ void Visit(V& v, ClockConfig& c) {
 /// A config file that names carrier.type clears carrier_from_scene (the file chose the carrier).
 template <class V>
 void Visit(V& v, SimConfig& c) {
-  v("seed", &c.seed), v("duration_s", &c.duration_s), v("scene", &c.scene), v("truth_rate_hz", &c.truth_rate_hz);
+  v("seed", &c.seed), v("realism", &c.realism), v("duration_s", &c.duration_s), v("scene", &c.scene), v("truth_rate_hz", &c.truth_rate_hz);
   v("return_mode", &c.return_mode);
   v("rig_model", yaml::Custom(&c.rig_model, ReadRigModel, EmitRigModelConfig));
   const auto read_carrier = [&c](const yaml::Section& at, const YAML::Node& n, CarrierConfig* carrier) {
@@ -136,6 +136,12 @@ RigCalib SimConfig::TrueCalib() const {
 }
 
 SimConfig DefaultSimConfig() { return SimConfig{}; }
+
+SimConfig PresetSimConfig(Realism r) {
+  SimConfig c = DefaultSimConfig();
+  ApplyRealism(r, &c);
+  return c;
+}
 
 bool SimConfig::Validate(std::string* error) const {
   auto fail = [&](const std::string& m) {
@@ -210,6 +216,10 @@ Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig
   try {
     if (!root.IsMap() && !root.IsNull())
       throw yaml::ParseError(yaml::Where(path, root) + "sim config: expected a mapping");
+    // The preset first, so that the file's other keys override single sources (a bad word is reported below).
+    if (Realism r; root.IsMap() && root["realism"] && root["realism"].IsScalar() &&
+                   yaml::EnumFromWord(root["realism"].Scalar(), &r))
+      ApplyRealism(r, &c);
     yaml::Parse(yaml::Section(path, "", "sim"), root, &c);
     c.lidar.return_mode = c.return_mode;  // the caster's echoes follow the encoder's mode
   } catch (const yaml::ParseError& e) {

@@ -12,6 +12,7 @@
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/rig/rig_model.hpp"
+#include "sim/realism.hpp"
 #include "sim/rig/stepper.hpp"
 #include "sim/sensors/imu_model.hpp"
 #include "sim/sensors/sensor_clock.hpp"
@@ -49,6 +50,9 @@ struct ClockConfig {
 
 struct SimConfig {
   uint64_t seed = 1;                 ///< run seed: every random stream derives from it plus its name
+  /// The preset the error sources started from (ApplyRealism); the struct's own defaults are kIdeal. In YAML,
+  /// `realism:` is applied first, then the file's other keys override single sources.
+  Realism realism = Realism::kIdeal;
   double duration_s = 20.0;          ///< simulated time [s]
   std::string scene = "box_room";    ///< a name in scenes/ (scenes/<name>.yaml) or a path to a scene file
   double truth_rate_hz = 1000.0;     ///< rate of base/lidar/rotor truth samples [Hz] (the physics rate)
@@ -76,9 +80,18 @@ struct SimConfig {
   ClockTruth TrueClocks() const;
 };
 
+/// Sets every error source the presets govern to preset r's values (docs/noise_models.md, "Realism presets"):
+/// sensor clocks, IMU scale/misalignment/clock errors, the VLP-16's spin jitter. Other fields (scene, carrier,
+/// motor, seed, durations) are untouched. ApplyRealism(kIdeal) restores the struct's defaults for those fields.
+void ApplyRealism(Realism r, SimConfig* config);
+
 /// The built-in default: the seed's forward-scanning rig (motor axis along base +x, the VLP-16's spin axis
 /// across it), handheld through the box room at walking speed, motor at 2.6 rad/s (docs/motor_model.md).
 SimConfig DefaultSimConfig();
+
+/// DefaultSimConfig() with preset r applied: what `sim`, `demo`, studies and scenario tests start from
+/// (kTypical there; DefaultSimConfig() itself is kIdeal).
+SimConfig PresetSimConfig(Realism r);
 
 /// The rig geometry of the default rig (docs/frames.md draws it).
 RigCalib DefaultRigCalib();
@@ -93,7 +106,8 @@ std::vector<std::string> AvailableScenes();
 /// ResolveScenePath; fails when no such file exists, listing AvailableScenes() in the message.
 Status FindSceneFile(const std::string& scene, std::string* path);
 
-/// Reads a YAML file whose keys override DefaultSimConfig() (only the keys given change). `rig_model` may be a
+/// Reads a YAML file whose keys override *config (only the keys given change); a `realism:` key first applies
+/// that preset (ApplyRealism), then the file's other keys. `rig_model` may be a
 /// mapping of overrides or a path to a rig parameter file (relative paths resolve against the config's folder).
 Status LoadSimConfig(const std::string& path, SimConfig* config);
 /// LoadSimConfig on an already-parsed mapping (e.g. a section of a study file): `path` names it in messages

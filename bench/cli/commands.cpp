@@ -13,6 +13,7 @@
 #include "bench/run/progress.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
+#include "core/io/yaml_fields.hpp"
 #include "core/io/yaml_util.hpp"
 #include "sim/sim_runner.hpp"
 
@@ -53,8 +54,15 @@ Status ApplyCarrierOption(const OptionParser& p, sim::SimConfig* config) {
 /// is the scene's default unless --carrier or the config file's carrier.type names one.
 Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
   config->carrier_from_scene = true;
+  sim::Realism realism = sim::Realism::kTypical;
+  if (!yaml::EnumFromWord(p.Get("realism"), &realism))
+    return Status::Error("--realism: " + yaml::EnumWordsText<sim::Realism>() + " (got '" + p.Get("realism") + "')");
+  sim::ApplyRealism(realism, config);
   if (!p.Get("config").empty())
     if (Status s = sim::LoadSimConfig(p.Get("config"), config); !s) return s;
+  if (p.IsSet("realism") && config->realism != realism)  // the file named another preset: which one was meant?
+    return Status::Error("--realism " + p.Get("realism") + " contradicts " + p.Get("config") + "'s realism: " +
+                         yaml::EnumWord(config->realism));
   long seed = 0;
   if (p.IsSet("seed")) {
     if (Status s = p.GetInt("seed", &seed); !s) return s;
@@ -85,7 +93,10 @@ Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
 }
 
 void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
-  p->Add("config", "", "-", "sim config YAML; its keys override the built-in default");
+  p->Add("config", "", "-", "sim config YAML; its keys override the built-in default and the realism preset");
+  p->Add("realism", "typical", "-",
+         "error sources preset: ideal|typical|harsh (docs/noise_models.md); ideal = no rig, clock or extra sensor "
+         "errors");
   p->Add("scene", d.scene, "-", "scene name in scenes/ or a scene file path");
   p->Add("carrier", "scene", "-",
          "scene (the scene's handheld path, else its first path, else scripted_loop if it fits)|handheld|"

@@ -19,7 +19,7 @@ namespace rotolidar::bench {
 
 struct DemoOptions {
   std::string out_dir = "runs/demo";
-  sim::SimConfig sim = sim::DefaultSimConfig();
+  sim::SimConfig sim = sim::PresetSimConfig(sim::Realism::kTypical);
   EstimatorConfig slam;
   RunEvaluationOptions evaluation;  ///< RPE delta, map metrics (coverage distance, completeness ...)
   bool report = true;               ///< write report.html

@@ -66,7 +66,7 @@ struct StudyPlot {
 struct StudyConfig {
   std::string name = "study";
   std::string source_path;  ///< the study file (for messages); "" when built in code
-  sim::SimConfig base = sim::DefaultSimConfig();
+  sim::SimConfig base = sim::PresetSimConfig(sim::Realism::kTypical);  ///< studies run `typical` unless told
   std::string slam_config_path;  ///< "" = the estimator's defaults; else an absolute or CWD-relative path
   StudySweep sweep;
   std::vector<StudyPlot> plots;  ///< empty = DefaultStudyPlots(sweep)

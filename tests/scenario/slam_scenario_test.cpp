@@ -22,7 +22,7 @@ struct ScenarioResult {
 
 /// Simulates `seconds` of the scene's handheld walk (seed 1) and runs the estimator with the sim's range noise.
 ScenarioResult RunScenario(const std::string& scene, double seconds) {
-  sim::SimConfig sim_config = sim::DefaultSimConfig();
+  sim::SimConfig sim_config = sim::PresetSimConfig(sim::Realism::kTypical);  // the twin's default realism
   sim_config.scene = scene;
   sim_config.duration_s = seconds;
   sim_config.carrier.type = sim::CarrierType::kHandheld;

@@ -72,7 +72,8 @@ struct SimConfig {
   bool carrier_from_scene = false;
 
   bool Validate(std::string* error) const;
-  /// The rig's TRUE calibration, as written to calib.yaml: geometry from rig_model, IMU noise, encoder
+  /// The rig's TRUE calibration (what the sim simulates with; calib.yaml holds BelievedCalib(), equal to this
+  /// unless rig_errors.calibration is on): geometry from rig_model, IMU noise, encoder
   /// resolution and zero, the nominal motor speed (the uniform-rotation fallback), the nominal LiDAR clock offset and
   /// the camera's lens and rate (T_base_cam is the rig model's `cam` site).
   RigCalib TrueCalib() const;

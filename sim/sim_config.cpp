@@ -94,6 +94,9 @@ void Visit(V& v, SimConfig& c) {
   v("motor", Module(&c.motor, ParseMotorDriveConfig, EmitMotorDriveConfig));
   v("imu", Module(&c.imu, ParseImuConfig, EmitImuConfig)), v("lidar", &c.lidar), v("clocks", &c.clocks);
   v("camera", Module(&c.camera, ParseCameraConfig, EmitCameraConfig));
+  // Written only when enabled: a run without rig errors keeps its sim_config.yaml as before.
+  v("rig_errors",
+    yaml::EmitIf(c.rig_errors.Enabled(), Module(&c.rig_errors, ParseRigErrorConfig, EmitRigErrorConfig)));
 }
 
 bool ClockConfig::Validate(std::string* error) const {
@@ -135,6 +138,10 @@ RigCalib SimConfig::TrueCalib() const {
   return c;
 }
 
+RigCalib SimConfig::BelievedCalib() const {
+  return ApplyCalibErrors(TrueCalib(), DrawCalibErrors(rig_errors.calibration, seed));
+}
+
 SimConfig DefaultSimConfig() { return SimConfig{}; }
 
 SimConfig PresetSimConfig(Realism r) {
@@ -161,6 +168,7 @@ bool SimConfig::Validate(std::string* error) const {
   if (!lidar.Validate(&why)) return fail("lidar: " + why);
   if (!clocks.Validate(&why)) return fail(why);
   if (!camera.Validate(&why)) return fail(why);
+  if (!rig_errors.Validate(&why)) return fail(why);
   if (lidar.return_mode != return_mode) return fail("lidar.return_mode must equal return_mode");
   // The physics loop samples the IMU at step boundaries: its period must be a whole number of steps.
   const double steps_per_imu = 1.0 / (imu.noise.rate_hz * rig_model.physics.timestep_s);

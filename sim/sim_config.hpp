@@ -11,6 +11,7 @@
 #include "sim/camera/camera_model.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/carrier_paths.hpp"
+#include "sim/rig/rig_errors.hpp"
 #include "sim/rig/rig_model.hpp"
 #include "sim/realism.hpp"
 #include "sim/rig/stepper.hpp"
@@ -65,6 +66,9 @@ struct SimConfig {
   LidarIntrinsics lidar_intrinsics;  ///< the VLP-16's laser table (manual's values by default)
   ClockConfig clocks;
   CameraConfig camera;               ///< the RGB camera (sim/camera/camera_model.hpp); on by default at 30 Hz
+  /// Rig imperfections (sim/rig/rig_errors.hpp): calibration errors in calib.yaml, axis wobble, rotor
+  /// vibration at the IMU. All off by default; YAML `rig_errors:` (emitted only when enabled).
+  RigErrorConfig rig_errors;
   /// true: the run takes the scene's default carrier (sim/scene_carrier.hpp ChooseSceneCarrier: its handheld
   /// path, else its first path, else the scripted loop if that fits) and carrier.type is ignored. The CLI sets
   /// it unless --carrier or a config file's carrier.type names one; a config file with carrier.type clears it.
@@ -72,10 +76,14 @@ struct SimConfig {
   bool carrier_from_scene = false;
 
   bool Validate(std::string* error) const;
-  /// The rig's TRUE calibration, as written to calib.yaml: geometry from rig_model, IMU noise, encoder
+  /// The rig's TRUE calibration (what the sim simulates with; calib.yaml holds BelievedCalib(), equal to this
+  /// unless rig_errors.calibration is on): geometry from rig_model, IMU noise, encoder
   /// resolution and zero, the nominal motor speed (the uniform-rotation fallback), the nominal LiDAR clock offset and
   /// the camera's lens and rate (T_base_cam is the rig model's `cam` site).
   RigCalib TrueCalib() const;
+  /// What calib.yaml holds: TrueCalib() with the run's calibration errors (rig_errors.calibration, drawn from
+  /// the seed's "calib.error" stream) applied; equal to TrueCalib() when they are off.
+  RigCalib BelievedCalib() const;
   /// Every sensor clock as the run applies it (written to truth/clocks.yaml).
   ClockTruth TrueClocks() const;
 };

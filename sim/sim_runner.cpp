@@ -12,6 +12,7 @@
 #include "core/io/recording.hpp"
 #include "sim/camera/camera_stream.hpp"
 #include "sim/lidar/position_source.hpp"
+#include "sim/rig/rig_errors.hpp"
 #include "sim/rig/rig_physics.hpp"
 #include "sim/rig/rig_trace.hpp"
 #include "sim/scene_carrier.hpp"
@@ -90,6 +91,7 @@ class LidarStream {
   LidarStream(const SimConfig& config, const SimWorld& world, const RigCalib& calib)
       : config_(config),
         calib_(calib),
+        kinematics_(calib, config.rig_errors.wobble),
         embree_(*world.embree),
         caster_(*world.embree, calib.lidar, config.lidar, config.seed),
         encoder_(config.return_mode, calib.lidar_clock_offset_s, config.clocks.Lidar().drift_ppm),
@@ -100,7 +102,7 @@ class LidarStream {
     const int per_packet = encoder_.SequencesPerPacket();
     const auto T_world_lidar_at = [&](Seconds t) {
       const RigTraceSample s = trace.At(t);
-      return s.T_world_base * calib_.T_base_lidar(s.theta_rad);
+      return s.T_world_base * kinematics_.T_base_lidar(s.theta_rad);
     };
     while (true) {
       // The caster may ask for the pose up to the start of the sequence after the packet (it interpolates within one).
@@ -148,6 +150,7 @@ class LidarStream {
 
   const SimConfig& config_;
   const RigCalib& calib_;
+  TrueRotorKinematics kinematics_;  // the true rotor geometry, wobble included
   EmbreeScene& embree_;
   Vlp16Caster caster_;
   Vlp16PacketEncoder encoder_;
@@ -161,7 +164,7 @@ class LidarStream {
 class TruthStream {
  public:
   TruthStream(const SimConfig& config, const RigCalib& calib, TruthWriter* writer)
-      : config_(config), calib_(calib), writer_(writer) {}
+      : config_(config), kinematics_(calib, config.rig_errors.wobble), writer_(writer) {}
 
   Status WriteCovered(const RigTrace& trace) {
     while (true) {
@@ -169,7 +172,8 @@ class TruthStream {
       if (t > config_.duration_s || !trace.Covers(t, t)) return Status::Ok();
       const RigTraceSample s = trace.At(t);
       if (Status st = writer_->WriteBase({t, s.T_world_base}); !st) return st;
-      if (Status st = writer_->WriteLidar({t, s.T_world_base * calib_.T_base_lidar(s.theta_rad)}); !st) return st;
+      const Pose3 T_world_lidar = s.T_world_base * kinematics_.T_base_lidar(s.theta_rad);
+      if (Status st = writer_->WriteLidar({t, T_world_lidar}); !st) return st;
       if (Status st = writer_->WriteRotor({t, s.theta_rad}); !st) return st;
       ++next_;
     }
@@ -178,7 +182,7 @@ class TruthStream {
 
  private:
   const SimConfig& config_;
-  const RigCalib& calib_;
+  TrueRotorKinematics kinematics_;  // the true rotor geometry, wobble included
   TruthWriter* writer_;
   long next_ = 0;
 };
@@ -194,8 +198,9 @@ Status MakeCameraStream(const SimConfig& config, SimWorld& world, const RigCalib
   return Status::Ok();
 }
 
-/// The physics loop: steps the rig at its timestep; samples the IMU every whole number of steps; streams the
-/// encoder samples the drive produced; feeds the trace that the LiDAR and truth streams read behind it.
+/// The physics loop: steps the rig at its timestep; samples the IMU every whole number of steps (plus the rotor's
+/// vibration when rig_errors configures it); streams the encoder samples the drive produced; feeds the trace that
+/// the LiDAR and truth streams read behind it. `calib` is the TRUE calibration (the rig as it is).
 Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& calib, RecordingWriter* writer,
                   TruthWriter* truth_writer, SimSummary* summary, const ProgressFn& progress) {
   RigState state(*world.rig);
@@ -209,16 +214,21 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
   TruthStream truth(config, calib, truth_writer);
   std::unique_ptr<CameraStream> camera;
   if (Status s = MakeCameraStream(config, world, calib, &camera); !s) return s;
+  const Eigen::Matrix3d R_imu_motor = calib.T_base_imu.linear().transpose() * calib.T_base_motor.linear();
   const long steps_per_imu = std::lround(1.0 / (config.imu.noise.rate_hz * state.timestep_s()));
   const long n_steps = long(std::ceil(config.duration_s / state.timestep_s() - 1e-9)) + 1;
   std::vector<EncoderSample> encoder_samples;
   double next_progress_s = 1.0;
   for (long k = 0; k < n_steps; ++k) {
     const Seconds t = state.time_s();
+    const RotorJointState rotor_t = state.rotor_state();  // the rotor at t, for the IMU's vibration
     if (Status s = state.Step(world.carrier->At(t).T_world_base, &drive); !s) return s;
     trace.Append({state.time_s(), state.T_world_base(), state.rotor_angle_rad()});
     if (k % steps_per_imu == 0 && t <= config.duration_s) {  // imu() describes the start of this step: t
-      const ImuTruth true_imu = state.imu();
+      ImuTruth true_imu = state.imu();
+      if (config.rig_errors.VibrationEnabled())
+        AddRotorVibration(config.rig_errors.vibration, R_imu_motor, rotor_t.theta_rad, rotor_t.omega_radps,
+                          &true_imu.angular_rate_imu_radps, &true_imu.specific_force_imu_mps2);
       if (Status s = writer->Write(imu.SampleFromTruth(true_imu.angular_rate_imu_radps,
                                                        true_imu.specific_force_imu_mps2, true_imu.t_s));
           !s)
@@ -285,11 +295,15 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
   summary->scene_triangles = world.triangles;
   summary->recording_dir = recording_dir;
 
-  const RigCalib calib = config.TrueCalib();  // what the rig's owner would have calibrated: here, the truth
+  // The sim runs the true rig; calib.yaml holds what its owner believes (truth + drawn calibration errors).
+  const RigCalib calib = config.TrueCalib();
+  const CalibErrors calib_errors = DrawCalibErrors(config.rig_errors.calibration, config.seed);
   RecordingWriter writer;
-  if (Status s = writer.Open(recording_dir, calib); !s) return s;
+  if (Status s = writer.Open(recording_dir, ApplyCalibErrors(calib, calib_errors)); !s) return s;
   TruthWriter truth;
   if (Status s = truth.Open(recording_dir); !s) return s;
+  if (config.rig_errors.Enabled())
+    if (Status s = WriteRigErrorTruth(recording_dir, config.rig_errors, calib_errors, calib); !s) return s;
   if (Status s = WriteClockTruth(recording_dir, config.TrueClocks()); !s) return s;
   if (Status s = WriteResolvedConfig(config, world, recording_dir); !s) return s;
   if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress); !s) return s;

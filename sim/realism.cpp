@@ -53,6 +53,7 @@ void ApplyImuPreset(Realism r, ImuErrorConfig* e) {
 void ApplyRealism(Realism r, SimConfig* config) {
   config->realism = r;
   config->clocks = ClockPreset(r);
+  config->rig_errors = RigErrorPreset(r);  // calibration errors, axis wobble, rotor vibration (sim/rig/rig_errors)
   ApplyImuPreset(r, &config->imu.errors);
   // The head's spin-rate wander (1-sigma, Gauss-Markov): invisible to a decoder that reads the packets' azimuths.
   config->lidar.rpm_jitter_frac = r == Realism::kIdeal ? 0.0 : r == Realism::kTypical ? 0.005 : 0.02;

@@ -89,7 +89,7 @@ struct SimConfig {
 };
 
 /// Sets every error source the presets govern to preset r's values (docs/noise_models.md, "Realism presets"):
-/// sensor clocks, IMU scale/misalignment/clock errors, the VLP-16's spin jitter. Other fields (scene, carrier,
+/// rig imperfections (rig_errors), sensor clocks, IMU scale/misalignment/clock errors, the VLP-16's spin jitter. Other fields (scene, carrier,
 /// motor, seed, durations) are untouched. ApplyRealism(kIdeal) restores the struct's defaults for those fields.
 void ApplyRealism(Realism r, SimConfig* config);
 

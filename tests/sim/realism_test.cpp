@@ -52,6 +52,8 @@ TEST(Realism, PresetsDifferAndGrow) {
   EXPECT_GT(h.clocks.camera_offset_s, t.clocks.camera_offset_s);
   EXPECT_GT(h.imu.errors.gyro_scale_sigma, t.imu.errors.gyro_scale_sigma);
   EXPECT_GT(h.lidar.rpm_jitter_frac, t.lidar.rpm_jitter_frac);
+  EXPECT_TRUE(t.rig_errors.Enabled());
+  EXPECT_FALSE(PresetSimConfig(Realism::kIdeal).rig_errors.Enabled());
   EXPECT_TRUE(t.clocks.lidar_pps_synced);
   EXPECT_FALSE(h.clocks.lidar_pps_synced);
 }
@@ -83,7 +85,7 @@ TEST(Realism, ResolvedConfigReadsBackTheSame) {
     ASSERT_TRUE(s.ok) << s.message;
     // The sections the presets govern (the rig model's quaternions may move in their last bit through text).
     const YAML::Node a = YAML::Load(Emitted(c)), b = YAML::Load(Emitted(back));
-    for (const char* key : {"realism", "clocks", "imu", "lidar"})
+    for (const char* key : {"realism", "clocks", "imu", "lidar", "rig_errors"})
       EXPECT_EQ(YAML::Dump(b[key]), YAML::Dump(a[key])) << key;
   }
 }

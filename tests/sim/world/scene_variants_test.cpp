@@ -107,7 +107,7 @@ TEST(SceneVariants, NoObjectRidesAlongTheRigsDefaultPath) {
     ASSERT_TRUE(s.ok) << name << ": " << s.message;
     const int samples = 1200;
     double worst = 0.0;
-    std::string worst_name;
+    std::string worst_name = "none";
     for (const DynamicObject& o : scene.dynamic_objects) {
       int near = 0;
       for (int k = 0; k < samples; ++k) {

@@ -47,6 +47,7 @@ class SceneParser {
  private:
   Scene LoadBase(const Section& at, const YAML::Node& extends) const;
   void ParseBody(const Section& at, const YAML::Node& root, Scene* scene);
+  void ParseLook(const Section& at, const YAML::Node& root, Scene* scene) const;
   void ParseMaterials(const Section& at, const YAML::Node& list, Scene* scene) const;
   std::vector<Primitive> ParsePrimitives(const Section& at, const YAML::Node& list, Scene* scene);
   Primitive ParsePrimitive(const Section& at, const YAML::Node& node, Scene* scene);
@@ -335,6 +336,12 @@ void SceneParser::ParseBody(const Section& at, const YAML::Node& root, Scene* ou
     });
   }
   if (const YAML::Node paths = root["paths"]) ParsePaths(at.Child("paths"), paths, &scene);
+  ParseLook(at, root, &scene);
+}
+
+/// `lighting` and `view`, each replacing the scene's (the base's) as a whole when present.
+void SceneParser::ParseLook(const Section& at, const YAML::Node& root, Scene* out) const {
+  Scene& scene = *out;
   if (const YAML::Node lighting = root["lighting"]) {
     scene.lighting = SceneLighting{};
     yaml::ReadValue(at.Child("lighting"), lighting, &scene.lighting);

@@ -32,7 +32,19 @@ struct SimWorld {
   std::unique_ptr<RigModel> rig;
   std::unique_ptr<BaseMotion> carrier;
   CarrierConfig carrier_config;  ///< the config's carrier with the scene's default path filled in
+  Vlp16CasterConfig lidar;       ///< the config's lidar plus the scene's transmissive materials
 };
+
+/// The scene's materials with a transmittance (glass, porous foliage) join lidar.material_transmittance unless
+/// the config lists the material already (the config wins); scenes without any leave the config as it is.
+void AddSceneTransmittance(const Scene& scene, Vlp16CasterConfig* lidar) {
+  for (const Material& m : scene.materials) {
+    if (!(m.transmittance > 0.0)) continue;
+    const auto listed = [&](const std::pair<std::string, double>& e) { return e.first == m.name; };
+    auto& list = lidar->material_transmittance;
+    if (std::none_of(list.begin(), list.end(), listed)) list.emplace_back(m.name, m.transmittance);
+  }
+}
 
 /// The run's carrier: the scene's default when the config asks for it, its path filled from the scene where the
 /// config leaves it empty, checked against the scene's bounds and static geometry before anything runs.
@@ -57,7 +69,9 @@ Status BuildWorld(const SimConfig& config, SimWorld* world) {
   if (Status s = LoadScene(path, &world->scene); !s) return s;
   if (Status s = EmbreeScene::Create(world->scene, &world->embree); !s) return s;
   world->triangles = world->embree->num_triangles();
-  if (Status s = CheckCasterMaterials(config.lidar, world->embree->materials()); !s) return s;
+  world->lidar = config.lidar;
+  AddSceneTransmittance(world->scene, &world->lidar);
+  if (Status s = CheckCasterMaterials(world->lidar, world->embree->materials()); !s) return s;
   if (Status s = RigModel::Create(config.rig_model, &world->rig); !s) return s;
   return ResolveCarrier(config, path, world);
 }
@@ -72,6 +86,7 @@ Status WriteText(const std::string& path, const std::string& text) {
 Status WriteResolvedConfig(const SimConfig& config, const SimWorld& world, const std::string& dir) {
   SimConfig resolved = config;
   resolved.carrier = world.carrier_config;
+  resolved.lidar = world.lidar;
   const RigModel& rig = *world.rig;
   YAML::Emitter out;
   out.SetDoublePrecision(17);
@@ -93,7 +108,7 @@ class LidarStream {
         calib_(calib),
         kinematics_(calib, config.rig_errors.wobble),
         embree_(*world.embree),
-        caster_(*world.embree, calib.lidar, config.lidar, config.seed),
+        caster_(*world.embree, calib.lidar, world.lidar, config.seed),
         encoder_(config.return_mode, calib.lidar_clock_offset_s, config.clocks.Lidar().drift_ppm),
         positions_(PositionConfig(calib, config.clocks)),
         capture_(config.clocks.lidar_capture, config.seed) {}

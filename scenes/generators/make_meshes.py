@@ -3,6 +3,9 @@
 
   sedan.obj  a parked car: lower body and cabin (extruded side profiles) and four wheels, closed, ~4.5 x 1.8 x 1.45 m
   tree.ply   a street tree: octagonal trunk and a faceted ellipsoid crown, closed, ~3.6 m wide, 6.2 m tall
+  leaf_crown.ply  a porous crown: 800 leaves (thin closed tetrahedra, 0.2 m triangles 1 cm thick) scattered in
+             tree.ply's crown ellipsoid (radii 1.8, 1.7, 2.1 m about (0, 0, 4.1)); no trunk. A third of horizontal
+             rays through its middle (|y| < 0.8 m, |z - 4.1| < 1 m) pass between the leaves (ray cast, 300 rays).
 
 Frames: x forward (car), z up, origin on the ground at the object's centre. Triangles wind counter-clockwise seen
 from outside. Run from the repository root:  python3 scenes/generators/make_meshes.py
@@ -107,6 +110,49 @@ def tree():
     return m
 
 
+def leaf_crown(count=800, side=0.20, thickness=0.01, seed=2024):
+    """Leaves uniformly in the crown ellipsoid, random orientation; a 64-bit LCG keeps it the same everywhere."""
+    state = [seed]
+
+    def uniform():  # Knuth's MMIX LCG, top 53 bits
+        state[0] = (state[0] * 6364136223846793005 + 1442695040888963407) % (1 << 64)
+        return (state[0] >> 11) / float(1 << 53)
+
+    centre, radii = (0.0, 0.0, 4.1), (1.8, 1.7, 2.1)
+    m = Mesh()
+    for _ in range(count):
+        while True:  # rejection sampling inside the ellipsoid (shrunk by one leaf)
+            u = [2.0 * uniform() - 1.0 for _ in range(3)]
+            if sum(x * x for x in u) <= 1.0:
+                break
+        c = [centre[i] + u[i] * (radii[i] - side) for i in range(3)]
+        while True:  # a random unit normal
+            n = [2.0 * uniform() - 1.0 for _ in range(3)]
+            r = math.sqrt(sum(x * x for x in n))
+            if 0.1 < r <= 1.0:
+                n = [x / r for x in n]
+                break
+        a = [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]  # in-plane axes e1, e2
+        e1 = [a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]]
+        l1 = math.sqrt(sum(x * x for x in e1))
+        e1 = [x / l1 for x in e1]
+        e2 = [n[1] * e1[2] - n[2] * e1[1], n[2] * e1[0] - n[0] * e1[2], n[0] * e1[1] - n[1] * e1[0]]
+        phi = 2.0 * math.pi * uniform()
+        rad = side / math.sqrt(3.0)  # circumradius of an equilateral triangle of this side
+        corners = []
+        for k in range(3):
+            ang = phi + 2.0 * math.pi * k / 3.0
+            corners.append([c[i] + rad * (math.cos(ang) * e1[i] + math.sin(ang) * e2[i]) for i in range(3)])
+        apex = [c[i] + thickness * n[i] for i in range(3)]
+        v0, v1, v2, v3 = (m.vertex(p) for p in corners + [apex])
+        # corners go counter-clockwise about n: the base faces -n, the sides face outwards
+        m.tri(v0, v2, v1)
+        m.tri(v0, v1, v3)
+        m.tri(v1, v2, v3)
+        m.tri(v2, v0, v3)
+    return m
+
+
 def write_obj(mesh, path, comment):
     with open(path, "w") as f:
         f.write("# %s\n# %d vertices, %d triangles; metres, z up, ccw = outside\n" % (comment, len(mesh.v), len(mesh.f)))
@@ -131,3 +177,5 @@ if __name__ == "__main__":
     os.makedirs(OUT, exist_ok=True)
     write_obj(sedan(), os.path.join(OUT, "sedan.obj"), "rotolidar sedan (scenes/generators/make_meshes.py)")
     write_ply(tree(), os.path.join(OUT, "tree.ply"), "rotolidar street tree (scenes/generators/make_meshes.py)")
+    write_ply(leaf_crown(), os.path.join(OUT, "leaf_crown.ply"),
+              "rotolidar porous leaf crown (scenes/generators/make_meshes.py)")

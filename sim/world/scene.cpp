@@ -38,12 +38,16 @@ using yaml::Section;
 
 class SceneParser {
  public:
-  explicit SceneParser(const std::string& path)
-      : file_(path), dir_(std::filesystem::path(path).parent_path().string()) {}
+  /// `chain`: the files that extend this one, outermost first (to find cycles of `extends`).
+  SceneParser(const std::string& path, std::vector<std::string> chain)
+      : file_(path), dir_(std::filesystem::path(path).parent_path().string()), chain_(std::move(chain)) {}
 
   Scene Parse(const YAML::Node& root);
 
  private:
+  Scene LoadBase(const Section& at, const YAML::Node& extends) const;
+  void ParseBody(const Section& at, const YAML::Node& root, Scene* scene);
+  void ParseLook(const Section& at, const YAML::Node& root, Scene* scene) const;
   void ParseMaterials(const Section& at, const YAML::Node& list, Scene* scene) const;
   std::vector<Primitive> ParsePrimitives(const Section& at, const YAML::Node& list, Scene* scene);
   Primitive ParsePrimitive(const Section& at, const YAML::Node& node, Scene* scene);
@@ -57,7 +61,16 @@ class SceneParser {
 
   std::string file_;
   std::string dir_;  ///< folder of the scene file: mesh files resolve against it
+  std::vector<std::string> chain_;
+  std::size_t base_materials_ = 0;  ///< materials inherited from the base scene (this file may redefine them)
 };
+
+/// The file a path names, for comparing paths (the path itself when it cannot be resolved).
+std::string Canonical(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::path p = std::filesystem::weakly_canonical(path, ec);
+  return ec ? path : p.string();
+}
 
 void SceneParser::ParseMaterials(const Section& at, const YAML::Node& list, Scene* scene) const {
   ForEachItem(at, list, [&](const Section& item, const YAML::Node& node) {
@@ -66,9 +79,17 @@ void SceneParser::ParseMaterials(const Section& at, const YAML::Node& list, Scen
     if (!node["color"]) m.color_rgb = Eigen::Vector3d::Constant(m.texture.empty() ? 0.7 : 1.0);
     if (!(m.albedo >= 0.0 && m.albedo <= 1.0))
       Fail(item, node["albedo"], "albedo must be in [0, 1] in material '" + m.name + "'");
-    if (scene->FindMaterial(m.name) >= 0) Fail(item, node, "material '" + m.name + "' defined twice");
+    if (!(m.transmittance >= 0.0 && m.transmittance < 1.0 && m.albedo + m.transmittance <= 1.0))
+      Fail(item, node["transmittance"], "transmittance must be in [0, 1) with albedo + transmittance <= 1 in "
+                                        "material '" + m.name + "'");
+    const int existing = scene->FindMaterial(m.name);
+    if (existing >= static_cast<int>(base_materials_)) Fail(item, node, "material '" + m.name + "' defined twice");
     if (!m.texture.empty() && !FindTexture(scene->textures, m.texture))
       Fail(item, node["texture"], "unknown texture '" + m.texture + "' in material '" + m.name + "'");
+    if (existing >= 0) {
+      scene->materials[static_cast<size_t>(existing)] = m;  // redefines the base's material of that name
+      return;
+    }
     scene->materials.push_back(m);
   });
 }
@@ -84,13 +105,13 @@ int SceneParser::MaterialRef(const Section& at, const YAML::Node& name_node, con
 int SceneParser::MeshRef(const Section& at, const YAML::Node& file_node, Scene* scene) {
   std::string file;
   yaml::ReadAs(at.file, file_node, at.path, &file);
+  const std::filesystem::path p(file);
+  const std::string path = p.is_absolute() ? file : (std::filesystem::path(dir_) / p).string();
   for (size_t i = 0; i < scene->meshes.size(); ++i) {
-    if (scene->meshes[i].file == file) return static_cast<int>(i);
+    if (scene->meshes[i].path == path) return static_cast<int>(i);
   }
   MeshAsset asset;
   asset.file = file;
-  const std::filesystem::path p(file);
-  const std::string path = p.is_absolute() ? file : (std::filesystem::path(dir_) / p).string();
   if (Status s = LoadMeshFile(path, &asset); !s) Fail(at, file_node, s.message + " (" + at.path + ")");
   scene->meshes.push_back(std::move(asset));
   return static_cast<int>(scene->meshes.size()) - 1;
@@ -211,26 +232,73 @@ DynamicObject SceneParser::ParseDynamic(const Section& at, const YAML::Node& nod
   return o;
 }
 
+/// The scene `extends` names: <dir>/<name>.yaml, or <dir>/<name> when it already ends in .yaml.
+Scene SceneParser::LoadBase(const Section& at, const YAML::Node& extends) const {
+  std::string name;
+  yaml::ReadAs(file_, extends, "extends", &name);
+  std::filesystem::path p(name);
+  if (p.extension() != ".yaml") p += ".yaml";
+  const std::string path = p.is_absolute() ? p.string() : (std::filesystem::path(dir_) / p).string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) Fail(at, extends, "base scene '" + path + "' not found (extends)");
+  std::vector<std::string> chain = chain_;
+  chain.push_back(Canonical(file_));
+  const std::string base = Canonical(path);
+  for (const std::string& f : chain) {
+    if (f != base) continue;
+    std::string cycle;
+    for (const std::string& c : chain) cycle += c + " -> ";
+    Fail(at, extends, "extends cycle: " + cycle + base);
+  }
+  try {
+    return SceneParser(path, chain).Parse(yaml::LoadFile(path));
+  } catch (const yaml::ParseError& e) {
+    Fail(at, extends, std::string("in base scene (extends): ") + e.what());
+  } catch (const YAML::Exception& e) {
+    Fail(at, extends, "in base scene (extends): " + path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
 Scene SceneParser::Parse(const YAML::Node& root) {
   const Section at(file_, "", "scene");
-  yaml::CheckKeys(file_, root, {"format_version", "name", "description", "closed", "bounds", "materials", "textures",
-                                "primitives", "elements", "dynamic", "paths", "lighting", "view"},
+  if (!root.IsMap()) Fail(at, root, "a scene file must be a mapping");
+  yaml::CheckKeys(file_, root, {"format_version", "extends", "name", "description", "closed", "bounds", "materials",
+                                "textures", "primitives", "elements", "dynamic", "paths", "lighting", "view"},
                   "scene");
-  Scene scene;
-  scene.source_path = file_;
   int version = 0;
   yaml::Parser read{at, root};
   read("format_version", yaml::Required(&version));
   if (version != 1) Fail(at, root["format_version"], "unsupported format_version " + std::to_string(version));
+  Scene scene;
+  if (const YAML::Node extends = root["extends"]) {
+    scene = LoadBase(at.Child("extends"), extends);
+    base_materials_ = scene.materials.size();
+  } else {
+    for (const char* key : {"bounds", "materials", "primitives"}) {
+      if (!root[key]) Fail(at, root, std::string("missing required key '") + key + "' in scene");
+    }
+  }
+  scene.source_path = file_;
+  ParseBody(at, root, &scene);
+  std::string error;
+  if (!scene.Validate(&error)) Fail(at, root, error);
+  return scene;
+}
+
+/// Reads every key but format_version and extends over *scene (empty, or the base scene: lists append, paths
+/// replace per carrier, materials of the base's names redefine them, the other keys replace).
+void SceneParser::ParseBody(const Section& at, const YAML::Node& root, Scene* out) {
+  Scene& scene = *out;
+  yaml::Parser read{at, root};
   read("name", &scene.name), read("description", &scene.description), read("closed", &scene.closed);
-  Eigen::Vector3d lo, hi;
-  const YAML::Node bounds = root["bounds"];
-  if (!bounds) Fail(at, root, "missing required key 'bounds' in scene");
-  yaml::CheckKeys(file_, bounds, {"min", "max"}, "bounds");
-  yaml::Parser read_bounds{at.Child("bounds"), bounds};
-  read_bounds("min", yaml::Required(Point(&lo))), read_bounds("max", yaml::Required(Point(&hi)));
-  scene.bounds = Eigen::AlignedBox3d(lo, hi);
-  if (scene.bounds.isEmpty()) Fail(at, bounds, "bounds: min must be < max");
+  if (const YAML::Node bounds = root["bounds"]) {
+    Eigen::Vector3d lo, hi;
+    yaml::CheckKeys(file_, bounds, {"min", "max"}, "bounds");
+    yaml::Parser read_bounds{at.Child("bounds"), bounds};
+    read_bounds("min", yaml::Required(Point(&lo))), read_bounds("max", yaml::Required(Point(&hi)));
+    scene.bounds = Eigen::AlignedBox3d(lo, hi);
+    if (scene.bounds.isEmpty()) Fail(at, bounds, "bounds: min must be < max");
+  }
   if (const YAML::Node textures = root["textures"]) {
     ForEachItem(at.Child("textures"), textures, [&](const Section& item, const YAML::Node& node) {
       TextureSpec t;
@@ -240,37 +308,55 @@ Scene SceneParser::Parse(const YAML::Node& root) {
       scene.textures.push_back(t);
     });
   }
-  if (!root["materials"]) Fail(at, root, "missing required key 'materials' in scene");
-  ParseMaterials(at.Child("materials"), root["materials"], &scene);
-  if (!root["primitives"]) Fail(at, root, "missing required key 'primitives' in scene");
-  scene.primitives = ParsePrimitives(at.Child("primitives"), root["primitives"], &scene);
+  if (const YAML::Node materials = root["materials"]) ParseMaterials(at.Child("materials"), materials, &scene);
+  if (const YAML::Node primitives = root["primitives"]) {
+    for (Primitive& p : ParsePrimitives(at.Child("primitives"), primitives, &scene))
+      scene.primitives.push_back(std::move(p));
+  }
+  const auto unique = [&](const Section& item, const YAML::Node& node, const std::string& what, const auto& list,
+                          std::size_t before) {
+    for (std::size_t i = 0; i < before; ++i) {
+      if (list[i].name == list.back().name) Fail(item, node, what + " '" + list.back().name + "' defined twice");
+    }
+  };
   if (const YAML::Node elements = root["elements"]) {
     ForEachItem(at.Child("elements"), elements, [&](const Section& item, const YAML::Node& node) {
-      for (AnnotatedElement& one : ParseElement(item, node)) scene.elements.push_back(std::move(one));
+      const std::size_t before = scene.elements.size();
+      for (AnnotatedElement& one : ParseElement(item, node)) {
+        scene.elements.push_back(std::move(one));
+        unique(item, node, "element", scene.elements, before);
+      }
     });
   }
   if (const YAML::Node dynamic = root["dynamic"]) {
     ForEachItem(at.Child("dynamic"), dynamic, [&](const Section& item, const YAML::Node& node) {
+      const std::size_t before = scene.dynamic_objects.size();
       scene.dynamic_objects.push_back(ParseDynamic(item, node, &scene));
+      unique(item, node, "dynamic object", scene.dynamic_objects, before);
     });
   }
   if (const YAML::Node paths = root["paths"]) ParsePaths(at.Child("paths"), paths, &scene);
+  ParseLook(at, root, &scene);
+}
+
+/// `lighting` and `view`, each replacing the scene's (the base's) as a whole when present.
+void SceneParser::ParseLook(const Section& at, const YAML::Node& root, Scene* out) const {
+  Scene& scene = *out;
   if (const YAML::Node lighting = root["lighting"]) {
+    scene.lighting = SceneLighting{};
     yaml::ReadValue(at.Child("lighting"), lighting, &scene.lighting);
     const SceneLighting& l = scene.lighting;
     if (!(l.ambient >= 0.0 && l.ambient <= 1.0 && l.headlight >= 0.0 && l.headlight <= 1.0))
       Fail(at, lighting, "lighting: ambient and headlight must be in [0, 1]");
   }
   if (const YAML::Node view = root["view"]) {
+    scene.view = SceneView{};
     yaml::ReadValue(at.Child("view"), view, &scene.view);
     const SceneView& v = scene.view;
     scene.view.set = true;
     if (!(v.fov_deg > 1.0 && v.fov_deg < 170.0) || (v.eye_m - v.target_m).norm() < 1e-6)
       Fail(at, view, "view: fov_deg must be in (1, 170) and eye != target");
   }
-  std::string error;
-  if (!scene.Validate(&error)) Fail(at, root, error);
-  return scene;
 }
 
 }  // namespace
@@ -279,7 +365,7 @@ Status LoadScene(const std::string& path, Scene* scene) {
   ROTOLIDAR_CHECK(scene != nullptr, "LoadScene needs an output");
   try {
     const YAML::Node root = yaml::LoadFile(path);
-    *scene = SceneParser(path).Parse(root);
+    *scene = SceneParser(path, {}).Parse(root);
     return Status::Ok();
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());

@@ -31,6 +31,10 @@ struct Material {
   /// Visible albedo (camera colour), RGB in [0, 1]; multiplies the texture. The loader defaults it to white
   /// for textured materials (the texture carries the colour) and to 0.7 grey otherwise.
   Eigen::Vector3d color_rgb = Eigen::Vector3d(0.7, 0.7, 0.7);
+  /// LiDAR only: fraction of the power a surface of this material passes on (glass, porous foliage), [0, 1),
+  /// with albedo + transmittance <= 1. The sim adds every material with transmittance > 0 to the caster's
+  /// lidar.material_transmittance unless the run's config lists that material itself (sim/sim_runner.cpp).
+  double transmittance = 0.0;
 };
 
 enum class PrimitiveType { kBox, kQuad, kCylinder, kMesh };
@@ -168,6 +172,9 @@ bool ValidatePrimitive(const Primitive& primitive, const Scene& scene, std::stri
 
 /// Loads a scene file. Never throws: YAML syntax errors, unknown keys, wrong types, unreadable mesh files and
 /// invalid values come back as a Status whose message reads "<path>:<line>: <what> (<key>)" (1-based line).
+/// A file with `extends: BASE` starts from the base scene (BASE.yaml or BASE, relative to the file's folder,
+/// loaded the same way) and adds to it (docs/scene_format.md, 'Extending a scene'); a missing base, an error in
+/// it and a cycle of extends come back naming the file and line of the `extends` key.
 Status LoadScene(const std::string& path, Scene* scene);
 
 /// Tessellates every static primitive (deterministic: the same scene gives the same mesh, bit for bit).

@@ -71,6 +71,7 @@ template <class V>
 void Visit(V& v, Material& m) {
   v("name", yaml::Required(&m.name)), v("albedo", yaml::Required(&m.albedo));
   v("retroreflective", &m.retroreflective), v("texture", &m.texture), v("color", scene_io::Color(&m.color_rgb));
+  v("transmittance", &m.transmittance);
 }
 
 template <class V>
@@ -169,13 +170,15 @@ inline std::vector<Copy> ParseRepeat(const Section& item, const YAML::Node& node
   return copies;
 }
 
-/// `paths: {handheld|wheeled|car: [[x, y], [x, y, dwell_s], ...]}` in the file's order.
+/// `paths: {handheld|wheeled|car: [[x, y], [x, y, dwell_s], ...]}` in the file's order. A carrier the scene
+/// already has a path for (from the base scene) gets the new path in its old place in path_order.
 inline void ParsePaths(const Section& at, const YAML::Node& node, Scene* scene) {
   yaml::CheckKeys(at.file, node, {"handheld", "wheeled", "car"}, at.path);
   for (const auto& kv : node) {
     const std::string carrier = kv.first.as<std::string>();
+    if (!scene->default_paths.count(carrier)) scene->path_order.push_back(carrier);
     std::vector<Waypoint2d>& path = scene->default_paths[carrier];
-    scene->path_order.push_back(carrier);
+    path.clear();
     ForEachItem(at.Child(carrier), kv.second, [&](const Section& item, const YAML::Node& w) {
       const Eigen::Vector3d v = ReadVec(item, w, w.IsSequence() && w.size() == 3 ? 3 : 2);
       path.push_back(Waypoint2d{v.x(), v.y(), v.z()});

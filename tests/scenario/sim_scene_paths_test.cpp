@@ -1,6 +1,7 @@
 // `rotolidar sim --scene NAME` walks the scene's own path: the rig stays inside the scene for the whole run;
 // a carrier that does not fit the scene fails before anything is written; the built-in default (box room,
-// scripted loop) writes the same bytes whether the carrier is chosen from the scene or given.
+// scripted loop) writes the same bytes whether the carrier is chosen from the scene or given; a scene's
+// transmissive materials reach the caster unless the config lists them.
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -76,6 +77,32 @@ TEST(SimScenePaths, TheDefaultRunIsTheSameWhetherTheCarrierIsChosenOrGiven) {
   for (const char* f : {"lidar.pcap", "imu.csv", "encoder.csv", "calib.yaml", "sim_config.yaml", "truth/base.tum"})
     EXPECT_EQ(ReadAll(a + "/" + f), ReadAll(b + "/" + f)) << f;
   EXPECT_NE(ReadAll(a + "/sim_config.yaml").find("type: scripted_loop"), std::string::npos);
+}
+
+TEST(SimScenePaths, ASceneDeclaresItsTransmissiveMaterialsToTheCaster) {
+  const std::string tmp = fs::temp_directory_path().string();
+  const auto run = [&](const std::string& name, const SimConfig& config) {
+    const std::string dir = tmp + "/rotolidar_scenario_glass_" + name;
+    fs::remove_all(dir);
+    SimSummary summary;
+    const Status s = RunSimulation(config, dir, &summary);
+    EXPECT_TRUE(s.ok) << s.message;
+    return dir;
+  };
+  const SimConfig from_scene = FromScene("glass_atrium", 0.5);  // glass: transmittance 0.9 in the scene file
+  SimConfig listed = from_scene, other = from_scene;
+  listed.lidar.material_transmittance = {{"glass", 0.9}};
+  other.lidar.material_transmittance = {{"glass", 0.5}};  // the config wins over the scene
+  const std::string a = run("scene", from_scene), b = run("listed", listed), c = run("other", other);
+  SimConfig resolved;
+  ASSERT_TRUE(LoadSimConfig(a + "/sim_config.yaml", &resolved).ok);
+  EXPECT_EQ(resolved.lidar.material_transmittance, (std::vector<std::pair<std::string, double>>{{"glass", 0.9}}));
+  ASSERT_TRUE(LoadSimConfig(c + "/sim_config.yaml", &resolved).ok);
+  EXPECT_EQ(resolved.lidar.material_transmittance, (std::vector<std::pair<std::string, double>>{{"glass", 0.5}}));
+  const std::string pcap = ReadAll(a + "/lidar.pcap");
+  EXPECT_GT(pcap.size(), 100000u);
+  EXPECT_EQ(pcap, ReadAll(b + "/lidar.pcap"));  // declared in the scene = listed in the config
+  EXPECT_NE(pcap, ReadAll(c + "/lidar.pcap"));  // a different transmittance changes what the head sees
 }
 
 }  // namespace

@@ -20,8 +20,10 @@ inline std::string BoxRoomPath() { return ScenePath("box_room"); }
 
 /// Every scene shipped in scenes/ (a test checks the folder holds exactly these).
 inline const std::vector<std::string>& SceneNames() {
-  static const std::vector<std::string> kNames = {"box_room", "clean_street", "corridor", "garage",
-                                                  "lab",      "parking",      "urban_loop"};
+  static const std::vector<std::string> kNames = {
+      "box_room", "clean_street", "corridor",        "corridor_busy", "garage",     "glass_atrium",
+      "lab",      "lab_people",   "park",            "parking",       "parking_traffic", "tunnel",
+      "urban_loop", "urban_loop_traffic"};
   return kNames;
 }
 

@@ -66,6 +66,8 @@ void SceneParser::ParseMaterials(const Section& at, const YAML::Node& list, Scen
     if (!node["color"]) m.color_rgb = Eigen::Vector3d::Constant(m.texture.empty() ? 0.7 : 1.0);
     if (!(m.albedo >= 0.0 && m.albedo <= 1.0))
       Fail(item, node["albedo"], "albedo must be in [0, 1] in material '" + m.name + "'");
+    if (!(m.specular >= 0.0 && m.albedo + m.specular <= 1.0))
+      Fail(item, node, "specular must be >= 0 with albedo + specular <= 1 in material '" + m.name + "'");
     if (scene->FindMaterial(m.name) >= 0) Fail(item, node, "material '" + m.name + "' defined twice");
     if (!m.texture.empty() && !FindTexture(scene->textures, m.texture))
       Fail(item, node["texture"], "unknown texture '" + m.texture + "' in material '" + m.name + "'");

@@ -31,6 +31,9 @@ struct Material {
   /// Visible albedo (camera colour), RGB in [0, 1]; multiplies the texture. The loader defaults it to white
   /// for textured materials (the texture carries the colour) and to 0.7 grey otherwise.
   Eigen::Vector3d color_rgb = Eigen::Vector3d(0.7, 0.7, 0.7);
+  /// Fraction of the LiDAR beam reflected specularly (a mirror: ~0.9; albedo + specular <= 1); the VLP-16 twin
+  /// follows it when its specular_reflections switch is on (docs/lidar_model.md).
+  double specular = 0.0;
 };
 
 enum class PrimitiveType { kBox, kQuad, kCylinder, kMesh };

@@ -52,6 +52,9 @@ bool CheckPrimitive(const Primitive& p, const std::vector<Material>& materials, 
 bool ValidateMaterial(const Material& m, const std::vector<TextureSpec>& textures, std::string* error) {
   const std::string where = "material '" + m.name + "': ";
   if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return Fail(error, where + "albedo not in [0, 1]");
+  if (!(m.specular >= 0.0 && m.albedo + m.specular <= 1.0)) {
+    return Fail(error, where + "specular must be >= 0 with albedo + specular <= 1");
+  }
   if (!(m.color_rgb.minCoeff() >= 0.0 && m.color_rgb.maxCoeff() <= 1.0)) {
     return Fail(error, where + "color entries not in [0, 1]");
   }

@@ -13,6 +13,9 @@
 #include "bench/eval/twin_capture.hpp"
 #include "bench/report/svg_plot.hpp"
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 namespace rotolidar::bench {
 namespace {
 
@@ -50,12 +53,58 @@ std::string SideBySideHistograms(const PlaneResidualResult& real, const PlaneRes
   return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"1120\" height=\"380\">" + left + right + "</svg>\n";
 }
 
-void PrintComparison(const PlaneResidualResult& real, const PlaneResidualResult& twin, std::ostream& os) {
-  os << "range [m]      real: n  median  p90 | twin: n  median  p90 [mm] | twin/real median  p90\n";
+/// The same two histograms as a PNG (OpenCV drawing; for docs, where SVG with embedded text is not rendered):
+/// fraction of points per 2.5 mm bin of |residual|, real left, twin right, equal axes.
+Status SideBySidePng(const PlaneResidualResult& real, const PlaneResidualResult& twin, double max_m,
+                     const std::string& path) {
+  constexpr int kBins = 40, kW = 560, kH = 380, kLeft = 60, kBottom = 50, kTop = 40;
+  auto fractions = [&](const PlaneResidualResult& r) {
+    std::vector<double> f(kBins, 0.0);
+    for (const PlaneResidual& p : r.points) {
+      const int b = static_cast<int>(std::abs(p.residual_m) / max_m * kBins);
+      if (b >= 0 && b < kBins) f[static_cast<std::size_t>(b)] += 1.0 / static_cast<double>(r.points.size());
+    }
+    return f;
+  };
+  const std::vector<double> fr = fractions(real), ft = fractions(twin);
+  const double top = std::max(*std::max_element(fr.begin(), fr.end()), *std::max_element(ft.begin(), ft.end()));
+  cv::Mat img(kH, 2 * kW, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto panel = [&](const std::vector<double>& f, int x0, const std::string& title, const cv::Scalar& color,
+                   const ResidualBin& all) {
+    const int plot_w = kW - kLeft - 20, plot_h = kH - kBottom - kTop;
+    for (int b = 0; b < kBins; ++b) {
+      const int x = x0 + kLeft + b * plot_w / kBins, x2 = x0 + kLeft + (b + 1) * plot_w / kBins - 1;
+      const int h = static_cast<int>(f[static_cast<std::size_t>(b)] / top * plot_h);
+      cv::rectangle(img, {x, kTop + plot_h - h}, {x2, kTop + plot_h}, color, cv::FILLED);
+    }
+    cv::rectangle(img, {x0 + kLeft, kTop}, {x0 + kLeft + plot_w, kTop + plot_h}, cv::Scalar(0, 0, 0), 1);
+    for (int t = 0; t <= 4; ++t) {  // x ticks every max/4
+      const int x = x0 + kLeft + t * plot_w / 4;
+      cv::putText(img, std::to_string(static_cast<int>(std::lround(1e3 * max_m * t / 4))), {x - 10, kTop + plot_h + 18},
+                  cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    }
+    cv::putText(img, "|residual to fitted plane| [mm]", {x0 + kLeft + 100, kH - 10}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    char text[160];
+    std::snprintf(text, sizeof(text), "%s: median %.1f mm, p90 %.1f mm", title.c_str(), 1e3 * all.median_abs_m,
+                  1e3 * all.p90_abs_m);
+    cv::putText(img, text, {x0 + kLeft, 25}, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(img, "fraction", {x0 + 5, kTop + 12}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
+  };
+  panel(fr, 0, "real VLP-16", cv::Scalar(180, 119, 31), real.all);  // BGR of tab10 blue / orange
+  panel(ft, kW, "twin", cv::Scalar(14, 127, 255), twin.all);
+  if (!cv::imwrite(path, img)) return Status::Error(path + ": cannot write PNG");
+  return Status::Ok();
+}
+
+void PrintComparisonTable(const char* what, const std::vector<ResidualBin>& real,
+                          const std::vector<ResidualBin>& twin, std::ostream& os) {
+  os << what << "  real: n  median  p90 | twin: n  median  p90 [mm] | twin/real median  p90\n";
   char line[200];
-  for (std::size_t i = 0; i < real.by_range.size() && i < twin.by_range.size(); ++i) {
-    const ResidualBin& a = real.by_range[i];
-    const ResidualBin& b = twin.by_range[i];
+  for (std::size_t i = 0; i < real.size() && i < twin.size(); ++i) {
+    const ResidualBin& a = real[i];
+    const ResidualBin& b = twin[i];
     if (a.count == 0 && b.count == 0) continue;
     std::snprintf(line, sizeof(line), "%5.1f - %-5.1f %9zu %7.1f %5.1f | %7zu %7.1f %5.1f | %8.2f %6.2f\n", a.lo, a.hi,
                   a.count, 1e3 * a.median_abs_m, 1e3 * a.p90_abs_m, b.count, 1e3 * b.median_abs_m,
@@ -63,11 +112,12 @@ void PrintComparison(const PlaneResidualResult& real, const PlaneResidualResult&
                   a.count ? b.p90_abs_m / a.p90_abs_m : 0.0);
     os << line;
   }
-  std::snprintf(line, sizeof(line), "all           %9zu %7.1f %5.1f | %7zu %7.1f %5.1f | %8.2f %6.2f\n",
-                real.all.count, 1e3 * real.all.median_abs_m, 1e3 * real.all.p90_abs_m, twin.all.count,
-                1e3 * twin.all.median_abs_m, 1e3 * twin.all.p90_abs_m, twin.all.median_abs_m / real.all.median_abs_m,
-                twin.all.p90_abs_m / real.all.p90_abs_m);
-  os << line;
+}
+
+void PrintComparison(const PlaneResidualResult& real, const PlaneResidualResult& twin, std::ostream& os) {
+  PrintComparisonTable("range [m]    ", real.by_range, twin.by_range, os);
+  PrintComparisonTable("incidence [deg]", real.by_incidence, twin.by_incidence, os);
+  PrintComparisonTable("all          ", {real.all}, {twin.all}, os);
 }
 
 }  // namespace
@@ -81,6 +131,7 @@ int BenchPlaneResiduals(int argc, char** argv) {
   p.Add("csv", "", "-", "write the per-point residuals of the capture (or of the twin alone) to this CSV");
   p.Add("twin-csv", "", "-", "write the twin's per-point residuals to this CSV");
   p.Add("figure", "", "-", "with a capture and a twin: side-by-side |residual| histograms (SVG) to this file");
+  p.Add("figure-png", "", "-", "the same histograms as a PNG");
   p.Add("threshold", "0.10", "m", "RANSAC inlier band = residual window");
   p.Add("max-planes", "8", "-", "planes per revolution");
   p.Add("min-plane-points", "400", "-", "smallest plane used");
@@ -97,6 +148,7 @@ int BenchPlaneResiduals(int argc, char** argv) {
   p.Add("cmin", "0.1", "-", "twin range_noise_min_cos");
   p.Add("weak-power", "0", "-", "twin range_noise_weak_power");
   p.Add("beam-rings", "0", "-", "twin beam_rings");
+  p.Add("weak-gain", "3", "-", "twin range_noise_weak_max_gain");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   PlaneResidualOptions o;
   TwinCaptureOptions t;
@@ -109,6 +161,7 @@ int BenchPlaneResiduals(int argc, char** argv) {
                           p.GetDouble("k", &t.lidar.range_noise_incidence_exponent),
                           p.GetDouble("cmin", &t.lidar.range_noise_min_cos),
                           p.GetDouble("weak-power", &t.lidar.range_noise_weak_power),
+                          p.GetDouble("weak-gain", &t.lidar.range_noise_weak_max_gain),
                           p.GetInt("beam-rings", &rings)}) {
     if (!s) return std::cerr << "error: " << s.message << "\n", 2;
   }
@@ -155,6 +208,9 @@ int BenchPlaneResiduals(int argc, char** argv) {
       std::ofstream svg(p.Get("figure"));
       svg << SideBySideHistograms(real, twin, o.ransac_threshold_m);
       if (!svg) return fail(Status::Error(p.Get("figure") + ": cannot write"));
+    }
+    if (!p.Get("figure-png").empty()) {
+      if (Status s = SideBySidePng(real, twin, o.ransac_threshold_m, p.Get("figure-png")); !s) return fail(s);
     }
   }
   return 0;

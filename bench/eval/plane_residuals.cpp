@@ -106,6 +106,7 @@ void ScanPlanes(const LidarScan& scan, int scan_index, const PlaneResidualOption
     Eigen::Vector3d n;
     double d = 0.0;
     FitPlane(in, &n, &d);
+    const bool measured = d >= o.min_plane_offset_m;
     std::vector<Eigen::Vector3d> rest;
     std::vector<float> rest_intensity;
     for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -115,6 +116,7 @@ void ScanPlanes(const LidarScan& scan, int scan_index, const PlaneResidualOption
         rest_intensity.push_back(intensity[i]);
         continue;
       }
+      if (!measured) continue;
       const double r = pts[i].norm();
       PlaneResidual pr;
       pr.range_m = static_cast<float>(r);
@@ -125,7 +127,7 @@ void ScanPlanes(const LidarScan& scan, int scan_index, const PlaneResidualOption
       pr.plane = plane;
       result->points.push_back(pr);
     }
-    ++result->planes;
+    result->planes += measured ? 1 : 0;
     pts.swap(rest);
     intensity.swap(rest_intensity);
   }
@@ -137,6 +139,7 @@ bool PlaneResidualOptions::Validate(std::string* error) const {
   auto fail = [&](const std::string& m) { return (error ? *error = m : m), false; };
   if (!(min_range_m >= 0.0 && max_range_m > min_range_m)) return fail("plane residuals: need 0 <= min_range < max_range");
   if (!(ransac_threshold_m > 0.0 && ransac_threshold_m < 1.0)) return fail("plane residuals: threshold in (0, 1) m");
+  if (!(min_plane_offset_m >= 0.0)) return fail("plane residuals: min_plane_offset_m >= 0");
   if (max_planes < 1 || min_plane_points < 3 || ransac_iterations < 1) {
     return fail("plane residuals: max_planes >= 1, min_plane_points >= 3, ransac_iterations >= 1");
   }

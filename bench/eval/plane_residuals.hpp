@@ -7,7 +7,8 @@
 // or a stopped rig): up to max_planes times, PCL's RANSAC plane segmentation (pcl::SACSegmentation, distance
 // threshold ransac_threshold_m) finds the largest plane among the points left; the plane is refitted by least
 // squares (PCA) to those inliers, its points are those within ransac_threshold_m of the refit, and each one's
-// residual is its signed distance to it. Planes with fewer than min_plane_points points end the search. A
+// residual is its signed distance to it. Planes with fewer than min_plane_points points end the search; planes
+// passing within min_plane_offset_m of the sensor are removed unmeasured. A
 // point's incidence is the angle between its ray (from the lidar origin) and the plane normal.
 // Residuals are truncated at +-ransac_threshold_m by construction: compare only results of equal options.
 // PCL's RANSAC is seeded with a fixed value, so results are deterministic.
@@ -29,6 +30,9 @@ struct PlaneResidualOptions {
   int max_planes = 8;                ///< planes per revolution
   int min_plane_points = 400;        ///< smaller planes are not used (and end the search)
   int ransac_iterations = 400;
+  /// Planes closer than this to the sensor are dropped (their points removed, not measured): a plane through the
+  /// sensor is a bundle of scan lines (RANSAC finds those among clutter), not a surface seen by the beams.
+  double min_plane_offset_m = 0.3;
   std::vector<double> range_edges_m = {1, 2, 4, 6, 8, 12, 16, 25, 40, 60};  ///< bin edges, increasing
   std::vector<double> incidence_edges_deg = {0, 20, 40, 60, 75, 90};      ///< bin edges, increasing
   bool Validate(std::string* error) const;

@@ -5,9 +5,9 @@ namespace rotolidar::sim {
 namespace {
 
 // The noise model fitted to the real capture (docs/lidar_model.md, section 5).
-constexpr double kTypicalS0 = 0.010;  // [m]
+constexpr double kTypicalS0 = 0.020;  // [m]
 constexpr double kTypicalS1 = 0.0;    // [m/m]
-constexpr double kTypicalK = 0.0;
+constexpr double kTypicalK = 2.5;
 
 /// Range walk [byte, bias_m]: weak diffuse echoes late (leading-edge timing), strong and retroreflective early.
 std::vector<std::array<double, 2>> RangeWalk(double scale) {
@@ -37,7 +37,7 @@ void ApplyLidarRealism(Realism r, Vlp16CasterConfig* c) {
   c->range_noise_per_m = (harsh ? 1.5 : 1.0) * kTypicalS1;
   c->range_noise_incidence_exponent = kTypicalK;
   c->range_noise_min_cos = 0.1;
-  c->range_noise_weak_power = 0.1;
+  c->range_noise_weak_power = harsh ? 0.15 : 0.0;  // the fit found no need for it; a dirty window weakens echoes
   c->range_noise_weak_max_gain = 3.0;
   c->range_bias_curve = RangeWalk(harsh ? 2.0 : 1.0);
   c->bloom_halo_mrad = harsh ? 8.0 : 4.0;

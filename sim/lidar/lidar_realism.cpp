@@ -43,7 +43,8 @@ void ApplyLidarRealism(Realism r, Vlp16CasterConfig* c) {
   c->bloom_halo_mrad = harsh ? 8.0 : 4.0;
   c->bloom_power_fraction = 0.05;
   c->specular_reflections = true;
-  c->beam_rings = 1;
+  // Mixed edge points cost a 7-ray beam: 4.4x slower casting (bench lidar, lab), so only the harsh preset pays.
+  c->beam_rings = harsh ? 1 : 0;
 }
 
 }  // namespace rotolidar::sim

@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <yaml-cpp/yaml.h>
+
 #include "sim/lidar/lidar_realism.hpp"
+#include "sim/sim_config.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "tests/sim/lidar/lidar_fixtures.hpp"
 #include "tests/sim/world/world_fixtures.hpp"
@@ -239,6 +242,34 @@ TEST(Vlp16Physics, PresetsIdealIsTheDefaultAndHarshIsNoisier) {
   EXPECT_GT(harsh.range_noise_sigma_m, typical.range_noise_sigma_m);
   EXPECT_GT(harsh.bloom_halo_mrad, typical.bloom_halo_mrad);
   EXPECT_GT(std::abs(harsh.range_bias_curve.front()[1]), std::abs(typical.range_bias_curve.front()[1]));
+}
+
+// The new switches are keys of the sim config's `lidar:` section, and the resolved config writes them back.
+TEST(Vlp16Physics, ConfigKeysParseAndRoundTrip) {
+  const YAML::Node root = YAML::Load(
+      "lidar: {range_noise_per_m: 0.001, range_noise_incidence_exponent: 2.5, range_noise_min_cos: 0.2,\n"
+      "        range_noise_weak_power: 0.1, range_noise_weak_max_gain: 2, range_bias_curve: [[0, 0.03], [255, -0.04]],\n"
+      "        bloom_halo_mrad: 4, bloom_power_fraction: 0.1, specular_reflections: true}\n");
+  SimConfig config = DefaultSimConfig();
+  const Status parsed = ParseSimConfig("test.yaml", root, &config);
+  ASSERT_TRUE(parsed.ok) << parsed.message;
+  EXPECT_EQ(config.lidar.range_noise_incidence_exponent, 2.5);
+  ASSERT_EQ(config.lidar.range_bias_curve.size(), 2u);
+  EXPECT_EQ(config.lidar.range_bias_curve[1][1], -0.04);
+  EXPECT_TRUE(config.lidar.specular_reflections);
+  YAML::Emitter out;
+  EmitSimConfig(out, config);
+  SimConfig again = DefaultSimConfig();
+  const Status reparsed = ParseSimConfig("resolved.yaml", YAML::Load(out.c_str()), &again);
+  ASSERT_TRUE(reparsed.ok) << reparsed.message;
+  EXPECT_EQ(again.lidar.range_bias_curve, config.lidar.range_bias_curve);
+  EXPECT_EQ(again.lidar.bloom_halo_mrad, 4.0);
+  // A decreasing curve is refused, naming the key.
+  SimConfig bad = DefaultSimConfig();
+  const Status refused =
+      ParseSimConfig("bad.yaml", YAML::Load("lidar: {range_bias_curve: [[50, 0.01], [10, 0.0]]}"), &bad);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.message.find("range_bias_curve"), std::string::npos) << refused.message;
 }
 
 }  // namespace

@@ -102,6 +102,8 @@ struct Vlp16CasterConfig {
 
   /// True when usable; otherwise false with the field named in *error.
   bool Validate(std::string* error) const;
+  /// The range-physics part of Validate (noise model, range walk, blooming).
+  bool ValidateRangePhysics(std::string* error) const;
 };
 
 /// Checks that every material_transmittance name exists among `materials` and that its albedo (the diffusely

@@ -2,6 +2,7 @@
 // ("Realism presets"); keep the two in step.
 #include "sim/realism.hpp"
 
+#include "sim/lidar/lidar_realism.hpp"
 #include "sim/sim_config.hpp"
 
 namespace rotolidar::sim {
@@ -55,6 +56,7 @@ void ApplyRealism(Realism r, SimConfig* config) {
   config->clocks = ClockPreset(r);
   config->rig_errors = RigErrorPreset(r);  // calibration errors, axis wobble, rotor vibration (sim/rig/rig_errors)
   ApplyImuPreset(r, &config->imu.errors);
+  ApplyLidarRealism(r, &config->lidar);  // range noise model, range walk, blooming, mirrors, beam footprint
   // The head's spin-rate wander (1-sigma, Gauss-Markov): invisible to a decoder that reads the packets' azimuths.
   config->lidar.rpm_jitter_frac = r == Realism::kIdeal ? 0.0 : r == Realism::kTypical ? 0.005 : 0.02;
 }

@@ -68,6 +68,12 @@ void Visit(V& v, Vlp16CasterConfig& c) {
   v("echo_separation_m", &c.echo_separation_m);
   v("material_transmittance", yaml::Custom(&c.material_transmittance, ReadTransmittance, EmitTransmittance));
   v("max_surfaces_per_ray", &c.max_surfaces_per_ray), v("pose_per_firing", &c.pose_per_firing);
+  v("range_noise_per_m", &c.range_noise_per_m);
+  v("range_noise_incidence_exponent", &c.range_noise_incidence_exponent);
+  v("range_noise_min_cos", &c.range_noise_min_cos), v("range_noise_weak_power", &c.range_noise_weak_power);
+  v("range_noise_weak_max_gain", &c.range_noise_weak_max_gain), v("range_bias_curve", &c.range_bias_curve);
+  v("bloom_halo_mrad", &c.bloom_halo_mrad), v("bloom_power_fraction", &c.bloom_power_fraction);
+  v("specular_reflections", &c.specular_reflections);
 }
 
 template <class V>

@@ -1,4 +1,5 @@
 // `rotolidar bench <name>`: speed benchmarks (ratios to real time) and the IMU Allan check.
+#include <algorithm>
 #include <cstring>
 #include <iostream>
 
@@ -20,12 +21,13 @@ const Benchmark kBenchmarks[] = {
     {"lidar", BenchLidar, "VLP-16 ray casting + packet encoding (target >= 20x real time, 1 core)"},
     {"decode", BenchDecode, "VLP-16 packet decoding (target >= 100x real time)"},
     {"slam", BenchSlam, "SLAM core per-scan time per stage, ATE, deskew error (target median <= 10 ms/scan, 1 core)"},
+    {"plane-residuals", BenchPlaneResiduals, "range noise: residuals to RANSAC planes, real capture vs twin"},
     {"camera", BenchCamera, "camera twin frames/s per renderer and image size (target 640x480 >= 30 fps, 2 cores)"},
 };
 
 void Usage(std::ostream& os) {
   os << "usage: rotolidar bench <name> [options]   (rotolidar bench <name> --help)\n\nbenchmarks:\n";
-  for (const Benchmark& b : kBenchmarks) os << "  " << b.name << std::string(8 - std::strlen(b.name), ' ') << b.summary << "\n";
+  for (const Benchmark& b : kBenchmarks) os << "  " << b.name << std::string(std::max<std::size_t>(8, std::strlen(b.name) + 1) - std::strlen(b.name), ' ') << b.summary << "\n";
 }
 
 }  // namespace

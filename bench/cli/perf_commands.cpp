@@ -127,8 +127,10 @@ int BenchLidar(int argc, char** argv) {
   p.AddFlag("truth", "also collect per-firing truth (as the tests do)");
   p.AddFlag("pose-per-firing", "call the rig pose for every firing instead of once per sequence");
   p.Add("seed", "1", "-", "run seed");
+  p.Add("realism", "", "-", "ideal | typical | harsh: the preset's range physics (its beam rings replace --beam-rings)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   LidarBenchOptions o;
+  o.realism = p.Get("realism");
   o.scene = p.Get("scene");
   long reps = 0, rings = 0, seed = 0;
   for (const Status& s : {p.GetDouble("seconds", &o.seconds), p.GetInt("reps", &reps), p.GetDouble("rpm", &o.rpm),

@@ -10,5 +10,6 @@ int BenchLidar(int argc, char** argv);
 int BenchDecode(int argc, char** argv);
 int BenchSlam(int argc, char** argv);
 int BenchCamera(int argc, char** argv);
+int BenchPlaneResiduals(int argc, char** argv);  ///< bench/cli/residual_commands.cpp
 
 }  // namespace rotolidar::bench

@@ -11,6 +11,8 @@
 #include "core/wire/pcap.hpp"
 #include "core/wire/scan_splitter.hpp"
 #include "sim/lidar/position_source.hpp"
+#include "core/io/yaml_fields.hpp"
+#include "sim/lidar/lidar_realism.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/rig/motor.hpp"
@@ -154,6 +156,11 @@ Status RunLidarBench(const LidarBenchOptions& o, LidarBenchResult* result) {
   config.lidar.return_mode = o.return_mode;
   config.lidar.beam_rings = o.beam_rings;
   config.lidar.pose_per_firing = o.pose_per_firing;
+  if (!o.realism.empty()) {
+    sim::Realism realism;
+    if (!yaml::EnumFromWord(o.realism, &realism)) return Status::Error("--realism: ideal, typical or harsh");
+    sim::ApplyLidarRealism(realism, &config.lidar);
+  }
   *result = LidarBenchResult();
   std::vector<Timing> cast_runs, total_runs;
   std::vector<Vlp16FiringSequence> seqs;

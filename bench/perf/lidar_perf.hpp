@@ -33,6 +33,9 @@ struct LidarBenchOptions {
   bool truth = false;              ///< also collect per-firing truth (what tests do; the sim does not)
   bool pose_per_firing = false;    ///< call the rig's pose function for every firing instead of per sequence
   uint64_t seed = 1;
+  /// "" = the options above alone; ideal | typical | harsh = the preset's range physics (sim/lidar/lidar_realism.hpp),
+  /// whose beam_rings replaces the one above.
+  std::string realism;
   bool Validate(std::string* error) const;
 };
 

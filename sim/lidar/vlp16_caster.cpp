@@ -57,6 +57,7 @@ bool Vlp16CasterConfig::Validate(std::string* error) const {
   if (!(range_noise_sigma_m >= 0.0 && range_noise_sigma_m < 1.0)) {
     return Fail(error, "lidar.range_noise_sigma_m must be in [0, 1)");
   }
+  if (!ValidateRangePhysics(error)) return false;
   if (!(min_range_m >= 0.0)) return Fail(error, "lidar.min_range_m must be >= 0");
   if (!(max_range_m > min_range_m && max_range_m <= kMaxEncodableRangeM)) {
     return Fail(error, "lidar.max_range_m must be in (min_range_m, 131.07]");
@@ -141,8 +142,21 @@ Vlp16Caster::Vlp16Caster(const EmbreeScene& scene, const LidarIntrinsics& intrin
   firings_.resize(firings);
   queries_.resize(firings * pattern_.size());
   hits_.resize(queries_.size());
-  returns_.resize(queries_.size() * static_cast<std::size_t>(config_.max_surfaces_per_ray));
+  return_capacity_ = pattern_.size() * static_cast<std::size_t>(config_.max_surfaces_per_ray) +
+                     (config_.bloom_halo_mrad > 0.0 ? 1 : 0);
+  returns_.resize(firings * return_capacity_);
   return_counts_.resize(firings);
+  if (config_.bloom_halo_mrad > 0.0) {
+    for (const Eigen::AlignedBox3d& box : scene_.retroreflective_bounds()) {
+      retro_spheres_.push_back({box.center(), 0.5 * box.diagonal().norm()});
+    }
+    // Two staggered rings of 8 rays at the halo's edge and half way in (offsets in units of the halo radius).
+    for (int k = 0; k < 16; ++k) {
+      const double phi = 2.0 * kPi * (k / 2) / 8.0 + (k % 2) * kPi / 8.0;
+      const double rho = k % 2 == 0 ? 1.0 : 0.5;
+      halo_pattern_.push_back({rho * std::cos(phi), rho * std::sin(phi), 1.0});
+    }
+  }
 }
 
 Seconds Vlp16Caster::FiringTime(int64_t sequence_index, int laser_id) const {
@@ -225,11 +239,11 @@ void Vlp16Caster::PlanSequence(const PoseFn& T_world_lidar_at, Vlp16FiringSequen
   AdvanceSpinRate();
 }
 
-// Casts the batch's queries, then follows sub-rays through transmissive surfaces (one more Embree call per
-// surface depth, for the sub-rays that crossed one), collecting each firing's surface returns in returns_.
+// Casts the batch's queries, then follows sub-rays through transmissive surfaces and, with specular_reflections,
+// off mirrors (one more Embree call per surface depth, for the sub-rays that went on), collecting each firing's
+// surface returns in returns_; then adds the bloom returns.
 void Vlp16Caster::CastBatch(std::size_t n_firings) {
   const std::size_t k_rays = pattern_.size();
-  const std::size_t capacity = k_rays * static_cast<std::size_t>(config_.max_surfaces_per_ray);
   std::fill(return_counts_.begin(), return_counts_.begin() + static_cast<std::ptrdiff_t>(n_firings), 0);
   std::size_t n = n_firings * k_rays;
   scene_.IntersectBatch(queries_.data(), n, hits_.data());
@@ -241,27 +255,40 @@ void Vlp16Caster::CastBatch(std::size_t n_firings) {
     for (std::size_t q = 0; q < n; ++q) {
       const RayHit& hit = hits[q];
       if (!hit.hit) continue;
-      // Pass 0: query q is sub-ray q of the batch; later passes carry (sub-ray, path transmittance so far).
-      const std::size_t ray = depth == 0 ? q : pass_info_[q].first;
-      const double path_t = depth == 0 ? 1.0 : pass_info_[q].second;
-      const std::size_t firing = FiringOfQuery(ray);
+      // Pass 0: query q is sub-ray q of the batch; later passes carry the sub-ray and its path so far.
+      const Pass pass = depth == 0 ? Pass{q, 1.0, 0.0, false} : pass_info_[q];
+      const std::size_t firing = FiringOfQuery(pass.ray);
       const RayQuery& query = queries[q];
-      const double range_m =
-          depth == 0 ? hit.distance_m : (query.origin_world - queries_[ray].origin_world).norm() + hit.distance_m;
+      const double range_m = depth == 0    ? hit.distance_m
+                             : pass.folded ? pass.path_m + hit.distance_m
+                                           : (query.origin_world - queries_[pass.ray].origin_world).norm() +
+                                                 hit.distance_m;
       const double cos_incidence = -hit.normal_world.dot(query.dir_world);
       const Material& material = scene_.material(hit.material_id);
       const double t = transmittance_[static_cast<std::size_t>(hit.material_id)];
-      SurfaceReturn& r = returns_[firing * capacity + static_cast<std::size_t>(return_counts_[firing]++)];
-      r.range_m = range_m;
-      r.retroreflective = material.retroreflective;
-      r.power = (cos_incidence < cos_grazing_cutoff_ || cos_incidence <= 0.0)
-                    ? 0.0
-                    : pattern_[ray % k_rays].weight * path_t * path_t * material.albedo * cos_incidence *
-                          std::exp(-config_.intensity_attenuation_per_m * range_m);
-      if (t > 0.0 && depth + 1 < config_.max_surfaces_per_ray && range_m + kPassThroughM < config_.max_range_m) {
-        next_info_.emplace_back(ray, path_t * t);
-        next_queries_.push_back(RayQuery{query.origin_world + (hit.distance_m + kPassThroughM) * query.dir_world,
-                                         query.dir_world, config_.max_range_m - range_m - kPassThroughM});
+      if (static_cast<std::size_t>(return_counts_[firing]) < return_capacity_) {
+        SurfaceReturn& r = returns_[firing * return_capacity_ + static_cast<std::size_t>(return_counts_[firing]++)];
+        r.range_m = range_m;
+        r.retroreflective = material.retroreflective;
+        r.cos_incidence = cos_incidence;
+        r.power = (cos_incidence < cos_grazing_cutoff_ || cos_incidence <= 0.0)
+                      ? 0.0
+                      : pattern_[pass.ray % k_rays].weight * pass.path_t * pass.path_t * material.albedo *
+                            cos_incidence * std::exp(-config_.intensity_attenuation_per_m * range_m);
+      }
+      if (depth + 1 >= config_.max_surfaces_per_ray || range_m + kPassThroughM >= config_.max_range_m) continue;
+      const double left_m = config_.max_range_m - range_m - kPassThroughM;
+      if (t > 0.0) {
+        next_info_.push_back({pass.ray, pass.path_t * t, range_m + kPassThroughM, pass.folded});
+        next_queries_.push_back(
+            RayQuery{query.origin_world + (hit.distance_m + kPassThroughM) * query.dir_world, query.dir_world, left_m});
+      }
+      if (config_.specular_reflections && material.specular > 0.0 && cos_incidence > 0.0) {
+        // Mirror: d' = d - 2 (d . n) n, restarting just off the surface on the incoming side.
+        const Eigen::Vector3d p = query.origin_world + hit.distance_m * query.dir_world;
+        const Eigen::Vector3d d = query.dir_world + 2.0 * cos_incidence * hit.normal_world;
+        next_info_.push_back({pass.ray, pass.path_t * material.specular, range_m + kPassThroughM, true});
+        next_queries_.push_back(RayQuery{p + kPassThroughM * d, d, left_m});
       }
     }
     if (next_queries_.empty()) break;
@@ -273,6 +300,7 @@ void Vlp16Caster::CastBatch(std::size_t n_firings) {
     hits = pass_hits_.data();
     n = pass_queries_.size();
   }
+  if (!retro_spheres_.empty()) AddBloom(n_firings);
 }
 
 // Forms the firing's echoes, picks the reported ones, adds noise and writes the wire fields (and *truth, when
@@ -280,10 +308,10 @@ void Vlp16Caster::CastBatch(std::size_t n_firings) {
 void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int laser_id, Vlp16FiringSequence* seq,
                           LidarTruthPoint* truth) {
   const bool dual = config_.return_mode == Vlp16ReturnMode::kDual;
-  double noise_m[2] = {config_.range_noise_sigma_m * StandardNormal(&range_rng_), 0.0};  // for every firing
-  if (dual) noise_m[1] = config_.range_noise_sigma_m * StandardNormal(&range_rng_);
-  const std::size_t k_rays = pattern_.size();
-  const std::size_t capacity = k_rays * static_cast<std::size_t>(config_.max_surfaces_per_ray);
+  // Unit normals, one per firing (two in dual mode) whether or not it returns; scaled by each echo's sigma.
+  double unit_noise[2] = {StandardNormal(&range_rng_), 0.0};
+  if (dual) unit_noise[1] = StandardNormal(&range_rng_);
+  const std::size_t capacity = return_capacity_;
   if (truth) {
     const RayHit& central = hits_[QueryIndex(firing_index, 0)];
     *truth = LidarTruthPoint();
@@ -301,7 +329,7 @@ void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int la
   const std::size_t n_returns = static_cast<std::size_t>(return_counts_[firing_index]);
   const SurfaceReturn* first = &returns_[firing_index * capacity];
   if (n_returns == 1 && first->power > 0.0) {  // the common case of a single surface: one echo, nothing to merge
-    echoes_.push_back(Echo{first->range_m, first->power, first->retroreflective});
+    echoes_.push_back(Echo{first->range_m, first->power, first->retroreflective, first->cos_incidence});
   } else {
     FormEchoes(&returns_[firing_index * capacity], n_returns, config_.echo_separation_m, &echoes_);
   }
@@ -313,16 +341,18 @@ void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int la
   for (int s = 0; s < 2; ++s) {
     if (slots[s] < 0) continue;
     const Echo& e = echoes_[static_cast<std::size_t>(slots[s])];
+    const double p = std::min(e.power, 1.0);
+    const long long byte = e.retroreflective ? 101 + static_cast<long long>(154.0 * p + 0.5)
+                                             : static_cast<long long>(100.0 * p + 0.5);
+    const int byte_clamped = static_cast<int>(std::clamp<long long>(byte, 0, 255));
     // One echo reported twice (dual mode, single echo) is one measurement: identical blocks (manual 9.3.2).
-    const double measured_m = e.range_m + noise_m[s == 1 && slots[1] == slots[0] ? 0 : s];
+    const double noise_m = RangeSigma(e) * unit_noise[s == 1 && slots[1] == slots[0] ? 0 : s];
+    const double measured_m = e.range_m + RangeBias(byte_clamped) + noise_m;
     if (measured_m < config_.min_range_m || measured_m > config_.max_range_m) continue;
     const long long units = static_cast<long long>(measured_m / kVlp16DistanceUnitM + 0.5);  // > 0: rounds
     if (units <= 0 || units > 65535) continue;
     distance[s] = static_cast<uint16_t>(units);
-    const double p = std::min(e.power, 1.0);
-    const long long byte = e.retroreflective ? 101 + static_cast<long long>(154.0 * p + 0.5)
-                                             : static_cast<long long>(100.0 * p + 0.5);
-    reflectivity[s] = static_cast<uint8_t>(std::clamp<long long>(byte, 0, 255));
+    reflectivity[s] = static_cast<uint8_t>(byte_clamped);
     if (truth) truth->echo_range_m[static_cast<std::size_t>(s)] = e.range_m;
   }
   if (truth) {

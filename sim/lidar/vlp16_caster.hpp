@@ -15,8 +15,11 @@
 //
 // Beam and echoes (vlp16_echoes.hpp): beam_rings = 0 casts the central ray only; > 0 samples the divergent beam
 // with sub-rays, so a spot straddling an edge returns a mixed (power-weighted) range or two echoes >= 1 m apart.
-// Transmissive materials (glass) pass part of the power on to the surfaces behind them.
-// Range model: each reported echo's range + N(0, range_noise_sigma_m), quantised to 2 mm. No return (distance 0)
+// Transmissive materials (glass) pass part of the power on to the surfaces behind them; with specular_reflections
+// mirrors send it on along the reflected direction (range = folded path). Blooming adds a weak retroreflective
+// return to firings passing near a retroreflector.
+// Range model: each reported echo's range + range_bias(reflectivity byte) + N(0, sigma(range, incidence,
+// power)), quantised to 2 mm (sigma = range_noise_sigma_m with the defaults). No return (distance 0)
 // when nothing is hit within max_range_m, the range is outside [min_range_m, max_range_m], every contributing
 // surface is beyond grazing_cutoff_deg, or the echo's intensity 100 * power falls under min_intensity_for_return.
 // Reflectivity byte of an echo of power s (in [0, 1]): diffuse round(100 s) (0..100; the VLP-16 calibrates out
@@ -54,6 +57,28 @@ struct Vlp16CasterConfig {
   /// Gaussian range noise, 1-sigma [m]. The datasheet's "+-3 cm typical accuracy" read conservatively as 1-sigma
   /// (Gazebo's plugin uses 0.008 m); set 0 for noise-free truth tests.
   double range_noise_sigma_m = 0.03;
+  /// Range-, incidence- and reflectivity-dependent noise (docs/lidar_model.md, section 5). The 1-sigma of an
+  /// echo at range r, incidence theta and power p (0..1 scale) is
+  ///   sqrt(s0^2 + (range_noise_per_m * r)^2) / max(cos theta, range_noise_min_cos)^range_noise_incidence_exponent
+  ///   * min(range_noise_weak_max_gain, sqrt(range_noise_weak_power / p))   [the last factor only when p < it]
+  /// with s0 = range_noise_sigma_m. The defaults (0, 0, 0) give s0 everywhere, exactly.
+  double range_noise_per_m = 0.0;               ///< s1 [m per m of range]
+  double range_noise_incidence_exponent = 0.0;  ///< k (0 = no incidence dependence)
+  double range_noise_min_cos = 0.1;             ///< c_min, caps the incidence factor at c_min^-k
+  double range_noise_weak_power = 0.0;          ///< diffuse echoes weaker than this are noisier; 0 = off
+  double range_noise_weak_max_gain = 3.0;       ///< cap of the weak-echo factor (>= 1)
+  /// Range walk: bias [m] added to every reported range as a function of the echo's reflectivity byte, piecewise
+  /// linear through [byte, bias_m] points with increasing bytes, constant beyond the ends; empty = none.
+  std::vector<std::array<double, 2>> range_bias_curve;
+  /// Retroreflector blooming: a firing whose central ray passes within this half-angle [mrad] of a visible
+  /// retroreflective surface also gets a return from it (power bloom_power_fraction times the surface's own);
+  /// 0 = off. Only static retroreflectors bloom.
+  double bloom_halo_mrad = 0.0;
+  double bloom_power_fraction = 0.05;
+  /// Materials with `specular` > 0 (scene file) send that fraction of a beam on along the mirrored direction; an
+  /// echo from behind the mirror reports the folded path length (a ghost point). false = mirrors are plain
+  /// diffuse surfaces (their specular fraction is ignored).
+  bool specular_reflections = false;
   double min_range_m = 0.4;      ///< same for all lasers (the manual gives no per-laser minimum)
   double max_range_m = 100.0;    ///< rated range; also the ray length cast; <= 131.07 (uint16 x 2 mm)
   double grazing_cutoff_deg = 85.0;          ///< incidence angles above this give no return
@@ -77,6 +102,8 @@ struct Vlp16CasterConfig {
 
   /// True when usable; otherwise false with the field named in *error.
   bool Validate(std::string* error) const;
+  /// The range-physics part of Validate (noise model, range walk, blooming).
+  bool ValidateRangePhysics(std::string* error) const;
 };
 
 /// Checks that every material_transmittance name exists among `materials` and that its albedo (the diffusely
@@ -177,7 +204,27 @@ class Vlp16Caster {
   std::vector<int> return_counts_;
   std::vector<RayQuery> pass_queries_, next_queries_;  ///< sub-rays continuing behind transmissive surfaces
   std::vector<RayHit> pass_hits_;
-  std::vector<std::pair<std::size_t, double>> pass_info_, next_info_;  ///< (sub-ray index, path transmittance)
+  struct Pass {
+    std::size_t ray;  ///< sub-ray index in the batch
+    double path_t;    ///< one-way power factor so far (transmittances, specular fractions)
+    double path_m;    ///< folded paths (after a mirror): the path length to the new origin; else unused
+    bool folded;
+  };
+  std::vector<Pass> pass_info_, next_info_;
+  /// Returns stored per firing: sub-rays * max_surfaces_per_ray (+ 1 bloom return when blooming is on).
+  std::size_t return_capacity_ = 0;
+  double RangeSigma(const Echo& e) const;
+  double RangeBias(int reflectivity_byte) const;
+  void AddBloom(std::size_t n_firings);
+  struct RetroSphere {
+    Eigen::Vector3d center;
+    double radius_m;
+  };
+  std::vector<RetroSphere> retro_spheres_;
+  std::vector<BeamSample> halo_pattern_;
+  std::vector<RayQuery> halo_queries_;
+  std::vector<RayHit> halo_hits_;
+  std::vector<std::size_t> halo_firings_;
   std::vector<Echo> echoes_;
 };
 

@@ -58,6 +58,7 @@ struct SurfaceReturn {
   double range_m = 0.0;       ///< true range along the sub-ray
   double power = 0.0;
   bool retroreflective = false;
+  double cos_incidence = 1.0;  ///< of the sub-ray on the surface
 };
 
 /// A detectable pulse at the receiver.
@@ -65,6 +66,7 @@ struct Echo {
   double range_m = 0.0;       ///< power-weighted mean range of the merged returns (noise-free)
   double power = 0.0;         ///< summed power
   bool retroreflective = false;  ///< most of its power comes from retroreflective surfaces
+  double cos_incidence = 1.0;    ///< power-weighted mean over the merged returns
 };
 
 /// Sorts `returns` by range and merges them into echoes (see the file comment). Returns of zero power are
@@ -73,12 +75,13 @@ inline void FormEchoes(SurfaceReturn* returns, std::size_t n, double separation_
   std::sort(returns, returns + n, [](const SurfaceReturn& a, const SurfaceReturn& b) {
     return a.range_m < b.range_m;
   });
-  double first_m = 0.0, weighted_m = 0.0, retro_power = 0.0;
+  double first_m = 0.0, weighted_m = 0.0, retro_power = 0.0, weighted_cos = 0.0;
   bool open = false;
   auto close = [&] {
     if (!open) return;
     Echo& e = echoes->back();
     e.range_m = weighted_m / e.power;
+    e.cos_incidence = weighted_cos / e.power;
     e.retroreflective = retro_power > 0.5 * e.power;
     open = false;
   };
@@ -89,12 +92,13 @@ inline void FormEchoes(SurfaceReturn* returns, std::size_t n, double separation_
       close();
       echoes->push_back(Echo{});
       first_m = r.range_m;
-      weighted_m = retro_power = 0.0;
+      weighted_m = retro_power = weighted_cos = 0.0;
       open = true;
     }
     Echo& e = echoes->back();
     e.power += r.power;
     weighted_m += r.power * r.range_m;
+    weighted_cos += r.power * r.cos_incidence;
     if (r.retroreflective) retro_power += r.power;
   }
   close();

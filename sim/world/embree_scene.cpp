@@ -112,6 +112,24 @@ bool VisitPointQueryCandidate(RTCPointQueryFunctionArguments* args) {
   return true;  // the radius shrank: Embree re-culls the remaining nodes
 }
 
+/// Bounds of the static triangles of retroreflective materials, one box per primitive.
+std::vector<Eigen::AlignedBox3d> RetroreflectiveBounds(const TriangleMesh& mesh) {
+  std::vector<Eigen::AlignedBox3d> boxes;
+  std::vector<int> box_of_primitive;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!mesh.materials[static_cast<std::size_t>(mesh.material_ids[t])].retroreflective) continue;
+    const std::size_t p = static_cast<std::size_t>(t < mesh.primitive_ids.size() ? std::max(mesh.primitive_ids[t], 0) : 0);
+    if (box_of_primitive.size() <= p) box_of_primitive.resize(p + 1, -1);
+    if (box_of_primitive[p] < 0) {
+      box_of_primitive[p] = static_cast<int>(boxes.size());
+      boxes.emplace_back();
+    }
+    Eigen::AlignedBox3d& box = boxes[static_cast<std::size_t>(box_of_primitive[p])];
+    for (int k = 0; k < 3; ++k) box.extend(mesh.vertices_m[mesh.triangles[t][k]]);
+  }
+  return boxes;
+}
+
 }  // namespace
 
 Status EmbreeScene::AddTriangles(RTCScene target, const TriangleMesh& mesh, Part* part) {
@@ -153,6 +171,7 @@ Status EmbreeScene::Create(const TriangleMesh& mesh, std::unique_ptr<EmbreeScene
   es->scene_ = NewScene(es->device_, false);
   if (Status s = es->AddTriangles(es->scene_, mesh, &es->static_part_); !s) return s;
   es->materials_ = mesh.materials;
+  es->retro_bounds_ = RetroreflectiveBounds(mesh);
   *out = std::move(es);
   return Status::Ok();
 }
@@ -191,6 +210,7 @@ Status EmbreeScene::Create(const Scene& scene, std::unique_ptr<EmbreeScene>* out
     if (Status s = es->AddObject(scene, object); !s) return s;
   }
   es->materials_ = mesh.materials;
+  es->retro_bounds_ = RetroreflectiveBounds(mesh);
   es->SetTime(t0);
   if (Status s = DeviceStatus(es->device_, "top-level commit"); !s) return s;
   *out = std::move(es);

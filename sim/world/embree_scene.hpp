@@ -95,6 +95,9 @@ class EmbreeScene {
 
   const Material& material(int id) const { return materials_.at(static_cast<std::size_t>(id)); }
   const std::vector<Material>& materials() const { return materials_; }
+  /// World-frame bounds of the static world's retroreflective surfaces, one box per scene primitive (or mesh
+  /// triangle set without primitive ids); for the VLP-16 twin's blooming.
+  const std::vector<Eigen::AlignedBox3d>& retroreflective_bounds() const { return retro_bounds_; }
   /// Static triangles plus every dynamic object's body triangles.
   std::size_t num_triangles() const;
 
@@ -125,6 +128,7 @@ class EmbreeScene {
   std::vector<Object> objects_;
   std::vector<int> object_of_instance_;  ///< top-level geometry id -> object index (-1: the static world)
   std::vector<Material> materials_;
+  std::vector<Eigen::AlignedBox3d> retro_bounds_;
   Seconds time_s_ = 0.0;
 };
 

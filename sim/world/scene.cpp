@@ -82,6 +82,9 @@ void SceneParser::ParseMaterials(const Section& at, const YAML::Node& list, Scen
     if (!(m.transmittance >= 0.0 && m.transmittance < 1.0 && m.albedo + m.transmittance <= 1.0))
       Fail(item, node["transmittance"], "transmittance must be in [0, 1) with albedo + transmittance <= 1 in "
                                         "material '" + m.name + "'");
+    if (!(m.specular >= 0.0 && m.albedo + m.transmittance + m.specular <= 1.0))
+      Fail(item, node, "specular must be >= 0 with albedo + transmittance + specular <= 1 in material '" + m.name +
+                           "'");
     const int existing = scene->FindMaterial(m.name);
     if (existing >= static_cast<int>(base_materials_)) Fail(item, node, "material '" + m.name + "' defined twice");
     if (!m.texture.empty() && !FindTexture(scene->textures, m.texture))

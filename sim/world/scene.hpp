@@ -32,9 +32,12 @@ struct Material {
   /// for textured materials (the texture carries the colour) and to 0.7 grey otherwise.
   Eigen::Vector3d color_rgb = Eigen::Vector3d(0.7, 0.7, 0.7);
   /// LiDAR only: fraction of the power a surface of this material passes on (glass, porous foliage), [0, 1),
-  /// with albedo + transmittance <= 1. The sim adds every material with transmittance > 0 to the caster's
-  /// lidar.material_transmittance unless the run's config lists that material itself (sim/sim_runner.cpp).
+  /// with albedo + transmittance + specular <= 1. The sim adds every material with transmittance > 0 to the
+  /// caster's lidar.material_transmittance unless the run's config lists that material itself (sim/sim_runner.cpp).
   double transmittance = 0.0;
+  /// Fraction of the LiDAR beam reflected specularly (a mirror: ~0.9; albedo + transmittance + specular <= 1);
+  /// the VLP-16 twin follows it when its specular_reflections switch is on (docs/lidar_model.md).
+  double specular = 0.0;
 };
 
 enum class PrimitiveType { kBox, kQuad, kCylinder, kMesh };

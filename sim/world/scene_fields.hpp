@@ -70,8 +70,8 @@ void ForEachItem(const Section& at, const YAML::Node& node, Fn parse) {
 template <class V>
 void Visit(V& v, Material& m) {
   v("name", yaml::Required(&m.name)), v("albedo", yaml::Required(&m.albedo));
-  v("retroreflective", &m.retroreflective), v("texture", &m.texture), v("color", scene_io::Color(&m.color_rgb));
-  v("transmittance", &m.transmittance);
+  v("retroreflective", &m.retroreflective), v("specular", &m.specular), v("texture", &m.texture);
+  v("color", scene_io::Color(&m.color_rgb)), v("transmittance", &m.transmittance);
 }
 
 template <class V>

@@ -53,7 +53,8 @@ bool ValidateMaterial(const Material& m, const std::vector<TextureSpec>& texture
   const std::string where = "material '" + m.name + "': ";
   if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return Fail(error, where + "albedo not in [0, 1]");
   if (!(m.transmittance >= 0.0 && m.transmittance < 1.0)) return Fail(error, where + "transmittance not in [0, 1)");
-  if (m.albedo + m.transmittance > 1.0) return Fail(error, where + "albedo + transmittance exceeds 1");
+  if (!(m.specular >= 0.0)) return Fail(error, where + "specular below 0");
+  if (m.albedo + m.transmittance + m.specular > 1.0) return Fail(error, where + "albedo + transmittance + specular exceeds 1");
   if (!(m.color_rgb.minCoeff() >= 0.0 && m.color_rgb.maxCoeff() <= 1.0)) {
     return Fail(error, where + "color entries not in [0, 1]");
   }

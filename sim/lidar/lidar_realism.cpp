@@ -4,7 +4,7 @@
 namespace rotolidar::sim {
 namespace {
 
-// The noise model fitted to the real capture (docs/lidar_model.md, section 5).
+// The noise model fitted to the real capture (ApplyFittedVlp16Noise) (docs/lidar_model.md, section 5).
 constexpr double kTypicalS0 = 0.020;  // [m]
 constexpr double kTypicalS1 = 0.0;    // [m/m]
 constexpr double kTypicalK = 2.5;
@@ -16,6 +16,14 @@ std::vector<std::array<double, 2>> RangeWalk(double scale) {
 }
 
 }  // namespace
+
+void ApplyFittedVlp16Noise(Vlp16CasterConfig* c) {
+  c->range_noise_sigma_m = kTypicalS0;
+  c->range_noise_per_m = kTypicalS1;
+  c->range_noise_incidence_exponent = kTypicalK;
+  c->range_noise_min_cos = 0.1;
+  c->range_noise_weak_power = 0.0;
+}
 
 void ApplyLidarRealism(Realism r, Vlp16CasterConfig* c) {
   const Vlp16CasterConfig ideal;
@@ -32,11 +40,17 @@ void ApplyLidarRealism(Realism r, Vlp16CasterConfig* c) {
   c->beam_rings = ideal.beam_rings;
   if (r == Realism::kIdeal) return;
   const bool harsh = r == Realism::kHarsh;
-  // Fitted to the einride capture (docs/lidar_model.md, section 5); harsh: x1.5 (a dirty or scratched window).
-  c->range_noise_sigma_m = (harsh ? 1.5 : 1.0) * kTypicalS0;
-  c->range_noise_per_m = (harsh ? 1.5 : 1.0) * kTypicalS1;
-  c->range_noise_incidence_exponent = kTypicalK;
-  c->range_noise_min_cos = 0.1;
+  ApplyFittedVlp16Noise(c);
+  if (harsh) {
+    // A dirty or scratched window: 1.5x the fitted noise, and weak echoes noisier still.
+    c->range_noise_sigma_m *= 1.5;
+    c->range_noise_per_m *= 1.5;
+  } else {
+    // Typical keeps the fitted floor but grows it only as 1/cos up to 60 deg (at most 2x): with the full fit's
+    // growth (5.7x at 60 deg) the core diverges in the box room (docs/lidar_model.md, "Presets").
+    c->range_noise_incidence_exponent = 1.0;
+    c->range_noise_min_cos = 0.5;
+  }
   c->range_noise_weak_power = harsh ? 0.15 : 0.0;  // the fit found no need for it; a dirty window weakens echoes
   c->range_noise_weak_max_gain = 3.0;
   c->range_bias_curve = RangeWalk(harsh ? 2.0 : 1.0);

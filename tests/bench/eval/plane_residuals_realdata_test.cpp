@@ -32,10 +32,10 @@ TEST(PlaneResidualsRealdata, EinrideCaptureGivesTheReportedNumbers) {
   EXPECT_LT(r.by_incidence.front().median_abs_m * 2.5, r.by_incidence.back().median_abs_m);
 }
 
-// The twin with the typical preset's noise in box_room (static, 2.5, 1.5, 1.0 m: walls 1.5..7.5 m away) agrees
+// The twin with the fitted noise model in box_room (static, 2.5, 1.5, 1.0 m: walls 1.5..7.5 m away) agrees
 // with the real capture's overall median and p90 within the 30 % bar the fit was made to (measured: ratios 1.00
 // and 0.74).
-TEST(PlaneResidualsRealdata, TwinWithTheTypicalPresetMatchesTheRealCapture) {
+TEST(PlaneResidualsRealdata, TwinWithTheFittedNoiseMatchesTheRealCapture) {
   ROTOLIDAR_REQUIRE_DATA(dir, "vlp16_einride");
   std::vector<LidarScan> real_scans, twin_scans;
   ASSERT_TRUE(LoadLidarRevolutions(dir + "/recording.bin", &real_scans).ok);
@@ -43,10 +43,7 @@ TEST(PlaneResidualsRealdata, TwinWithTheTypicalPresetMatchesTheRealCapture) {
   t.scene = "box_room";
   t.T_world_lidar.translation() = Eigen::Vector3d(2.5, 1.5, 1.0);
   t.revolutions = 4;  // 4 of 13 for speed: the twin's median/p90 move < 2 % (4 vs 13 revolutions measured)
-  sim::ApplyLidarRealism(sim::Realism::kTypical, &t.lidar);
-  t.lidar.range_bias_curve.clear();  // the fit is of the noise alone: a bias is a plane offset here
-  t.lidar.bloom_halo_mrad = 0.0;
-  t.lidar.beam_rings = 0;
+  sim::ApplyFittedVlp16Noise(&t.lidar);  // the noise alone (a range bias would be a plane offset here)
   const Status captured = CaptureTwinRevolutions(t, &twin_scans);
   ASSERT_TRUE(captured.ok) << captured.message;
   PlaneResidualResult real, twin;

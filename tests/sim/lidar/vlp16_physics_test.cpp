@@ -241,6 +241,7 @@ TEST(Vlp16Physics, PresetsIdealIsTheDefaultAndHarshIsNoisier) {
   EXPECT_FALSE(typical.range_bias_curve.empty());
   EXPECT_GT(harsh.range_noise_sigma_m, typical.range_noise_sigma_m);
   EXPECT_GT(harsh.bloom_halo_mrad, typical.bloom_halo_mrad);
+  EXPECT_GT(harsh.range_noise_incidence_exponent, typical.range_noise_incidence_exponent);  // the full fit
   EXPECT_GT(std::abs(harsh.range_bias_curve.front()[1]), std::abs(typical.range_bias_curve.front()[1]));
 }
 

@@ -48,7 +48,8 @@ TEST(Hdl64Caster, ElevationTableIsKittisLayout) {
   EXPECT_DOUBLE_EQ(Hdl64ElevationDeg(63), -24.33);
   for (int i = 1; i < kHdl64Lasers; ++i) {
     const double step = Hdl64ElevationDeg(i - 1) - Hdl64ElevationDeg(i);
-    EXPECT_NEAR(step, i < 32 ? 1.0 / 3.0 : (i == 32 ? 8.83 - (2.0 + 31.0 / 3.0) : 0.5), 1e-9)  // 0.497 between blocks << "laser " << i;
+    // 1/3 deg in the upper block, 1/2 in the lower, 0.497 deg between the blocks
+    EXPECT_NEAR(step, i < 32 ? 1.0 / 3.0 : (i == 32 ? 8.83 - (31.0 / 3.0 - 2.0) : 0.5), 1e-9) << "laser " << i;
     const Eigen::Vector3d d = Hdl64Caster::RayDirection(i, 1.234);
     EXPECT_NEAR(d.norm(), 1.0, 1e-12);
     EXPECT_NEAR(std::asin(d.z()) / kDeg, Hdl64ElevationDeg(i), 1e-9);

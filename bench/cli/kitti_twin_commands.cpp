@@ -37,6 +37,7 @@ Status ReadTwinOptions(const OptionParser& p, KittiTwinOptions* o) {
   o->seed = uint64_t(seed);
   o->lidar.firings_per_revolution = int(firings);
   if (Status s = p.GetDouble("range-sigma", &o->lidar.range_noise_sigma_m); !s) return s;
+  if (Status s = p.GetDouble("elevation-error", &o->lidar.elevation_error_deg); !s) return s;
   if (o->poses_path.empty())
     return Status::Error("--poses is required (or set ROTOLIDAR_DATA to find kitti_poses/" + o->sequence + ".txt)");
   if (o->scene.empty())
@@ -63,6 +64,7 @@ int CmdKittiTwin(int argc, char** argv) {
   p.Add("poses", "", "-", "ground-truth poses (default $ROTOLIDAR_DATA/kitti_poses/<seq>.txt)");
   p.Add("scene", "", "-", "scene name or file in the generator's frame (default: urban_loop for 07)");
   p.Add("range-sigma", std::to_string(defaults.lidar.range_noise_sigma_m), "m", "range noise, 1 sigma");
+  p.Add("elevation-error", "0", "deg", "intrinsic vertical-angle error of every reported point (KITTI's: ~0.22)");
   p.Add("firings", std::to_string(defaults.lidar.firings_per_revolution), "-", "firing columns per revolution");
   p.AddFlag("compensate", "motion-compensate the bins with the true poses (as KITTI's published bins are)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;

@@ -57,6 +57,8 @@ KittiSequenceInfo TwinInfo(const KittiTwinOptions& o, const std::string& scene_p
   info.returns = "single (first surface hit)";
   info.source = "kitti-twin: KITTI " + o.sequence + " ground-truth poses, scene " + scene_path + ", seed " +
                 std::to_string(o.seed);
+  if (o.lidar.elevation_error_deg != 0.0)
+    info.source += ", elevation error " + std::to_string(o.lidar.elevation_error_deg) + " deg";
   return info;
 }
 

@@ -47,6 +47,7 @@ bool Hdl64CasterConfig::Validate(std::string* error) const {
   if (!(intensity_attenuation_per_m >= 0.0 && intensity_attenuation_per_m < 1.0)) {
     return Fail(error, "hdl64.intensity_attenuation_per_m must be in [0, 1)");
   }
+  if (!(std::abs(elevation_error_deg) <= 5.0)) return Fail(error, "hdl64.elevation_error_deg must be in [-5, 5]");
   if (!(columns_per_chunk >= 1 && columns_per_chunk <= 4096)) {
     return Fail(error, "hdl64.columns_per_chunk must be in 1..4096");
   }
@@ -64,7 +65,11 @@ Hdl64Caster::Hdl64Caster(EmbreeScene* scene, const Hdl64CasterConfig& config, ui
   ROTOLIDAR_CHECK(scene_ != nullptr, "Hdl64Caster needs a scene");
   ROTOLIDAR_CHECK(config_.Validate(&error), error);
   cos_grazing_cutoff_ = std::cos(config_.grazing_cutoff_deg * kDegToRad);
-  for (int i = 0; i < kHdl64Lasers; ++i) dir0_[size_t(i)] = RayDirection(i, 0.0);
+  for (int i = 0; i < kHdl64Lasers; ++i) {
+    dir0_[size_t(i)] = RayDirection(i, 0.0);
+    const double e = (Hdl64ElevationDeg(i) + config_.elevation_error_deg) * kDegToRad;
+    reported0_[size_t(i)] = Eigen::Vector3d(std::cos(e), 0.0, std::sin(e));
+  }
   const size_t n = size_t(config_.columns_per_chunk) * kHdl64Lasers;
   queries_.resize(n);
   hits_.resize(n);
@@ -123,7 +128,12 @@ void Hdl64Caster::CastChunk(Seconds t0_s, int first_column, int columns,
     if (reflectance < config_.min_reflectance) continue;
     const int laser = int(q / size_t(columns));
     const int column = first_column + int(q % size_t(columns));
-    const Eigen::Vector3d p = range_m * dir_lidar_[q];
+    Eigen::Vector3d p = range_m * dir_lidar_[q];
+    if (config_.elevation_error_deg != 0.0) {  // the same azimuth, the reported elevation
+      const Eigen::Vector3d& r0 = reported0_[size_t(laser)];
+      const Eigen::Vector2d u = dir_lidar_[q].head<2>().normalized();
+      p = range_m * Eigen::Vector3d(r0.x() * u.x(), r0.x() * u.y(), r0.z());
+    }
     lines_[size_t(laser)].push_back(Hdl64Point{float(p.x()), float(p.y()), float(p.z()), float(reflectance),
                                                float(column * dt_s), uint8_t(laser)});
   }

@@ -12,7 +12,8 @@
 // the S2 fires its lasers within ~50 us, 1.5 mm of car travel at 30 m/s, neglected). This is the order KITTI's bins
 // store each scan line in (counter-clockwise, from straight ahead), which the core's KITTI reader takes as the
 // firing order. Ray origin = the LiDAR origin (the lasers' few-cm offsets on the head are not modelled).
-// Per point: range = first hit of the ray + N(0, range_noise_sigma_m); a ray that hits nothing within max_range_m,
+// Per point: range = first hit of the ray + N(0, range_noise_sigma_m), reported along the laser's direction
+// (with elevation_error_deg added to its elevation); a ray that hits nothing within max_range_m,
 // a measured range outside [min_range_m, max_range_m], incidence beyond grazing_cutoff_deg or a reflectance under
 // min_reflectance gives no point. Reflectance = albedo * cos(incidence) * exp(-attenuation * range), in [0, 1].
 // Dynamic objects: the scene is moved to the chunk's time (EmbreeScene::SetTime) before each chunk of
@@ -49,6 +50,10 @@ struct Hdl64CasterConfig {
   double grazing_cutoff_deg = 88.0;
   double min_reflectance = 0.01;     ///< weaker returns give no point
   double intensity_attenuation_per_m = 0.004;  ///< residual range falloff of the reflectance
+  /// Intrinsic vertical-angle error [deg]: every point is reported at its laser's elevation + this (the ray is
+  /// cast at the true one), bending flat ground into a shallow cone. IMLS-SLAM (Deschaud, ICRA 2018) found
+  /// KITTI's bins need a 0.22 deg correction of this kind. 0 = a perfectly calibrated sensor.
+  double elevation_error_deg = 0.0;
   int columns_per_chunk = 50;        ///< columns cast per Embree batch (and per SetTime of dynamic objects)
   /// True when usable; otherwise false with the field named in *error.
   bool Validate(std::string* error) const;
@@ -87,6 +92,7 @@ class Hdl64Caster {
   RandomStream range_rng_;
   double cos_grazing_cutoff_ = 0.0;
   std::array<Eigen::Vector3d, kHdl64Lasers> dir0_{};  ///< directions at azimuth 0
+  std::array<Eigen::Vector3d, kHdl64Lasers> reported0_{};  ///< reported directions at azimuth 0 (elevation error)
   std::vector<RayQuery> queries_;                   ///< laser-major within a chunk
   std::vector<RayHit> hits_;
   std::vector<Eigen::Vector3d> dir_lidar_;          ///< per query

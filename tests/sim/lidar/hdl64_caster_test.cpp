@@ -153,6 +153,22 @@ TEST(Hdl64Caster, SameSeedSameBytesOtherSeedOtherBytes) {
   EXPECT_FALSE(same(a, c));
 }
 
+// An intrinsic vertical-angle error reports every point 0.22 deg above its laser's elevation at the true range:
+// flat ground then reads as a cone (a laser at -10 deg sees the floor 1.73 / sin(10 deg) away but reports it
+// 3.8 cm higher).
+TEST(Hdl64Caster, ElevationErrorTiltsTheReportedPoints) {
+  Hdl64CasterConfig config = Config(0.0);
+  config.elevation_error_deg = 0.22;
+  const auto points = OneRevolution(testing::BigFloor(), config, 1, [](Seconds) { return At({0, 0, kHeightM}); });
+  ASSERT_EQ(points.size(), 55u * size_t(config.firings_per_revolution));  // the same rays hit as without it
+  for (const Hdl64Point& p : points) {
+    const Eigen::Vector3d x(p.x_m, p.y_m, p.z_m);
+    const double elevation = Hdl64ElevationDeg(p.laser);
+    ASSERT_NEAR(std::asin(x.z() / x.norm()) / kDeg, elevation + 0.22, 1e-4);
+    ASSERT_NEAR(x.norm(), kHeightM / std::sin(-elevation * kDeg), 2e-5 * x.norm());
+  }
+}
+
 TEST(Hdl64Caster, ValidateNamesTheField) {
   std::string error;
   Hdl64CasterConfig c;

@@ -13,6 +13,7 @@ int CmdReplay(int argc, char** argv);
 int CmdScene(int argc, char** argv);
 int CmdExport(int argc, char** argv);     ///< bench/cli/kitti_commands.cpp
 int CmdSlamKitti(int argc, char** argv);  ///< `slam --kitti DIR` (CmdSlam dispatches to it)
+int CmdKittiTwin(int argc, char** argv);  ///< bench/cli/kitti_twin_commands.cpp
 int CmdMapEval(int argc, char** argv);
 int CmdStudy(int argc, char** argv);
 

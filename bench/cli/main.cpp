@@ -23,13 +23,14 @@ const Command kCommands[] = {
     {"replay", rotolidar::bench::CmdReplay, "send a recording's VLP-16 packets over UDP at N x real time"},
     {"scene", rotolidar::bench::CmdScene, "inspect scenes: list, show (top and perspective pictures)"},
     {"export", rotolidar::bench::CmdExport, "write a recording as a KITTI odometry sequence (bins, times, calib, poses)"},
+    {"kitti-twin", rotolidar::bench::CmdKittiTwin, "simulate KITTI's HDL-64E car on a KITTI path; write a KITTI sequence"},
     {"mapeval", rotolidar::bench::CmdMapEval, "map metrics vs the scene: coverage, density, distance, elements"},
     {"study", rotolidar::bench::CmdStudy, "trade studies: sweep sim parameters, run each point, table + plots"},
 };
 
 void PrintUsage(std::ostream& os) {
   os << "usage: rotolidar <command> [options]   (rotolidar <command> --help for its options)\n\ncommands:\n";
-  for (const Command& c : kCommands) os << "  " << c.name << std::string(10 - std::strlen(c.name), ' ') << c.summary << "\n";
+  for (const Command& c : kCommands) os << "  " << c.name << std::string(std::strlen(c.name) < 10 ? 10 - std::strlen(c.name) : 1, ' ') << c.summary << "\n";
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 #include "bench/cli/options.hpp"
 #include "bench/run/kitti_twin.hpp"
 #include "bench/run/progress.hpp"
+#include "core/io/yaml_fields.hpp"
+#include "sim/realism.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -27,7 +29,12 @@ Status ReadTwinOptions(const OptionParser& p, KittiTwinOptions* o) {
   o->out_dir = p.Get("out");
   o->poses_path = p.Get("poses").empty() ? DefaultPoses(o->sequence) : p.Get("poses");
   o->scene = p.Get("scene").empty() ? KittiTwinDefaultScene(o->sequence) : p.Get("scene");
-  o->motion_compensate = p.Flag("compensate");
+  // The realism preset first (what KITTI's published bins carry), then the explicit flags.
+  sim::Realism realism = sim::Realism::kTypical;
+  if (!yaml::EnumFromWord(p.Get("realism"), &realism))
+    return Status::Error("--realism: " + yaml::EnumWordsText<sim::Realism>() + " (got '" + p.Get("realism") + "')");
+  o->motion_compensate = realism != sim::Realism::kHarsh || p.Flag("compensate");
+  o->lidar.elevation_error_deg = realism == sim::Realism::kIdeal ? 0.0 : kKittiElevationErrorDeg;
   long frames = 0, seed = 0, firings = 0;
   if (Status s = p.GetInt("frames", &frames); !s) return s;
   if (Status s = p.GetInt("seed", &seed); !s) return s;
@@ -37,7 +44,8 @@ Status ReadTwinOptions(const OptionParser& p, KittiTwinOptions* o) {
   o->seed = uint64_t(seed);
   o->lidar.firings_per_revolution = int(firings);
   if (Status s = p.GetDouble("range-sigma", &o->lidar.range_noise_sigma_m); !s) return s;
-  if (Status s = p.GetDouble("elevation-error", &o->lidar.elevation_error_deg); !s) return s;
+  if (p.IsSet("elevation-error"))
+    if (Status s = p.GetDouble("elevation-error", &o->lidar.elevation_error_deg); !s) return s;
   if (o->poses_path.empty())
     return Status::Error("--poses is required (or set ROTOLIDAR_DATA to find kitti_poses/" + o->sequence + ".txt)");
   if (o->scene.empty())
@@ -54,8 +62,8 @@ Status ReadTwinOptions(const OptionParser& p, KittiTwinOptions* o) {
 int CmdKittiTwin(int argc, char** argv) {
   const KittiTwinOptions defaults;
   OptionParser p("kitti-twin", "Simulate KITTI's HDL-64E car on a KITTI ground-truth path through a generated street "
-                               "scene and write it as a KITTI odometry sequence: velodyne/ bins (not motion-"
-                               "compensated unless --compensate), velodyne_times/, poses.txt, times.txt, calib.txt, "
+                               "scene and write it as a KITTI odometry sequence: velodyne/ bins (motion-"
+                               "compensated with the true poses except under --realism harsh), velodyne_times/, poses.txt, times.txt, calib.txt, "
                                "sequence_info.txt; read it with `slam --kitti DIR` (docs/kitti.md).");
   p.Add("seq", defaults.sequence, "-", "KITTI sequence (07 has the committed scene urban_loop)");
   p.Add("out", "", "-", "output sequence folder (required)");
@@ -64,9 +72,13 @@ int CmdKittiTwin(int argc, char** argv) {
   p.Add("poses", "", "-", "ground-truth poses (default $ROTOLIDAR_DATA/kitti_poses/<seq>.txt)");
   p.Add("scene", "", "-", "scene name or file in the generator's frame (default: urban_loop for 07)");
   p.Add("range-sigma", std::to_string(defaults.lidar.range_noise_sigma_m), "m", "range noise, 1 sigma");
-  p.Add("elevation-error", "0", "deg", "intrinsic vertical-angle error of every reported point (KITTI's: ~0.22)");
+  p.Add("realism", "typical", "-",
+        "ideal: bins compensated with the true poses, exact angles | typical: as KITTI's published bins, also "
+        "with their 0.22 deg vertical-angle error | harsh: typical, not motion-compensated");
+  p.Add("elevation-error", "(preset)", "deg", "intrinsic vertical-angle error of every reported point (overrides "
+        "the preset's)");
   p.Add("firings", std::to_string(defaults.lidar.firings_per_revolution), "-", "firing columns per revolution");
-  p.AddFlag("compensate", "motion-compensate the bins with the true poses (as KITTI's published bins are)");
+  p.AddFlag("compensate", "motion-compensate the bins with the true poses even under --realism harsh");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   KittiTwinOptions o;
   if (p.Get("out").empty()) {

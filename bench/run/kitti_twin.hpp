@@ -34,6 +34,11 @@ KittiCalib KittiTwinCalib();
 /// The default scene of a sequence: "urban_loop" for "07" (generated along KITTI 07 in the same frame), else "".
 std::string KittiTwinDefaultScene(const std::string& sequence);
 
+/// The vertical-angle error of KITTI's published velodyne bins: their points need their elevation corrected by
+/// about 0.22 deg (J.-E. Deschaud, "IMLS-SLAM: scan-to-model matching based on 3D data", ICRA 2018), the
+/// `typical` and `harsh` twins carry it.
+constexpr double kKittiElevationErrorDeg = 0.22;
+
 struct KittiTwinOptions {
   std::string sequence = "07";   ///< only named in sequence_info.txt
   std::string poses_path;        ///< KITTI ground-truth poses of the sequence (cam0, 12 numbers a line)

@@ -6,17 +6,14 @@
 #include <cmath>
 
 #include "core/util/log.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::sim {
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 }  // namespace
 
@@ -28,28 +25,30 @@ double Hdl64ElevationDeg(int laser) {
 
 bool Hdl64CasterConfig::Validate(std::string* error) const {
   if (!(revolution_hz >= 5.0 && revolution_hz <= 20.0)) {
-    return Fail(error, "hdl64.revolution_hz must be in [5, 20] (the HDL-64E's spin range)");
+    return FailValidation(error, "hdl64.revolution_hz must be in [5, 20] (the HDL-64E's spin range)");
   }
   if (!(firings_per_revolution >= 36 && firings_per_revolution <= 20000)) {
-    return Fail(error, "hdl64.firings_per_revolution must be in [36, 20000]");
+    return FailValidation(error, "hdl64.firings_per_revolution must be in [36, 20000]");
   }
   if (!(range_noise_sigma_m >= 0.0 && range_noise_sigma_m < 1.0)) {
-    return Fail(error, "hdl64.range_noise_sigma_m must be in [0, 1)");
+    return FailValidation(error, "hdl64.range_noise_sigma_m must be in [0, 1)");
   }
-  if (!(min_range_m >= 0.0)) return Fail(error, "hdl64.min_range_m must be >= 0");
+  if (!(min_range_m >= 0.0)) return FailValidation(error, "hdl64.min_range_m must be >= 0");
   if (!(max_range_m > min_range_m && max_range_m <= 1000.0)) {
-    return Fail(error, "hdl64.max_range_m must be in (min_range_m, 1000]");
+    return FailValidation(error, "hdl64.max_range_m must be in (min_range_m, 1000]");
   }
   if (!(grazing_cutoff_deg > 0.0 && grazing_cutoff_deg <= 90.0)) {
-    return Fail(error, "hdl64.grazing_cutoff_deg must be in (0, 90]");
+    return FailValidation(error, "hdl64.grazing_cutoff_deg must be in (0, 90]");
   }
-  if (!(min_reflectance >= 0.0 && min_reflectance < 1.0)) return Fail(error, "hdl64.min_reflectance must be in [0, 1)");
+  if (!(min_reflectance >= 0.0 && min_reflectance < 1.0))
+    return FailValidation(error, "hdl64.min_reflectance must be in [0, 1)");
   if (!(intensity_attenuation_per_m >= 0.0 && intensity_attenuation_per_m < 1.0)) {
-    return Fail(error, "hdl64.intensity_attenuation_per_m must be in [0, 1)");
+    return FailValidation(error, "hdl64.intensity_attenuation_per_m must be in [0, 1)");
   }
-  if (!(std::abs(elevation_error_deg) <= 5.0)) return Fail(error, "hdl64.elevation_error_deg must be in [-5, 5]");
+  if (!(std::abs(elevation_error_deg) <= 5.0))
+    return FailValidation(error, "hdl64.elevation_error_deg must be in [-5, 5]");
   if (!(columns_per_chunk >= 1 && columns_per_chunk <= 4096)) {
-    return Fail(error, "hdl64.columns_per_chunk must be in 1..4096");
+    return FailValidation(error, "hdl64.columns_per_chunk must be in 1..4096");
   }
   return true;
 }

@@ -1,13 +1,15 @@
 // Simulated VLP-16 head: schedule, ray casting in batches, beam/echo, range and intensity model (see the header).
 #include "sim/lidar/vlp16_caster.hpp"
-#include "core/util/log.hpp"
 
 #include <algorithm>
+#include <boost/random/normal_distribution.hpp>
 #include <cmath>
 
-#include <boost/random/normal_distribution.hpp>
+#include "core/util/log.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::sim {
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -16,11 +18,6 @@ constexpr int kLasers = 16;
 constexpr int kSequencesPerBatch = 32;  // 512 firings per Embree stream call
 constexpr double kMaxEncodableRangeM = 65535 * kVlp16DistanceUnitM;
 constexpr double kPassThroughM = 1e-4;  // a transmitted sub-ray restarts this far behind the surface it crossed
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 /// RandomStream as a UniformRandomBitGenerator for Boost's normal distribution: the Marsaglia-Tsang ziggurat
 /// (header-only, a fixed algorithm, unlike std::normal_distribution), ~2x faster than RandomStream::Normal's
@@ -47,49 +44,51 @@ void ReserveGeometric(std::vector<T>* v, std::size_t more) {
 }  // namespace
 
 bool Vlp16CasterConfig::Validate(std::string* error) const {
-  if (!std::isfinite(t0_s)) return Fail(error, "lidar.t0_s must be finite");
-  if (!std::isfinite(azimuth0_deg)) return Fail(error, "lidar.azimuth0_deg must be finite");
-  if (!(rpm >= 300.0 && rpm <= 1200.0)) return Fail(error, "lidar.rpm must be in [300, 1200] (the VLP-16's range)");
+  if (!std::isfinite(t0_s)) return FailValidation(error, "lidar.t0_s must be finite");
+  if (!std::isfinite(azimuth0_deg)) return FailValidation(error, "lidar.azimuth0_deg must be finite");
+  if (!(rpm >= 300.0 && rpm <= 1200.0))
+    return FailValidation(error, "lidar.rpm must be in [300, 1200] (the VLP-16's range)");
   if (!(rpm_jitter_frac >= 0.0 && rpm_jitter_frac < 0.5)) {
-    return Fail(error, "lidar.rpm_jitter_frac must be in [0, 0.5)");
+    return FailValidation(error, "lidar.rpm_jitter_frac must be in [0, 0.5)");
   }
-  if (!(rpm_jitter_tau_s > 0.0)) return Fail(error, "lidar.rpm_jitter_tau_s must be > 0");
+  if (!(rpm_jitter_tau_s > 0.0)) return FailValidation(error, "lidar.rpm_jitter_tau_s must be > 0");
   if (!(range_noise_sigma_m >= 0.0 && range_noise_sigma_m < 1.0)) {
-    return Fail(error, "lidar.range_noise_sigma_m must be in [0, 1)");
+    return FailValidation(error, "lidar.range_noise_sigma_m must be in [0, 1)");
   }
   if (!ValidateRangePhysics(error)) return false;
-  if (!(min_range_m >= 0.0)) return Fail(error, "lidar.min_range_m must be >= 0");
+  if (!(min_range_m >= 0.0)) return FailValidation(error, "lidar.min_range_m must be >= 0");
   if (!(max_range_m > min_range_m && max_range_m <= kMaxEncodableRangeM)) {
-    return Fail(error, "lidar.max_range_m must be in (min_range_m, 131.07]");
+    return FailValidation(error, "lidar.max_range_m must be in (min_range_m, 131.07]");
   }
   if (!(grazing_cutoff_deg > 0.0 && grazing_cutoff_deg <= 90.0)) {
-    return Fail(error, "lidar.grazing_cutoff_deg must be in (0, 90]");
+    return FailValidation(error, "lidar.grazing_cutoff_deg must be in (0, 90]");
   }
   if (!(min_intensity_for_return >= 0.0 && min_intensity_for_return <= 100.0)) {
-    return Fail(error, "lidar.min_intensity_for_return must be in [0, 100]");
+    return FailValidation(error, "lidar.min_intensity_for_return must be in [0, 100]");
   }
   if (!(intensity_attenuation_per_m >= 0.0 && intensity_attenuation_per_m < 1.0)) {
-    return Fail(error, "lidar.intensity_attenuation_per_m must be in [0, 1)");
+    return FailValidation(error, "lidar.intensity_attenuation_per_m must be in [0, 1)");
   }
   if (return_mode != Vlp16ReturnMode::kStrongest && return_mode != Vlp16ReturnMode::kLast &&
       return_mode != Vlp16ReturnMode::kDual) {
-    return Fail(error, "lidar.return_mode must be strongest, last or dual");
+    return FailValidation(error, "lidar.return_mode must be strongest, last or dual");
   }
-  if (!(beam_rings >= 0 && beam_rings <= 4)) return Fail(error, "lidar.beam_rings must be in 0..4");
+  if (!(beam_rings >= 0 && beam_rings <= 4)) return FailValidation(error, "lidar.beam_rings must be in 0..4");
   if (!(beam_divergence_horizontal_mrad >= 0.0 && beam_divergence_horizontal_mrad < 100.0)) {
-    return Fail(error, "lidar.beam_divergence_horizontal_mrad must be in [0, 100)");
+    return FailValidation(error, "lidar.beam_divergence_horizontal_mrad must be in [0, 100)");
   }
   if (!(beam_divergence_vertical_mrad >= 0.0 && beam_divergence_vertical_mrad < 100.0)) {
-    return Fail(error, "lidar.beam_divergence_vertical_mrad must be in [0, 100)");
+    return FailValidation(error, "lidar.beam_divergence_vertical_mrad must be in [0, 100)");
   }
   if (!(echo_separation_m > 0.0 && echo_separation_m < 100.0)) {
-    return Fail(error, "lidar.echo_separation_m must be in (0, 100)");
+    return FailValidation(error, "lidar.echo_separation_m must be in (0, 100)");
   }
   for (const auto& [name, t] : material_transmittance) {
-    if (!(t >= 0.0 && t < 1.0)) return Fail(error, "lidar.material_transmittance." + name + " must be in [0, 1)");
+    if (!(t >= 0.0 && t < 1.0))
+      return FailValidation(error, "lidar.material_transmittance." + name + " must be in [0, 1)");
   }
   if (!(max_surfaces_per_ray >= 1 && max_surfaces_per_ray <= 8)) {
-    return Fail(error, "lidar.max_surfaces_per_ray must be in 1..8");
+    return FailValidation(error, "lidar.max_surfaces_per_ray must be in 1..8");
   }
   return true;
 }

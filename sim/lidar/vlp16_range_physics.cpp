@@ -3,47 +3,41 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/util/validation.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 
 namespace rotolidar::sim {
-namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
-
-}  // namespace
 
 bool Vlp16CasterConfig::ValidateRangePhysics(std::string* error) const {
   if (!(range_noise_per_m >= 0.0 && range_noise_per_m < 0.1)) {
-    return Fail(error, "lidar.range_noise_per_m must be in [0, 0.1)");
+    return FailValidation(error, "lidar.range_noise_per_m must be in [0, 0.1)");
   }
   if (!(range_noise_incidence_exponent >= 0.0 && range_noise_incidence_exponent <= 4.0)) {
-    return Fail(error, "lidar.range_noise_incidence_exponent must be in [0, 4]");
+    return FailValidation(error, "lidar.range_noise_incidence_exponent must be in [0, 4]");
   }
   if (!(range_noise_min_cos > 0.0 && range_noise_min_cos <= 1.0)) {
-    return Fail(error, "lidar.range_noise_min_cos must be in (0, 1]");
+    return FailValidation(error, "lidar.range_noise_min_cos must be in (0, 1]");
   }
   if (!(range_noise_weak_power >= 0.0 && range_noise_weak_power <= 1.0)) {
-    return Fail(error, "lidar.range_noise_weak_power must be in [0, 1]");
+    return FailValidation(error, "lidar.range_noise_weak_power must be in [0, 1]");
   }
   if (!(range_noise_weak_max_gain >= 1.0 && range_noise_weak_max_gain <= 100.0)) {
-    return Fail(error, "lidar.range_noise_weak_max_gain must be in [1, 100]");
+    return FailValidation(error, "lidar.range_noise_weak_max_gain must be in [1, 100]");
   }
   for (std::size_t i = 0; i < range_bias_curve.size(); ++i) {
     const auto& [byte, bias_m] = range_bias_curve[i];
     if (!(byte >= 0.0 && byte <= 255.0 && std::abs(bias_m) < 1.0) ||
         (i > 0 && !(byte > range_bias_curve[i - 1][0]))) {
-      return Fail(error, "lidar.range_bias_curve: [byte, bias_m] points need increasing bytes in [0, 255] and "
-                         "|bias_m| < 1");
+      return FailValidation(error,
+                            "lidar.range_bias_curve: [byte, bias_m] points need increasing bytes in [0, 255] and "
+                            "|bias_m| < 1");
     }
   }
   if (!(bloom_halo_mrad >= 0.0 && bloom_halo_mrad <= 100.0)) {
-    return Fail(error, "lidar.bloom_halo_mrad must be in [0, 100]");
+    return FailValidation(error, "lidar.bloom_halo_mrad must be in [0, 100]");
   }
   if (!(bloom_power_fraction > 0.0 && bloom_power_fraction <= 1.0)) {
-    return Fail(error, "lidar.bloom_power_fraction must be in (0, 1]");
+    return FailValidation(error, "lidar.bloom_power_fraction must be in (0, 1]");
   }
   return true;
 }

@@ -5,36 +5,36 @@
 #include <utility>
 
 #include "core/io/yaml_fields.hpp"
+#include "core/util/validation.hpp"
 #include "sim/rig/carrier_paths.hpp"
 
 namespace rotolidar::sim {
-namespace {
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
+namespace {
 
 bool InRange(std::string* error, const std::string& field, double v, double lo, double hi) {
   if (std::isfinite(v) && v >= lo && v <= hi) return true;
   std::ostringstream os;
   os << field << " must be finite and in [" << lo << ", " << hi << "], got " << v;
-  return Fail(error, os.str());
+  return FailValidation(error, os.str());
 }
 
 bool ValidWaypoints(std::string* error, const std::string& section, const std::vector<Waypoint2d>& w,
                     bool closed_loop, int laps) {
-  if (w.size() < 2) return Fail(error, section + ".waypoints: need at least 2, got " + std::to_string(w.size()));
+  if (w.size() < 2)
+    return FailValidation(error, section + ".waypoints: need at least 2, got " + std::to_string(w.size()));
   for (size_t i = 0; i < w.size(); ++i) {
     const std::string name = section + ".waypoints[" + std::to_string(i) + "]";
-    if (!std::isfinite(w[i].x_m) || !std::isfinite(w[i].y_m)) return Fail(error, name + ": x_m/y_m not finite");
+    if (!std::isfinite(w[i].x_m) || !std::isfinite(w[i].y_m))
+      return FailValidation(error, name + ": x_m/y_m not finite");
     if (!InRange(error, name + ".dwell_s", w[i].dwell_s, 0.0, 1e5)) return false;
     const Waypoint2d& prev = i > 0 ? w[i - 1] : w.back();
     if ((i > 0 || closed_loop) && std::hypot(w[i].x_m - prev.x_m, w[i].y_m - prev.y_m) < 0.05)
-      return Fail(error, name + " is closer than 0.05 m to the waypoint before it (the heading is undefined)");
+      return FailValidation(error,
+                            name + " is closer than 0.05 m to the waypoint before it (the heading is undefined)");
   }
-  if (laps < 1 || laps > 10000) return Fail(error, section + ".laps must be in [1, 10000]");
-  if (laps > 1 && !closed_loop) return Fail(error, section + ".laps > 1 needs closed_loop: true");
+  if (laps < 1 || laps > 10000) return FailValidation(error, section + ".laps must be in [1, 10000]");
+  if (laps > 1 && !closed_loop) return FailValidation(error, section + ".laps > 1 needs closed_loop: true");
   return true;
 }
 
@@ -160,7 +160,8 @@ bool WheeledConfig::Validate(std::string* error) const {
 
 bool CarConfig::Validate(std::string* error) const {
   if (waypoints_file.empty() && waypoints.size() < 2)
-    return Fail(error, "car.waypoints_file: required, or car.waypoints with >= 2 points (or a scene with a car default path)");
+    return FailValidation(
+        error, "car.waypoints_file: required, or car.waypoints with >= 2 points (or a scene with a car default path)");
   return InRange(error, "car.height_m", height_m, 0.0, 5.0) &&
          InRange(error, "car.cruise_speed_mps", cruise_speed_mps, 0.5, 70.0) &&
          InRange(error, "car.max_lateral_accel_mps2", max_lateral_accel_mps2, 0.1, 15.0) &&
@@ -170,7 +171,7 @@ bool CarConfig::Validate(std::string* error) const {
 }
 
 bool KittiPathConfig::Validate(std::string* error) const {
-  if (poses_file.empty()) return Fail(error, "kitti.poses_file: required");
+  if (poses_file.empty()) return FailValidation(error, "kitti.poses_file: required");
   return InRange(error, "kitti.rate_hz", rate_hz, 1e-3, 1e4) && InRange(error, "kitti.height_m", height_m, -100, 100) &&
          InRange(error, "kitti.smoothing_s", smoothing_s, 0.0, 10.0) &&
          InRange(error, "kitti.start_x_m", start_x_m, -1e6, 1e6) &&
@@ -195,7 +196,7 @@ bool CarrierConfig::Validate(std::string* error) const {
     case CarrierType::kCar: return car.Validate(error);
     case CarrierType::kKitti: return kitti.Validate(error);
   }
-  return Fail(error, "carrier.type: unknown");
+  return FailValidation(error, "carrier.type: unknown");
 }
 
 Status ParseCarrierConfig(const std::string& file, const YAML::Node& node, CarrierConfig* config) {

@@ -5,29 +5,23 @@
 #include <cmath>
 #include <limits>
 
+#include "core/util/validation.hpp"
+
 namespace rotolidar::sim {
-namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
-
-}  // namespace
 
 bool SensorClock::Validate(const std::string& name, std::string* error) const {
   if (!std::isfinite(offset_s) || std::abs(offset_s) > 1.0)
-    return Fail(error, name + "_offset_s must be finite with |offset| <= 1 s");
+    return FailValidation(error, name + "_offset_s must be finite with |offset| <= 1 s");
   if (!std::isfinite(drift_ppm) || std::abs(drift_ppm) > 1000.0)
-    return Fail(error, name + "_drift_ppm must be finite with |drift| <= 1000 ppm");
+    return FailValidation(error, name + "_drift_ppm must be finite with |drift| <= 1000 ppm");
   return true;
 }
 
 bool CaptureJitterConfig::Validate(const std::string& name, std::string* error) const {
   if (!std::isfinite(latency_s) || latency_s < 0.0 || latency_s > 0.01)
-    return Fail(error, name + "_latency_s must be finite and in [0, 0.01] s");
+    return FailValidation(error, name + "_latency_s must be finite and in [0, 0.01] s");
   if (!std::isfinite(jitter_scale_s) || jitter_scale_s < 0.0 || jitter_scale_s > 0.01)
-    return Fail(error, name + "_jitter_scale_s must be finite and in [0, 0.01] s");
+    return FailValidation(error, name + "_jitter_scale_s must be finite and in [0, 0.01] s");
   return true;
 }
 

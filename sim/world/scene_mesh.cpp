@@ -2,19 +2,16 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/util/log.hpp"
+#include "core/util/validation.hpp"
 #include "sim/world/scene.hpp"
 #include "sim/world/scene_dynamic.hpp"
-#include "core/util/log.hpp"
 
 namespace rotolidar::sim {
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 bool ValidMaterialRef(int id, const std::vector<Material>& materials, bool optional) {
   if (optional && id == -1) return true;
@@ -24,26 +21,28 @@ bool ValidMaterialRef(int id, const std::vector<Material>& materials, bool optio
 bool CheckPrimitive(const Primitive& p, const std::vector<Material>& materials, std::size_t num_meshes,
                     std::string* error) {
   const std::string where = "primitive '" + p.name + "': ";
-  if (!p.center_m.allFinite() || !p.rpy_rad.allFinite()) return Fail(error, where + "non-finite center/rpy");
+  if (!p.center_m.allFinite() || !p.rpy_rad.allFinite()) return FailValidation(error, where + "non-finite center/rpy");
   if (!ValidMaterialRef(p.material_id, materials, false) || !ValidMaterialRef(p.floor_material_id, materials, true) ||
       !ValidMaterialRef(p.ceiling_material_id, materials, true)) {
-    return Fail(error, where + "unknown material");
+    return FailValidation(error, where + "unknown material");
   }
   switch (p.type) {
     case PrimitiveType::kBox:
-      if (!(p.size_m.minCoeff() > 0.0)) return Fail(error, where + "size must be > 0");
+      if (!(p.size_m.minCoeff() > 0.0)) return FailValidation(error, where + "size must be > 0");
       break;
     case PrimitiveType::kQuad:
-      if (!(p.size_m.x() > 0.0 && p.size_m.y() > 0.0)) return Fail(error, where + "size must be > 0");
+      if (!(p.size_m.x() > 0.0 && p.size_m.y() > 0.0)) return FailValidation(error, where + "size must be > 0");
       break;
     case PrimitiveType::kCylinder:
-      if (!(p.radius_m > 0.0)) return Fail(error, where + "radius must be > 0");
-      if (!(p.height_m > 0.0)) return Fail(error, where + "height must be > 0");
-      if (p.segments < 3 || p.segments > 1024) return Fail(error, where + "segments must be in [3, 1024]");
+      if (!(p.radius_m > 0.0)) return FailValidation(error, where + "radius must be > 0");
+      if (!(p.height_m > 0.0)) return FailValidation(error, where + "height must be > 0");
+      if (p.segments < 3 || p.segments > 1024) return FailValidation(error, where + "segments must be in [3, 1024]");
       break;
     case PrimitiveType::kMesh:
-      if (p.mesh_id < 0 || p.mesh_id >= static_cast<int>(num_meshes)) return Fail(error, where + "unknown mesh");
-      if (!(p.scale.minCoeff() > 0.0) || !p.scale.allFinite()) return Fail(error, where + "scale must be > 0");
+      if (p.mesh_id < 0 || p.mesh_id >= static_cast<int>(num_meshes))
+        return FailValidation(error, where + "unknown mesh");
+      if (!(p.scale.minCoeff() > 0.0) || !p.scale.allFinite())
+        return FailValidation(error, where + "scale must be > 0");
       break;
   }
   return true;
@@ -51,15 +50,17 @@ bool CheckPrimitive(const Primitive& p, const std::vector<Material>& materials, 
 
 bool ValidateMaterial(const Material& m, const std::vector<TextureSpec>& textures, std::string* error) {
   const std::string where = "material '" + m.name + "': ";
-  if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return Fail(error, where + "albedo not in [0, 1]");
-  if (!(m.transmittance >= 0.0 && m.transmittance < 1.0)) return Fail(error, where + "transmittance not in [0, 1)");
-  if (!(m.specular >= 0.0)) return Fail(error, where + "specular below 0");
-  if (m.albedo + m.transmittance + m.specular > 1.0) return Fail(error, where + "albedo + transmittance + specular exceeds 1");
+  if (!(m.albedo >= 0.0 && m.albedo <= 1.0)) return FailValidation(error, where + "albedo not in [0, 1]");
+  if (!(m.transmittance >= 0.0 && m.transmittance < 1.0))
+    return FailValidation(error, where + "transmittance not in [0, 1)");
+  if (!(m.specular >= 0.0)) return FailValidation(error, where + "specular below 0");
+  if (m.albedo + m.transmittance + m.specular > 1.0)
+    return FailValidation(error, where + "albedo + transmittance + specular exceeds 1");
   if (!(m.color_rgb.minCoeff() >= 0.0 && m.color_rgb.maxCoeff() <= 1.0)) {
-    return Fail(error, where + "color entries not in [0, 1]");
+    return FailValidation(error, where + "color entries not in [0, 1]");
   }
   if (!m.texture.empty() && !FindTexture(textures, m.texture)) {
-    return Fail(error, where + "unknown texture '" + m.texture + "'");
+    return FailValidation(error, where + "unknown texture '" + m.texture + "'");
   }
   return true;
 }
@@ -67,11 +68,11 @@ bool ValidateMaterial(const Material& m, const std::vector<TextureSpec>& texture
 bool ValidateElement(const AnnotatedElement& e, std::string* error) {
   const std::string where = "element '" + e.name + "': ";
   if (e.type != "door" && e.type != "window" && e.type != "column") {
-    return Fail(error, where + "type must be door, window or column");
+    return FailValidation(error, where + "type must be door, window or column");
   }
-  if (!(e.width_m > 0.0 && e.height_m > 0.0)) return Fail(error, where + "width/height <= 0");
+  if (!(e.width_m > 0.0 && e.height_m > 0.0)) return FailValidation(error, where + "width/height <= 0");
   if (!(e.depth_m >= 0.0) || !e.center_m.allFinite() || !std::isfinite(e.yaw_rad)) {
-    return Fail(error, where + "depth < 0 or non-finite pose");
+    return FailValidation(error, where + "depth < 0 or non-finite pose");
   }
   return true;
 }
@@ -80,15 +81,16 @@ bool ValidatePath(const std::string& carrier, const std::vector<Waypoint2d>& pat
                   std::string* error) {
   const std::string where = "path '" + carrier + "': ";
   if (carrier != "handheld" && carrier != "wheeled" && carrier != "car") {
-    return Fail(error, where + "carrier must be handheld, wheeled or car");
+    return FailValidation(error, where + "carrier must be handheld, wheeled or car");
   }
-  if (path.size() < 2) return Fail(error, where + "needs >= 2 waypoints");
+  if (path.size() < 2) return FailValidation(error, where + "needs >= 2 waypoints");
   for (size_t i = 0; i < path.size(); ++i) {
     const Waypoint2d& w = path[i];
     const Eigen::Vector2d xy(w.x_m, w.y_m);
-    if (!xy.allFinite() || !(w.dwell_s >= 0.0)) return Fail(error, where + "waypoint " + std::to_string(i) + " bad");
+    if (!xy.allFinite() || !(w.dwell_s >= 0.0))
+      return FailValidation(error, where + "waypoint " + std::to_string(i) + " bad");
     if ((xy.array() < bounds.min().head<2>().array()).any() || (xy.array() > bounds.max().head<2>().array()).any()) {
-      return Fail(error, where + "waypoint " + std::to_string(i) + " is outside the bounds");
+      return FailValidation(error, where + "waypoint " + std::to_string(i) + " is outside the bounds");
     }
   }
   return true;
@@ -96,11 +98,12 @@ bool ValidatePath(const std::string& carrier, const std::vector<Waypoint2d>& pat
 
 bool ValidateLighting(const SceneLighting& l, std::string* error) {
   const auto unit = [](double x) { return x >= 0.0 && x <= 1.0; };
-  if (!unit(l.ambient) || !unit(l.headlight)) return Fail(error, "lighting: ambient/headlight not in [0, 1]");
-  if (!(l.sky_rgb.minCoeff() >= 0.0 && l.sky_rgb.maxCoeff() <= 1.0)) return Fail(error, "lighting: sky not in [0, 1]");
+  if (!unit(l.ambient) || !unit(l.headlight)) return FailValidation(error, "lighting: ambient/headlight not in [0, 1]");
+  if (!(l.sky_rgb.minCoeff() >= 0.0 && l.sky_rgb.maxCoeff() <= 1.0))
+    return FailValidation(error, "lighting: sky not in [0, 1]");
   for (const SceneLight& light : l.lights) {
     if (!unit(light.intensity) || !(light.direction.norm() > 1e-9) || !light.position_m.allFinite()) {
-      return Fail(error, "lighting: a light has intensity outside [0, 1], no direction or a bad position");
+      return FailValidation(error, "lighting: a light has intensity outside [0, 1], no direction or a bad position");
     }
   }
   return true;
@@ -180,26 +183,26 @@ Eigen::Isometry3d AnnotatedElement::T_world_element() const {
 }
 
 bool Scene::Validate(std::string* error) const {
-  if (materials.empty()) return Fail(error, "scene has no materials");
+  if (materials.empty()) return FailValidation(error, "scene has no materials");
   for (size_t i = 0; i < materials.size(); ++i) {
     if (!ValidateMaterial(materials[i], textures, error)) return false;
     for (size_t j = 0; j < i; ++j) {
       if (materials[j].name == materials[i].name) {
-        return Fail(error, "material '" + materials[i].name + "' defined twice");
+        return FailValidation(error, "material '" + materials[i].name + "' defined twice");
       }
     }
   }
   for (const TextureSpec& t : textures) {
     if (!t.Validate(error)) return false;
   }
-  if (primitives.empty()) return Fail(error, "scene has no primitives");
+  if (primitives.empty()) return FailValidation(error, "scene has no primitives");
   for (const MeshAsset& m : meshes) {
-    if (m.triangles.empty()) return Fail(error, "mesh '" + m.file + "' has no triangles");
+    if (m.triangles.empty()) return FailValidation(error, "mesh '" + m.file + "' has no triangles");
   }
   for (const Primitive& p : primitives) {
     if (!CheckPrimitive(p, materials, meshes.size(), error)) return false;
   }
-  if (bounds.isEmpty()) return Fail(error, "bounds: min must be < max");
+  if (bounds.isEmpty()) return FailValidation(error, "bounds: min must be < max");
   for (const AnnotatedElement& e : elements) {
     if (!ValidateElement(e, error)) return false;
   }

@@ -2,6 +2,7 @@
 // ("Realism presets"); keep the two in step.
 #include "sim/realism.hpp"
 
+#include "core/io/yaml_fields.hpp"
 #include "sim/lidar/lidar_realism.hpp"
 #include "sim/sim_config.hpp"
 
@@ -11,6 +12,11 @@ const std::vector<std::pair<const char*, Realism>>& EnumWords(Realism*) {
   static const std::vector<std::pair<const char*, Realism>> words = {
       {"ideal", Realism::kIdeal}, {"typical", Realism::kTypical}, {"harsh", Realism::kHarsh}};
   return words;
+}
+
+Status RealismFromWord(const std::string& word, Realism* r) {
+  if (yaml::EnumFromWord(word, r)) return Status::Ok();
+  return Status::Error(yaml::EnumWordsText<Realism>() + " (got '" + word + "')");
 }
 
 namespace {

@@ -3,8 +3,11 @@
 // vibration, clocks, the VLP-16's range physics, the IMU's noise) to the magnitudes of an ideal, a typical or a
 // harsh real rig. Each source can still be set alone after the preset (a config's explicit keys win). What each
 // preset sets, and why those magnitudes: docs/noise_models.md.
+#include <string>
 #include <utility>
 #include <vector>
+
+#include "core/util/status.hpp"
 
 namespace rotolidar::sim {
 
@@ -16,5 +19,8 @@ enum class Realism {
 
 /// Words in YAML and on the command line: ideal, typical, harsh.
 const std::vector<std::pair<const char*, Realism>>& EnumWords(Realism*);
+
+/// Sets *r to the preset named `word`; otherwise an error listing the words (and *r untouched).
+Status RealismFromWord(const std::string& word, Realism* r);
 
 }  // namespace rotolidar::sim

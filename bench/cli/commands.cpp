@@ -55,8 +55,7 @@ Status ApplyCarrierOption(const OptionParser& p, sim::SimConfig* config) {
 Status LoadSimOverrides(const OptionParser& p, sim::SimConfig* config) {
   config->carrier_from_scene = true;
   sim::Realism realism = sim::Realism::kTypical;
-  if (!yaml::EnumFromWord(p.Get("realism"), &realism))
-    return Status::Error("--realism: " + yaml::EnumWordsText<sim::Realism>() + " (got '" + p.Get("realism") + "')");
+  if (Status s = sim::RealismFromWord(p.Get("realism"), &realism); !s) return Status::Error("--realism: " + s.message);
   sim::ApplyRealism(realism, config);
   if (!p.Get("config").empty())
     if (Status s = sim::LoadSimConfig(p.Get("config"), config); !s) return s;

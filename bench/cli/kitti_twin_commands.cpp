@@ -7,7 +7,6 @@
 #include "bench/cli/options.hpp"
 #include "bench/run/kitti_twin.hpp"
 #include "bench/run/progress.hpp"
-#include "core/io/yaml_fields.hpp"
 #include "sim/realism.hpp"
 
 namespace rotolidar::bench {
@@ -31,8 +30,7 @@ Status ReadTwinOptions(const OptionParser& p, KittiTwinOptions* o) {
   o->scene = p.Get("scene").empty() ? KittiTwinDefaultScene(o->sequence) : p.Get("scene");
   // The realism preset first (what KITTI's published bins carry), then the explicit flags.
   sim::Realism realism = sim::Realism::kTypical;
-  if (!yaml::EnumFromWord(p.Get("realism"), &realism))
-    return Status::Error("--realism: " + yaml::EnumWordsText<sim::Realism>() + " (got '" + p.Get("realism") + "')");
+  if (Status s = sim::RealismFromWord(p.Get("realism"), &realism); !s) return Status::Error("--realism: " + s.message);
   o->motion_compensate = realism != sim::Realism::kHarsh || p.Flag("compensate");
   o->lidar.elevation_error_deg = realism == sim::Realism::kIdeal ? 0.0 : kKittiElevationErrorDeg;
   long frames = 0, seed = 0, firings = 0;
@@ -63,8 +61,9 @@ int CmdKittiTwin(int argc, char** argv) {
   const KittiTwinOptions defaults;
   OptionParser p("kitti-twin", "Simulate KITTI's HDL-64E car on a KITTI ground-truth path through a generated street "
                                "scene and write it as a KITTI odometry sequence: velodyne/ bins (motion-"
-                               "compensated with the true poses except under --realism harsh), velodyne_times/, poses.txt, times.txt, calib.txt, "
-                               "sequence_info.txt; read it with `slam --kitti DIR` (docs/kitti.md).");
+                               "compensated with the true poses except under --realism harsh), velodyne_times/, "
+                               "poses.txt, times.txt, calib.txt, sequence_info.txt; read it with `slam --kitti DIR` "
+                               "(docs/kitti.md).");
   p.Add("seq", defaults.sequence, "-", "KITTI sequence (07 has the committed scene urban_loop)");
   p.Add("out", "", "-", "output sequence folder (required)");
   p.Add("frames", "0", "-", "frames from frame 0 (0 = all the poses cover)");

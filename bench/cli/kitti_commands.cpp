@@ -48,7 +48,8 @@ void PrintStats(const char* name, const EvalResult& e, const char* unit) {
 
 int CmdSlamKitti(int argc, char** argv) {
   KittiRunOptions o;
-  OptionParser p("slam --kitti", "Run the SLAM core LiDAR-only on a KITTI odometry sequence (base = velodyne); "
+  OptionParser p("slam --kitti", "Run the SLAM core on a KITTI odometry sequence (base = velodyne), LiDAR-"
+                                 "inertial when it has imu.csv + calib_imu_to_velo.txt, else LiDAR-only; "
                                  "trajectory in KITTI's cam0 convention, map, per-frame table, metrics vs the "
                                  "ground truth when a poses file is found (docs/kitti.md).");
   p.Add("kitti", "", "-", "sequence folder holding velodyne/%06d.bin (and calib.txt, times.txt)");
@@ -60,8 +61,15 @@ int CmdSlamKitti(int argc, char** argv) {
   p.Add("poses", "", "-", "reference poses, e.g. ground truth (default DIR/poses.txt or DIR/../../poses/<DIR name>.txt)");
   p.Add("config", "", "-", "estimator config YAML (keys of slam_config.yaml) over the KITTI defaults");
   p.Add("lines", "0", "-", "scan lines per frame (0: DIR/sequence_info.txt's scan_lines, else the first frame's)");
+  p.Add("imu", "auto", "-", "auto: use DIR/imu.csv when present | on: require it | off: LiDAR-only");
+  p.Add("deskew", "auto", "-", "auto: deskew raw bins (sequence_info.txt's deskew: none...) | on | off");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  o.paths = {p.Get("kitti"), p.Get("calib"), p.Get("times"), p.Get("poses")};
+  if (!ParseKittiImuUse(p.Get("deskew"), &o.deskew)) return Fail(Status::Error("--deskew: auto, on or off"));
+  o.paths.dir = p.Get("kitti");
+  o.paths.calib_path = p.Get("calib");
+  o.paths.times_path = p.Get("times");
+  o.paths.poses_path = p.Get("poses");
+  if (!ParseKittiImuUse(p.Get("imu"), &o.imu)) return Fail(Status::Error("--imu: auto, on or off"));
   o.out_dir = p.Get("out");
   if (Status s = GetCount(p, "frames", &o.max_frames); !s) return Fail(s);
   if (Status s = GetCount(p, "start", &o.start_frame); !s) return Fail(s);
@@ -77,6 +85,11 @@ int CmdSlamKitti(int argc, char** argv) {
   if (r.frames_other_line_count > 0 || r.elevation_inversions > 0)
     std::printf("warning: %zu frames without %d scan lines, %zu elevation inversions (rings may be off)\n",
                 r.frames_other_line_count, r.expected_lines, r.elevation_inversions);
+  std::printf("%s\n", r.imu_used ? ("LiDAR-inertial: " + std::to_string(r.imu_samples_fed) + " IMU samples, " +
+                                      std::to_string(r.frames_imu_initialized) + " frames from the sliding window")
+                                         .c_str()
+                                   : "LiDAR-only (no IMU used)");
+  std::printf("deskew: %s\n", r.deskewed ? "by the estimator from the per-point times" : "none (compensated bins)");
   if (r.nominal_times) std::printf("note: no times file: nominal 10 Hz frame times\n");
   if (r.has_ground_truth) {
     std::printf("vs %s (cam0 convention, rebased to frame %d):\n", r.poses_path.c_str(), r.frame_ids.front());

@@ -8,6 +8,7 @@
 #include "bench/run/kitti_twin.hpp"
 #include "bench/run/progress.hpp"
 #include "sim/realism.hpp"
+#include "sim/sim_config.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -33,6 +34,8 @@ Status ReadTwinOptions(const OptionParser& p, KittiTwinOptions* o) {
   if (Status s = sim::RealismFromWord(p.Get("realism"), &realism); !s) return Status::Error("--realism: " + s.message);
   o->motion_compensate = realism != sim::Realism::kHarsh || p.Flag("compensate");
   o->lidar.elevation_error_deg = realism == sim::Realism::kIdeal ? 0.0 : kKittiElevationErrorDeg;
+  o->imu = sim::PresetSimConfig(realism).imu;  // the rig IMU's noise and the preset's sensor errors
+  o->write_imu = !p.Flag("no-imu");
   long frames = 0, seed = 0, firings = 0;
   if (Status s = p.GetInt("frames", &frames); !s) return s;
   if (Status s = p.GetInt("seed", &seed); !s) return s;
@@ -62,7 +65,7 @@ int CmdKittiTwin(int argc, char** argv) {
   OptionParser p("kitti-twin", "Simulate KITTI's HDL-64E car on a KITTI ground-truth path through a generated street "
                                "scene and write it as a KITTI odometry sequence: velodyne/ bins (motion-"
                                "compensated with the true poses except under --realism harsh), velodyne_times/, "
-                               "poses.txt, times.txt, calib.txt, sequence_info.txt; read it with `slam --kitti DIR` "
+                               "poses.txt, times.txt, calib.txt, sequence_info.txt, imu.csv, calib_imu_to_velo.txt; read it with `slam --kitti DIR` "
                                "(docs/kitti.md).");
   p.Add("seq", defaults.sequence, "-", "KITTI sequence (07 has the committed scene urban_loop)");
   p.Add("out", "", "-", "output sequence folder (required)");
@@ -77,6 +80,7 @@ int CmdKittiTwin(int argc, char** argv) {
   p.Add("elevation-error", "(preset)", "deg", "intrinsic vertical-angle error of every reported point (overrides "
         "the preset's)");
   p.Add("firings", std::to_string(defaults.lidar.firings_per_revolution), "-", "firing columns per revolution");
+  p.AddFlag("no-imu", "write no imu.csv / calib_imu_to_velo.txt (an IMU-less sequence, as KITTI's odometry set)");
   p.AddFlag("compensate", "motion-compensate the bins with the true poses even under --realism harsh");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   KittiTwinOptions o;
@@ -87,9 +91,9 @@ int CmdKittiTwin(int argc, char** argv) {
   if (Status s = ReadTwinOptions(p, &o); !s) return Fail(s);
   KittiTwinResult r;
   if (Status s = RunKittiTwin(o, &r, MakeProgressPrinter("kitti-twin")); !s) return Fail(s);
-  std::printf("wrote %s: %zu frames (%.1f m of path), %zu points (%.0f a frame), scene %s, %s; casting %.1f s "
-              "(%.0f ms a frame)\n", o.out_dir.c_str(), r.frames, r.path_length_m, r.points,
-              double(r.points) / double(r.frames), r.scene_path.c_str(),
+  std::printf("wrote %s: %zu frames (%.1f m of path), %zu points (%.0f a frame), %zu IMU samples, scene %s, %s; "
+              "casting %.1f s (%.0f ms a frame)\n", o.out_dir.c_str(), r.frames, r.path_length_m, r.points,
+              double(r.points) / double(r.frames), r.imu_samples, r.scene_path.c_str(),
               o.motion_compensate ? "motion-compensated with the true poses" : "not motion-compensated",
               r.cast_s, 1e3 * r.cast_s / double(r.frames));
   return 0;

@@ -75,8 +75,9 @@ void ResolveSensor(const KittiSequence& seq, const KittiRunOptions& o, KittiRunR
 
 /// The run's calibration: base = velodyne (no IMU, identity extrinsics), the sensor's range noise, and a rotary
 /// rig's rotor speed at the nominal 600 rpm head (from its angle per frame: it sets the keyframe policy).
-RigCalib KittiRunCalib(const KittiRunResult& r) {
+RigCalib KittiRunCalib(const KittiSequence& seq, const KittiRunResult& r) {
   RigCalib calib;
+  if (r.imu_used) calib.T_base_imu = seq.imu_calib.T_velo_imu;
   calib.lidar.range_sigma_m = r.range_sigma_m;
   calib.motor_speed_radps = r.rotor_deg_per_scan * M_PI / 180.0 * calib.lidar.rpm / 60.0;
   return calib;
@@ -86,8 +87,11 @@ RigCalib KittiRunCalib(const KittiRunResult& r) {
 Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
                  KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
                  const std::function<void(double)>& progress) {
-  Estimator estimator(KittiRunCalib(*r), o.estimator);
+  EstimatorConfig config = o.estimator;
+  config.use_imu = r->imu_used;
+  Estimator estimator(KittiRunCalib(seq, *r), config);
   double estimator_s = 0.0;
+  size_t next_imu = 0;
   size_t next_report = picked.size() / 10;
   for (size_t n = 0; n < picked.size(); ++n) {
     const size_t i = picked[n];
@@ -104,7 +108,17 @@ Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, co
     r->frames_other_line_count += stats.num_lines != size_t(r->expected_lines) ? 1 : 0;
     r->elevation_inversions += stats.elevation_inversions;
     const auto t0 = std::chrono::steady_clock::now();
-    r->scans.push_back(estimator.ProcessDeskewedScan(t_s, std::move(points)));
+    Seconds t_last_s = t_s;  // the IMU must reach the last point for a deskew
+    if (r->deskewed)
+      for (const ScanPoint& q : points) t_last_s = std::max(t_last_s, q.t_s);
+    for (; r->imu_used && next_imu < seq.imu.size() && seq.imu[next_imu].t_s <= t_last_s; ++next_imu) {
+      estimator.Feed(seq.imu[next_imu]);
+      ++r->imu_samples_fed;
+    }
+    if (r->imu_used && next_imu < seq.imu.size()) estimator.Feed(seq.imu[next_imu]);  // brackets t_last_s
+    r->scans.push_back(r->deskewed ? estimator.ProcessTimedScan(t_s, std::move(points))
+                                   : estimator.ProcessDeskewedScan(t_s, std::move(points)));
+    r->frames_imu_initialized += r->scans.back().imu_initialized ? 1 : 0;
     estimator_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r->frame_ids.push_back(id);
     if (progress && n >= next_report) {
@@ -184,6 +198,9 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
                      {"frames_other_count", r.frames_other_line_count},
                      {"elevation_inversions", r.elevation_inversions}};
   j["range_sigma_m"] = {{"value", r.range_sigma_m}, {"from", r.range_sigma_source}};
+  j["deskew"] = r.deskewed ? "estimator (per-point times)" : "none (bins taken as compensated)";
+  j["imu"] = {{"used", r.imu_used}, {"file", seq.imu_path}, {"calib", seq.imu_calib_path},
+              {"samples_fed", r.imu_samples_fed}, {"frames_from_window", r.frames_imu_initialized}};
   j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
   if (r.has_ground_truth) {
     j["ground_truth"] = seq.poses_path;
@@ -214,7 +231,9 @@ Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const st
   if (Status s = SavePointCloud(d + "/map.ply", map); !s) return s;
   if (Status s = WriteScanTable(d + "/scans.csv", r); !s) return s;
   YAML::Emitter out;
-  EmitEstimatorConfig(out, ResolveFromCalib(o.estimator, KittiRunCalib(r)));  // as the estimator ran
+  EstimatorConfig config = o.estimator;
+  config.use_imu = r.imu_used;
+  EmitEstimatorConfig(out, ResolveFromCalib(config, KittiRunCalib(seq, r)));  // as the estimator ran
   std::ofstream file(d + "/slam_config.yaml");
   file << "# Resolved estimator configuration of this run (rotolidar slam --kitti).\n" << out.c_str() << "\n";
   if (!file) return Status::Error(d + "/slam_config.yaml: write failed");
@@ -222,6 +241,14 @@ Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const st
 }
 
 }  // namespace
+
+bool ParseKittiImuUse(const std::string& word, KittiImuUse* use) {
+  if (word == "auto") *use = KittiImuUse::kAuto;
+  else if (word == "on") *use = KittiImuUse::kOn;
+  else if (word == "off") *use = KittiImuUse::kOff;
+  else return false;
+  return true;
+}
 
 EstimatorConfig KittiEstimatorConfig() {
   EstimatorConfig c;
@@ -263,6 +290,11 @@ Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
   KittiRunResult r;
   r.nominal_times = seq.nominal_times;
   r.point_times = !seq.point_time_paths.empty();
+  if (options.imu == KittiImuUse::kOn && seq.imu.empty())
+    return Status::Error(options.paths.dir + ": --imu on, but the sequence has no imu.csv");
+  r.imu_used = options.imu != KittiImuUse::kOff && options.estimator.use_imu && !seq.imu.empty();
+  r.deskewed = options.deskew == KittiImuUse::kOn ||
+               (options.deskew == KittiImuUse::kAuto && seq.info.deskew.rfind("none", 0) == 0);
   ResolveSensor(seq, options, &r);
   std::vector<Eigen::Vector3d> map;
   if (Status s = RunFrames(seq, picked, options, &r, &map, progress); !s) return s;

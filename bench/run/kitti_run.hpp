@@ -1,10 +1,13 @@
 #pragma once
-// `rotolidar slam --kitti DIR`: runs the core LiDAR-only on a KITTI odometry sequence (docs/kitti.md).
+// `rotolidar slam --kitti DIR`: runs the core on a KITTI odometry sequence (docs/kitti.md), LiDAR-only, or
+// LiDAR-inertial when the sequence has an IMU (imu.csv + calib_imu_to_velo.txt, core/io/kitti.hpp).
 //
 // KITTI's bins are motion-compensated clouds in the Velodyne frame of their frame, so base = velodyne: each bin
 // becomes ScanPoints (KittiScanPoints: rings from the scan-line order, split by the per-point times of
 // velodyne_times/ when the sequence has them, else by azimuth) fed to Estimator::ProcessDeskewedScan at the
-// frame's time (no IMU, no rotary transform, no deskew). The scan lines expected per frame: KittiScanConfig::
+// frame's time (no rotary transform, no deskew), or, for raw bins (KittiRunOptions::deskew), to
+// Estimator::ProcessTimedScan, which deskews them with the IMU or a constant twist. With an IMU, its samples up to each frame's time are fed first and
+// the calibration's T_base_imu is calib_imu_to_velo.txt's T_velo_imu (the IMU noise: RigCalib's defaults). The scan lines expected per frame: KittiScanConfig::
 // expected_lines when set, else sequence_info.txt's scan_lines, else the first frame's count. The estimator's world is the Velodyne frame of the first
 // frame used. Outputs in out_dir:
 //   trajectory.kitti    KITTI convention: T_cam0(first)_cam0(k) = Tr * T_velo(first)_velo(k) * Tr^-1, one line per
@@ -35,6 +38,10 @@ EstimatorConfig KittiEstimatorConfig();
 /// no calib.yaml; docs/features.md).
 inline constexpr double kKittiDefaultRangeSigmaM = 0.01;
 
+/// Whether to use the sequence's IMU: kAuto when it has one, kOn requires one (error without), kOff never.
+enum class KittiImuUse { kAuto, kOn, kOff };
+bool ParseKittiImuUse(const std::string& word, KittiImuUse* use);  ///< "auto" | "on" | "off"
+
 struct KittiRunOptions {
   KittiSequencePaths paths;          ///< the sequence folder and optional calib / times / poses files
   std::string out_dir = "runs/kitti";
@@ -42,6 +49,10 @@ struct KittiRunOptions {
   int max_frames = 0;                ///< at most this many frames from start_frame; 0 = all
   EstimatorConfig estimator = KittiEstimatorConfig();
   KittiScanConfig scan;
+  KittiImuUse imu = KittiImuUse::kAuto;
+  /// Deskew each bin with its per-point times: kAuto when sequence_info.txt's deskew starts with "none" (raw
+  /// bins), kOn always, kOff never (KITTI's own bins are already compensated).
+  KittiImuUse deskew = KittiImuUse::kAuto;
   bool Validate(std::string* error) const;  ///< false naming the field (start_frame, max_frames, sub-configs)
 };
 
@@ -50,6 +61,10 @@ struct KittiRunResult {
   Trajectory trajectory_velo;        ///< T_velo(first)_velo(k) at the frame times
   Trajectory trajectory_cam0;        ///< KITTI convention (see above), same times
   std::vector<ScanReport> scans;     ///< one per frame used
+  bool imu_used = false;             ///< LiDAR-inertial (the sequence's IMU fed to the estimator)
+  bool deskewed = false;             ///< bins deskewed by the estimator (ProcessTimedScan)
+  size_t imu_samples_fed = 0;
+  size_t frames_imu_initialized = 0; ///< frames whose pose came from the sliding window
   std::vector<size_t> scan_lines;    ///< scan lines (rings) found per frame
   int expected_lines = 0;            ///< the count every frame should have (see the top of this file)
   std::string expected_lines_source; ///< "option", the sequence_info.txt path, or "first frame"

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "core/io/recording.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/world/embree_scene.hpp"
@@ -31,12 +32,30 @@ std::string FramePath(const std::string& dir, const char* folder, int id) {
   return dir + name;
 }
 
-/// T_world_cam0(t) * Tr: the LiDAR in the scene frame. The carrier path's base is cam0 with x forward (cam z),
-/// y left (-cam x), z up (-cam y); T_cam_base undoes that axis change.
-Pose3 WorldVelo(const sim::BaseMotion& motion, const Pose3& T_cam0_velo, Seconds t) {
+/// The carrier path's base is cam0 with x forward (cam z), y left (-cam x), z up (-cam y): T_base_velo =
+/// T_cam_base^-1 * Tr.
+Pose3 BaseVelo(const Pose3& T_cam0_velo) {
   Pose3 T_cam_base = Pose3::Identity();
   T_cam_base.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
-  return motion.At(t).T_world_base * T_cam_base.inverse() * T_cam0_velo;
+  return T_cam_base.inverse() * T_cam0_velo;
+}
+
+/// T_world_cam0(t) * Tr: the LiDAR in the scene frame.
+Pose3 WorldVelo(const sim::BaseMotion& motion, const Pose3& T_cam0_velo, Seconds t) {
+  return motion.At(t).T_world_base * BaseVelo(T_cam0_velo);
+}
+
+/// imu.csv and calib_imu_to_velo.txt: the IMU model at its rate over [0, t_end_s].
+Status WriteImu(const KittiTwinOptions& o, const sim::BaseMotion& motion, Seconds t_end_s, size_t* count) {
+  const KittiImuCalib imu_calib = KittiTwinImuCalib();
+  const Pose3 T_base_imu = BaseVelo(KittiTwinCalib().T_cam0_velo) * imu_calib.T_velo_imu;
+  sim::ImuModel model(o.imu, T_base_imu, o.seed);
+  std::vector<ImuSample> samples;
+  const double dt = 1.0 / o.imu.noise.rate_hz;
+  for (long k = 0; k * dt <= t_end_s + 1e-9; ++k) samples.push_back(model.Sample(motion.At(k * dt), k * dt));
+  *count = samples.size();
+  if (Status s = SaveImuCsv(o.out_dir + "/imu.csv", samples); !s) return s;
+  return WriteKittiImuCalib(o.out_dir + "/calib_imu_to_velo.txt", imu_calib);
 }
 
 KittiSequenceInfo TwinInfo(const KittiTwinOptions& o, const std::string& scene_path) {
@@ -116,6 +135,15 @@ KittiCalib KittiTwinCalib() {
   return c;
 }
 
+KittiImuCalib KittiTwinImuCalib() {
+  KittiImuCalib c;
+  c.calib_time = "25-May-2012 16:47:16";
+  c.T_velo_imu.linear() << 9.999976e-01, 7.553071e-04, -2.035826e-03, -7.854027e-04, 9.998898e-01, -1.482298e-02,
+      2.024406e-03, 1.482454e-02, 9.998881e-01;
+  c.T_velo_imu.translation() << -8.086759e-01, 3.195559e-01, -7.997231e-01;
+  return c;
+}
+
 std::string KittiTwinDefaultScene(const std::string& sequence) { return sequence == "07" ? "urban_loop" : ""; }
 
 bool KittiTwinOptions::Validate(std::string* error) const {
@@ -127,6 +155,7 @@ bool KittiTwinOptions::Validate(std::string* error) const {
   if (scene.empty()) return fail("kitti-twin: a scene is required (sequence " + sequence + " has no default)");
   if (out_dir.empty()) return fail("kitti-twin: the output folder is required");
   if (frames < 0) return fail("kitti-twin: frames must be >= 0");
+  if (write_imu && !imu.Validate(error)) return false;
   return lidar.Validate(error);
 }
 
@@ -171,6 +200,8 @@ Status RunKittiTwin(const KittiTwinOptions& o, KittiTwinResult* result, const st
   r.cast_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.frames = size_t(frames);
   if (Status s = WriteSmallFiles(o, r.scene_path, r.poses, r.times); !s) return s;
+  if (o.write_imu)
+    if (Status s = WriteImu(o, *motion, 0.1 * frames, &r.imu_samples); !s) return s;
   *result = std::move(r);
   return Status::Ok();
 }

@@ -16,6 +16,10 @@
 //   velodyne_times/%06d.bin  per point: firing time after t_k [s] (float32)
 //   poses.txt                the ground truth of frames 0..N-1 as read (KITTI's cam0 convention, bit-exact)
 //   times.txt, calib.txt     t_k; P0..P3 and Tr of KittiTwinCalib
+//   imu.csv                  with write_imu: the rig's IMU model (sim/sensors/imu_model.hpp, options.imu) mounted
+//                            where KITTI's OXTS is (KittiTwinImuCalib), sampled at its rate from t = 0 to the last
+//                            frame's end, stamped on times.txt's clock (plus the model's clock error)
+//   calib_imu_to_velo.txt    with write_imu: KittiTwinImuCalib (T_velo_imu)
 //   sequence_info.txt        sensor, 64 scan lines, range noise, point order, frame, deskew, source
 #include <cstdint>
 #include <functional>
@@ -24,12 +28,17 @@
 
 #include "core/io/kitti.hpp"
 #include "sim/lidar/hdl64_caster.hpp"
+#include "sim/sensors/imu_model.hpp"
 
 namespace rotolidar::bench {
 
 /// KITTI's odometry calibration of sequences 00-02 (calib.txt of the odometry devkit: rectified P0..P3 [px] and
 /// Tr = T_cam0_velo [m]).
 KittiCalib KittiTwinCalib();
+
+/// KITTI's raw calibration of 2011_10_03 (the day of sequence 00; calib_imu_to_velo.txt): T_velo_imu of the OXTS
+/// RT3003 unit, 0.81 m behind, 0.32 m left of and 0.80 m below the Velodyne.
+KittiImuCalib KittiTwinImuCalib();
 
 /// The default scene of a sequence: "urban_loop" for "07" (generated along KITTI 07 in the same frame), else "".
 std::string KittiTwinDefaultScene(const std::string& sequence);
@@ -50,6 +59,10 @@ struct KittiTwinOptions {
   /// the LiDAR frame at the frame time with the true poses (as KITTI's published bins are compensated).
   bool motion_compensate = false;
   sim::Hdl64CasterConfig lidar;
+  /// An IMU stream (imu.csv + calib_imu_to_velo.txt): the rig's consumer MEMS model rather than KITTI's OXTS, so
+  /// a LiDAR-inertial number says what the core's IMU path does with the IMU it is built for.
+  bool write_imu = true;
+  sim::ImuConfig imu;            ///< noise and per-run errors (the CLI: the realism preset's)
   bool Validate(std::string* error) const;  ///< false naming the field
 };
 
@@ -57,6 +70,7 @@ struct KittiTwinResult {
   std::string scene_path;
   size_t frames = 0;
   size_t points = 0;             ///< over all bins
+  size_t imu_samples = 0;        ///< written to imu.csv
   std::vector<Seconds> times;    ///< as written to times.txt
   std::vector<Pose3> poses;      ///< as written to poses.txt
   double path_length_m = 0.0;    ///< of cam0 over the frames written

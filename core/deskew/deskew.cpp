@@ -77,6 +77,22 @@ MotionTable IdentityTable(Seconds t0_s, Seconds t1_s) {
   return table;
 }
 
+Pose3 MotionTablePose(const MotionTable& table, Seconds t_s) {
+  ROTOLIDAR_CHECK(!table.t_s.empty() && table.t_s.size() == table.T_start_t.size(),
+                  "MotionTable: empty or mismatched sizes");
+  bool outside = false;
+  const size_t k = deskew_detail::Interval(table.t_s, t_s, 1, &outside);
+  if (k == 0) return table.T_start_t.front();
+  if (k >= table.t_s.size()) return table.T_start_t.back();
+  const Pose3& a = table.T_start_t[k - 1];
+  const Pose3& b = table.T_start_t[k];
+  const double s = (t_s - table.t_s[k - 1]) / (table.t_s[k] - table.t_s[k - 1]);
+  Pose3 out = Pose3::Identity();
+  out.linear() = a.linear() * ExpSO3(s * LogSO3(a.linear().transpose() * b.linear()));
+  out.translation() = (1.0 - s) * a.translation() + s * b.translation();
+  return out;
+}
+
 MotionInterpolator::MotionInterpolator(const MotionTable& table) : table_(table) {
   ROTOLIDAR_CHECK(!table.t_s.empty() && table.t_s.size() == table.T_start_t.size(),
                   "MotionTable: empty or mismatched sizes");

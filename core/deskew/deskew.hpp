@@ -61,6 +61,10 @@ MotionTable ConstantTwistTable(const Pose3& T_start_end, Seconds t0_s, Seconds t
 /// The identity over [t0_s, t1_s] (no motion known).
 MotionTable IdentityTable(Seconds t0_s, Seconds t1_s);
 
+/// The table's pose T_base(t0)_base(t) at t, interpolated as MotionInterpolator does (the nearest end outside the
+/// span). `table` must be non-empty with matching sizes (ROTOLIDAR_CHECK).
+Pose3 MotionTablePose(const MotionTable& table, Seconds t_s);
+
 /// The table's pose at t applied to points, T_base(t0)_base(t) * p, with no trigonometry per point: each
 /// interval's relative rotation log w = Log(R_a^T R_b) is taken once, and R_a Exp(s w) p is applied with
 /// Rodrigues' formula on the vector (Taylor series of sin(x)/x and (1 - cos x)/x^2 below 0.1 rad). The previous point's

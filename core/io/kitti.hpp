@@ -19,6 +19,14 @@
 //   <dataset>/sequences/<NN>/sequence_info.txt  "key: value" lines (KittiSequenceInfo): the sensor, its scan line
 //                                               count, how the points are ordered, how they were deskewed
 //
+// And an IMU, which KITTI's odometry sequences do not have (KITTI's raw recordings do, as OXTS at 10-100 Hz; both
+// files optional, `rotolidar kitti-twin` writes them):
+//   <dataset>/sequences/<NN>/imu.csv            the recording format's IMU CSV (docs/recording_format.md), stamped on
+//                                               times.txt's clock, the IMU frame as calib_imu_to_velo.txt defines it
+//   <dataset>/sequences/<NN>/calib_imu_to_velo.txt  KITTI raw's file of that name: "R: 9 numbers" (row-major) and
+//                                               "T: 3 numbers" [m], p_velo = R * p_imu + T, i.e. T_velo_imu;
+//                                               an optional "calib_time: ..." line is kept as text
+//
 // KittiScanPoints() turns one bin into the estimator's ScanPoints (rings from the bin's point order; see its
 // comment and docs/kitti.md). Nothing here throws or keeps state; all functions are thread-safe.
 #include <array>
@@ -29,6 +37,7 @@
 
 #include "core/preprocess/filters.hpp"
 #include "core/types/geometry.hpp"
+#include "core/types/messages.hpp"
 #include "core/types/time.hpp"
 #include "core/util/status.hpp"
 
@@ -77,6 +86,16 @@ Status WriteKittiSequenceInfo(const std::string& path, const KittiSequenceInfo& 
 
 using Matrix34d = Eigen::Matrix<double, 3, 4>;
 
+/// calib_imu_to_velo.txt of KITTI's raw recordings: T_velo_imu. Lines "R: 9 numbers", "T: 3 numbers" (each exactly
+/// once) and optionally "calib_time: TEXT"; blank lines are skipped. Another key, a missing one, a wrong count, a
+/// non-number or an R that is not a rotation (within 1e-3) is an error naming file:line and the key.
+struct KittiImuCalib {
+  Pose3 T_velo_imu = Pose3::Identity();  ///< maps IMU-frame points into the Velodyne frame [m]
+  std::string calib_time;                ///< as written; empty when absent
+};
+Status ReadKittiImuCalib(const std::string& path, KittiImuCalib* calib);
+Status WriteKittiImuCalib(const std::string& path, const KittiImuCalib& calib);
+
 /// calib.txt of an odometry sequence.
 struct KittiCalib {
   /// P0..P3: projection matrices of cameras 0..3 (rectified) [px]; zero until set
@@ -112,6 +131,8 @@ struct KittiSequencePaths {
   std::string calib_path;  ///< default <dir>/calib.txt (required)
   std::string times_path;  ///< default <dir>/times.txt; when absent: nominal 10 Hz, t_k = 0.1 s * k
   std::string poses_path;  ///< default <dir>/poses.txt, else <dir>/../../poses/<name of dir>.txt; may be absent
+  std::string imu_path;    ///< default <dir>/imu.csv; may be absent (then no IMU)
+  std::string imu_calib_path;  ///< default <dir>/calib_imu_to_velo.txt; required when there is an IMU
 };
 
 /// An opened sequence: the frame list and the small files (bins are read one by one with ReadKittiBin).
@@ -129,13 +150,17 @@ struct KittiSequence {
   std::vector<std::string> point_time_paths;
   KittiSequenceInfo info;               ///< from sequence_info.txt; default (nothing stated) without one
   std::string info_path;                ///< empty when there is no sequence_info.txt
+  std::vector<ImuSample> imu;           ///< imu.csv's samples (times.txt's clock); empty when there is none
+  std::string imu_path, imu_calib_path; ///< empty when there is no IMU
+  KittiImuCalib imu_calib;              ///< T_velo_imu (identity when there is no IMU)
 };
 
 /// Lists velodyne/*.bin (a .bin whose name is not a frame number is an error; other files are ignored), reads
 /// calib, times, poses and sequence_info.txt (optional). With a velodyne_times/ folder every bin needs its time
 /// file there (a missing one is an error naming it).
 /// A times or poses file with fewer lines than the largest frame id + 1 is an error (more lines are fine: the
-/// bins may be a subset of the sequence). An explicitly given file that does not exist is an error.
+/// bins may be a subset of the sequence). An explicitly given file that does not exist is an error. An IMU file
+/// without calib_imu_to_velo.txt is an error (its frame would be unknown).
 Status OpenKittiSequence(const KittiSequencePaths& paths, KittiSequence* sequence);
 
 /// Writes sequence files in the dataset layout: <root>/sequences/<name>/{velodyne/, times.txt, calib.txt} and

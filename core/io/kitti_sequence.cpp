@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/io/kitti.hpp"
+#include "core/io/recording.hpp"
 
 namespace rotolidar {
 namespace {
@@ -82,6 +83,22 @@ Status ListPointTimes(const std::string& times_dir, KittiSequence* seq) {
   return Status::Ok();
 }
 
+/// The optional IMU: imu.csv and, required with it, calib_imu_to_velo.txt. Samples outside the frames' time span
+/// are kept (the runner uses what it needs).
+Status OpenImu(const KittiSequencePaths& paths, KittiSequence* seq) {
+  if (Status s = Resolve(paths.imu_path, {paths.dir + "/imu.csv"}, &seq->imu_path); !s) return s;
+  if (seq->imu_path.empty()) return Status::Ok();
+  const std::string calib_default = paths.dir + "/calib_imu_to_velo.txt";
+  if (Status s = Resolve(paths.imu_calib_path, {calib_default}, &seq->imu_calib_path); !s) return s;
+  if (seq->imu_calib_path.empty())
+    return Status::Error(calib_default + ": no such file (required with " + seq->imu_path +
+                         ": it defines the IMU's frame)");
+  if (Status s = ReadKittiImuCalib(seq->imu_calib_path, &seq->imu_calib); !s) return s;
+  if (Status s = LoadImuCsv(seq->imu_path, &seq->imu); !s) return s;
+  if (seq->imu.empty()) return Status::Error(seq->imu_path + ": no samples");
+  return Status::Ok();
+}
+
 std::string SequenceName(const std::string& dir) {
   fs::path p = fs::absolute(dir).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
@@ -122,6 +139,7 @@ Status OpenKittiSequence(const KittiSequencePaths& paths, KittiSequence* sequenc
     if (Status s = ReadKittiSequenceInfo(info_path, &seq.info); !s) return s;
     seq.info_path = info_path;
   }
+  if (Status s = OpenImu(paths, &seq); !s) return s;
   *sequence = std::move(seq);
   return Status::Ok();
 }

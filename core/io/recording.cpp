@@ -33,18 +33,6 @@ Status CheckIncreasing(const std::string& path, const CsvReader& reader, Seconds
                        std::to_string(t) + " does not increase (previous " + std::to_string(prev) + ")");
 }
 
-Status LoadImu(const std::string& path, std::vector<ImuSample>* out) {
-  CsvReader reader;
-  if (Status s = reader.Open(path, kImuColumns); !s) return s;
-  std::vector<double> v;
-  while (reader.Next(&v)) {
-    if (!out->empty())
-      if (Status s = CheckIncreasing(path, reader, out->back().t_s, v[0]); !s) return s;
-    out->push_back({v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6]}});
-  }
-  return reader.status();
-}
-
 Status LoadEncoder(const std::string& path, uint32_t counts_per_rev, std::vector<EncoderSample>* out) {
   CsvReader reader;
   if (Status s = reader.Open(path, kEncoderColumns); !s) return s;
@@ -93,13 +81,35 @@ Status LoadPackets(const std::string& path, double epoch_unix_s, std::vector<Lid
 
 }  // namespace
 
+Status LoadImuCsv(const std::string& path, std::vector<ImuSample>* out) {
+  CsvReader reader;
+  if (Status s = reader.Open(path, kImuColumns); !s) return s;
+  std::vector<double> v;
+  while (reader.Next(&v)) {
+    if (!out->empty())
+      if (Status s = CheckIncreasing(path, reader, out->back().t_s, v[0]); !s) return s;
+    out->push_back({v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6]}});
+  }
+  return reader.status();
+}
+
+Status SaveImuCsv(const std::string& path, const std::vector<ImuSample>& samples) {
+  CsvWriter csv;
+  if (Status s = csv.Open(path, kImuColumns); !s) return s;
+  for (const ImuSample& s : samples)
+    csv.Row({s.t_s, s.gyro_radps.x(), s.gyro_radps.y(), s.gyro_radps.z(), s.accel_mps2.x(), s.accel_mps2.y(),
+             s.accel_mps2.z()});
+  return csv.Close();
+}
+
+
 Status LoadRecording(const std::string& dir, Recording* recording) {
   Recording r;
   r.dir = dir;
   if (!fs::is_directory(dir)) return Status::Error(dir + ": not a recording folder (no such directory)");
   if (Status s = LoadCalibYaml(dir + "/" + RecordingLayout::kCalib, &r.calib); !s) return s;
   if (Status s = LoadPackets(dir + "/" + RecordingLayout::kLidar, r.calib.epoch_unix_s, &r.lidar_packets); !s) return s;
-  if (Status s = LoadImu(dir + "/" + RecordingLayout::kImu, &r.imu); !s) return s;
+  if (Status s = LoadImuCsv(dir + "/" + RecordingLayout::kImu, &r.imu); !s) return s;
   if (Status s = LoadEncoder(dir + "/" + RecordingLayout::kEncoder, r.calib.encoder.counts_per_rev, &r.encoder); !s)
     return s;
   if (Status s = LoadCamera(dir, &r.camera); !s) return s;

@@ -49,6 +49,12 @@ struct Recording {
 /// ports and payload sizes it holds (PcapReader::NoVlp16DataError).
 Status LoadRecording(const std::string& dir, Recording* recording);
 
+/// Reads an imu.csv (the columns above; strictly increasing t_s) and appends its samples to *samples. Errors name
+/// the file, the line and the column.
+Status LoadImuCsv(const std::string& path, std::vector<ImuSample>* samples);
+/// Writes samples as an imu.csv (overwritten). Fails naming the file when it cannot be written.
+Status SaveImuCsv(const std::string& path, const std::vector<ImuSample>& samples);
+
 /// Reads one camera image (BGR8); fails with the file name when it cannot be read.
 Status LoadCameraFrame(const CameraFrameRef& ref, CameraFrame* frame);
 

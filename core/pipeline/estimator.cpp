@@ -92,6 +92,7 @@ ScanReport Estimator::ProcessScan(const LidarScan& scan) {
   const Prediction prediction = Predict(scan.t_start_s, scan.t_end_s);
   std::vector<ScanPoint> points = Deskew(scan, prediction, &report);
   ProcessCloud(scan.t_start_s, std::move(points), prediction, &report);
+  RecordMeasuredPose(scan.t_start_s, scan.t_end_s, &prediction.motion);
   rotor_.DropBefore(scan.t_end_s - 1.0);
   report.timings.total_ms = total.ms();
   return report;
@@ -105,11 +106,35 @@ ScanReport Estimator::ProcessDeskewedScan(Seconds t_s, std::vector<ScanPoint> po
   report.num_points = points.size();
   const Prediction prediction = Predict(t_s, t_s);
   ProcessCloud(t_s, std::move(points), prediction, &report);
+  RecordMeasuredPose(t_s, t_s, nullptr);
   report.timings.total_ms = total.ms();
   return report;
 }
 
-// preprocess -> features -> register -> fuse -> map, shared by both entries.
+// The carrier's motion over the revolution moves each point to the start's base frame; then the shared back half.
+ScanReport Estimator::ProcessTimedScan(Seconds t_s, std::vector<ScanPoint> points) {
+  const Stopwatch total;
+  ScanReport report;
+  report.t_start_s = report.t_end_s = t_s;
+  for (const ScanPoint& p : points) report.t_end_s = std::max(report.t_end_s, p.t_s);
+  report.num_points = points.size();
+  const Prediction prediction = Predict(t_s, report.t_end_s);
+  const Stopwatch deskew;
+  MotionInterpolator motion(prediction.motion);
+  for (ScanPoint& p : points) {
+    bool outside = false;
+    p.p_base = motion.Apply(p.t_s, p.p_base.cast<double>(), &outside).cast<float>();
+    report.num_motion_extrapolated += outside ? 1 : 0;
+  }
+  report.imu_deskew = prediction.imu_motion;
+  report.timings.deskew_ms = deskew.ms();
+  ProcessCloud(t_s, std::move(points), prediction, &report);
+  RecordMeasuredPose(t_s, report.t_end_s, &prediction.motion);
+  report.timings.total_ms = total.ms();
+  return report;
+}
+
+// preprocess -> features -> register -> fuse -> map, shared by all entries.
 void Estimator::ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const Prediction& prediction,
                              ScanReport* report) {
   const FeatureSet features = ExtractScanFeatures(t_s, std::move(points), report);

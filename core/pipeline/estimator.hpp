@@ -118,6 +118,11 @@ class Estimator {
   /// LiDAR-only (no IMU factor) when no IMU samples were fed. Rings may number up to 256 (KITTI: 64); range_m
   /// must be the point's sensor range (the range gate uses it). Scans must come in time order.
   ScanReport ProcessDeskewedScan(Seconds t_s, std::vector<ScanPoint> points);
+  /// Points in the base frame at their own times p.t_s >= t_s (a fixed LiDAR's raw revolution, e.g. a KITTI bin
+  /// with per-point times): deskewed into the base frame at t_s like ProcessScan (IMU motion once initialised,
+  /// else the last two poses' constant twist), then processed as ProcessDeskewedScan. No rotary transform. Feed
+  /// the IMU up to the last point's time first. Scans must come in time order.
+  ScanReport ProcessTimedScan(Seconds t_s, std::vector<ScanPoint> points);
 
   const Trajectory& trajectory() const { return trajectory_; }  ///< T_world_base at each scan start
   const VoxelMap& map() const { return dense_map_; }            ///< dense map of deskewed points [world]
@@ -146,6 +151,8 @@ class Estimator {
   Prediction Predict(Seconds t0_s, Seconds t1_s) const;
   Prediction PredictFromWindow(Seconds t0_s, Seconds t1_s) const;
   Prediction PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const;
+  /// After a scan's pose is in trajectory_: the pose its registration measured best (measured_poses_).
+  void RecordMeasuredPose(Seconds t0_s, Seconds t1_s, const MotionTable* applied);
   void TryInitializeImu();
   bool StartWindow(const Eigen::Vector3d& gravity_world_mps2, const NavState& state);
   void DropOldData(Seconds t_s);
@@ -162,6 +169,7 @@ class Estimator {
   VoxelMap dense_map_;
   std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;
+  std::deque<StampedPose> measured_poses_;  ///< the last two scans' mid-scan poses (constant-twist prediction)
   std::vector<Pose3> init_poses_imu_;      ///< T_world_imu of the LiDAR-only scans before IMU initialisation
   std::vector<Seconds> init_times_s_;
   std::vector<ScanPoint> preprocessed_;    ///< the current scan's preprocessed points (base at scan start)

@@ -87,16 +87,28 @@ Estimator::Prediction Estimator::PredictFromWindow(Seconds t0_s, Seconds t1_s) c
 
 // Before the IMU is initialised (or without one): constant velocity from the last two poses; where IMU samples
 // cover the span, the rotation comes from the gyro (accelerometer unused: gravity is not known yet).
+// The pose the registration measured best: the scan's middle, T_world_base(t0) * table(t_mid); with no deskew
+// applied (ProcessDeskewedScan), the scan start itself.
+void Estimator::RecordMeasuredPose(Seconds t0_s, Seconds t1_s, const MotionTable* applied) {
+  const Pose3& T_world_start = trajectory_.back().T_ref_body;
+  const Seconds t_mid = applied ? 0.5 * (t0_s + t1_s) : t0_s;
+  measured_poses_.push_back({t_mid, applied ? T_world_start * MotionTablePose(*applied, t_mid) : T_world_start});
+  while (measured_poses_.size() > 2) measured_poses_.pop_front();
+}
+
 Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const {
   Prediction out;
   out.motion = IdentityTable(t0_s, t1_s);
   // Motion over one second in the last pose's frame (constant twist); none before two poses (the first scans:
   // zero velocity, yet the gyro below still removes the carrier's rotation during the scan).
+  // The twist comes from the measured poses (mid-scan, RecordMeasuredPose): a deskew with a wrong velocity shifts
+  // the scan-start pose but hardly its middle, so the velocity error does not feed back (KISS-ICP's reason to
+  // deskew about the scan's middle; Vizzo et al., RA-L 2023).
   Pose3 delta_per_s = Pose3::Identity();
-  if (!trajectory_.empty()) {
-    const StampedPose& b = trajectory_.back();
-    if (trajectory_.size() >= 2) {
-      const StampedPose& a = trajectory_[trajectory_.size() - 2];
+  if (!measured_poses_.empty()) {
+    const StampedPose& b = measured_poses_.back();
+    if (measured_poses_.size() >= 2) {
+      const StampedPose& a = measured_poses_.front();
       if (b.t_s > a.t_s) delta_per_s = ScaleMotion(a.T_ref_body.inverse() * b.T_ref_body, 1.0 / (b.t_s - a.t_s));
     }
     out.T_world_base = b.T_ref_body * ScaleMotion(delta_per_s, t0_s - b.t_s);

@@ -26,8 +26,12 @@ constexpr size_t kFrames = kKitti00Frames;
 
 /// The runner's inputs; the poses file is ORB-SLAM2's trajectory (cam0 convention, frames 0-10).
 KittiSequencePaths Kitti00Paths(const std::string& dir) {
-  return {dir, dir + "/calib_00.txt", dir + "/times_00_frames_0-10.txt",
-          dir + "/orbslam2_stereo_00_frames_0-10_cam0.txt"};
+  KittiSequencePaths paths;
+  paths.dir = dir;
+  paths.calib_path = dir + "/calib_00.txt";
+  paths.times_path = dir + "/times_00_frames_0-10.txt";
+  paths.poses_path = dir + "/orbslam2_stereo_00_frames_0-10_cam0.txt";
+  return paths;
 }
 
 

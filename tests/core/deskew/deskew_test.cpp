@@ -208,7 +208,7 @@ TEST(Deskew, ImuTableFailsWithoutCoverage) {
 
 // MotionInterpolator (Rodrigues on the vector, no trigonometry per point) equals the plain reference
 // TableAt(t) * p, for small and large per-interval rotations, points in any order, on the entries' times and
-// outside the span.
+// outside the span; and so does the table's pose, MotionTablePose(t) * p.
 TEST(MotionInterpolator, EqualsPlainTablePoseTimesPoint) {
   MotionTable table;
   RandomStream rng(5, "deskew_test.table");
@@ -235,6 +235,7 @@ TEST(MotionInterpolator, EqualsPlainTablePoseTimesPoint) {
     const Eigen::Vector3d direct = TableAt(table, t[i], &o) * p[i];
     expected_outside += o;
     ASSERT_LT((out[i] - direct).norm(), 1e-12) << i << " t " << t[i];
+    ASSERT_LT((MotionTablePose(table, t[i]) * p[i] - direct).norm(), 1e-12) << i << " t " << t[i];
   }
   EXPECT_GT(expected_outside, 0u);
   EXPECT_EQ(outside, expected_outside);

@@ -147,10 +147,13 @@ class LidarStream {
     c.epoch_unix_s = calib.epoch_unix_s;
     c.lidar_clock_offset_s = calib.lidar_clock_offset_s;
     c.clock_drift_ppm = clocks.Lidar().drift_ppm;
-    // The twin's VLP-16 has no GPS receiver wired: the packets report no PPS. clocks.lidar_pps_synced only decides
-    // whether clocks.lidar_drift_ppm applies (a disciplined head has none).
-    c.pps_status = 0;
-    c.gps_fix = false;
+    // A PPS-synced head (clocks.lidar_pps_synced) reports PPS locked and a $GPRMC fix when its clock reads UTC
+    // (lidar_clock_offset_s = -(epoch mod 1 h)), as a real head wired to a GPS receiver does; otherwise, and for
+    // a free-running head, no PPS and no fix.
+    c.pps_status = 2;
+    c.gps_fix = true;
+    std::string why;
+    if (!clocks.lidar_pps_synced || !c.Validate(&why)) c.pps_status = 0, c.gps_fix = false;
     return c;
   }
   Status WritePositionsUntil(Seconds t_s, RecordingWriter* writer) {

@@ -13,6 +13,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "core/io/recording.hpp"
+#include "core/wire/vlp16.hpp"
 #include "sim/sim_config.hpp"
 #include "sim/sim_runner.hpp"
 
@@ -122,6 +124,28 @@ TEST(Realism, SameSeedSameBytesWithEveryPreset) {
     ASSERT_FALSE(a.empty());
     EXPECT_EQ(a, b) << w;
     EXPECT_NE(a.at("lidar.pcap"), c.at("lidar.pcap")) << w;
+  }
+}
+
+// The position packets carry the head's time-sync evidence: typical's PPS-synced head (clock reading UTC at the
+// default epoch) reports PPS locked with a $GPRMC fix (status A), harsh's free-running head no PPS and no fix.
+TEST(Realism, PpsStatusFollowsTheHeadsClock) {
+  for (Realism r : {Realism::kTypical, Realism::kHarsh}) {
+    const std::string w = EnumWords(static_cast<Realism*>(nullptr))[int(r)].first;
+    Record(r, 3, w + "_pps");
+    Recording rec;
+    const Status s = LoadRecording((fs::temp_directory_path() / ("rotolidar_realism_" + w + "_pps")).string(), &rec);
+    ASSERT_TRUE(s) << s.message;
+    size_t positions = 0;
+    for (const LidarPacket& p : rec.lidar_packets) {
+      if (p.udp_port != 8308) continue;
+      Vlp16PositionPacket pos;
+      ASSERT_TRUE(ParseVlp16PositionPacket(p.payload.data(), p.payload.size(), &pos));
+      ++positions;
+      EXPECT_EQ(pos.pps_status, r == Realism::kTypical ? 2 : 0) << w;
+      EXPECT_EQ(pos.nmea.substr(0, 17).find(",A,") != std::string::npos, r == Realism::kTypical) << pos.nmea;
+    }
+    EXPECT_GT(positions, 40u) << w;  // 53.8 Hz over 1 s
   }
 }
 

@@ -1,4 +1,5 @@
 // study.html and the writing of a study's outputs (study_report.hpp).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -6,6 +7,7 @@
 
 #include "bench/report/svg_plot.hpp"
 #include "bench/study/study_report.hpp"
+#include "bench/study/study_seeds.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -52,6 +54,29 @@ void WriteTable(const StudyResult& result, std::ostringstream& os) {
   os << "</table>\n";
 }
 
+/// Median, p90 and worst ATE over each group's seeds (only when some group has more than one seed).
+void WriteSeedTable(const StudyResult& result, std::ostringstream& os) {
+  const std::vector<SeedStatistics> stats = StudySeedStatistics(result);
+  if (std::none_of(stats.begin(), stats.end(), [](const SeedStatistics& s) { return s.seeds > 1; })) return;
+  os << "<h2>Over seeds</h2>\n<p class=\"note\">ATE RMSE over the seeds of each group (points that differ only in "
+        "seed); nearest-rank percentiles; failed runs are counted, not averaged away. All metrics: "
+        "<a href=\"study_seeds.csv\">study_seeds.csv</a>.</p>\n<table><tr><th>group</th><th>seeds</th>"
+        "<th>failed</th><th>median [m]</th><th>p90 [m]</th><th>worst [m]</th><th>p90 / median</th></tr>\n";
+  char buf[256];
+  for (const SeedStatistics& s : stats) {
+    if (s.metric != "ate_rmse_m") continue;
+    os << "<tr" << (s.failed > 0 ? " class=\"failed\"" : "") << "><td>" << XmlEscape(s.group) << "</td>";
+    if (s.values == 0) {
+      os << "<td>" << s.seeds << "</td><td>" << s.failed << "</td><td colspan=\"4\">no value</td></tr>\n";
+      continue;
+    }
+    std::snprintf(buf, sizeof(buf), "<td>%zu</td><td>%zu</td><td>%.4f</td><td>%.4f</td><td>%.4f</td><td>%.2f</td>",
+                  s.seeds, s.failed, s.median, s.p90, s.max, s.median > 0.0 ? s.p90 / s.median : 0.0);
+    os << buf << "</tr>\n";
+  }
+  os << "</table>\n";
+}
+
 }  // namespace
 
 std::string StudyHtml(const StudyConfig& config, const StudyResult& result, const std::vector<StudyFigure>& figures) {
@@ -65,7 +90,9 @@ std::string StudyHtml(const StudyConfig& config, const StudyResult& result, cons
         "differ only in seed are averaged (error bars: standard deviation). Metric definitions: docs/studies.md, "
         "docs/metrics.md.</p>\n<div class=\"figs\">\n";
   for (const StudyFigure& f : figures) os << "<figure>" << f.svg << "</figure>\n";
-  os << "</div>\n<h2>Points</h2>\n";
+  os << "</div>\n";
+  WriteSeedTable(result, os);
+  os << "<h2>Points</h2>\n";
   WriteTable(result, os);
   os << "</body></html>\n";
   return os.str();
@@ -76,6 +103,8 @@ Status WriteStudyOutputs(const StudyConfig& config, const StudyResult& result, c
   std::filesystem::create_directories(out_dir + "/plots", ec);
   if (ec) return Status::Error(out_dir + "/plots: cannot create: " + ec.message());
   if (Status s = WriteFileAtomically(out_dir + "/study.csv", StudyCsv(result)); !s) return s;
+  if (Status s = WriteFileAtomically(out_dir + "/study_seeds.csv", StudySeedsCsv(StudySeedStatistics(result))); !s)
+    return s;
   const std::vector<StudyFigure> figures = StudyFigures(config, result);
   for (const StudyFigure& f : figures)
     if (Status s = WriteFileAtomically(out_dir + "/plots/" + f.file_name, f.svg); !s) return s;

@@ -11,6 +11,7 @@
 #include "bench/demo/demo.hpp"
 #include "bench/report/run_report.hpp"
 #include "bench/run/progress.hpp"
+#include "bench/run/scan_health.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/yaml_fields.hpp"
@@ -110,6 +111,20 @@ void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
 
 }  // namespace
 
+void PrintScanHealth(const std::vector<ScanReport>& scans) {
+  const ScanHealth h = AssessScanHealth(scans);
+  if (h.stretches.empty()) return;
+  constexpr size_t kMaxLines = 10;
+  const Seconds t0 = scans.front().t_start_s;
+  for (size_t i = 0; i < h.stretches.size() && i < kMaxLines; ++i)
+    std::printf("warning: %s\n", FormatStretch(h.stretches[i], t0).c_str());
+  if (h.stretches.size() > kMaxLines)
+    std::printf("warning: ... and %zu more stretches (metrics.json: health.stretches)\n",
+                h.stretches.size() - kMaxLines);
+  std::printf("registration problems: %zu of %zu scans did not converge, %zu degenerate (report.html: "
+              "\"Registration problems\")\n", h.not_converged, h.scans, h.degenerate);
+}
+
 int CmdDemo(int argc, char** argv) {
   DemoOptions options;
   OptionParser p("demo", "Simulate the rotary rig in the default scene, run the SLAM core, report the error vs truth.");
@@ -129,6 +144,7 @@ int CmdDemo(int argc, char** argv) {
               r.sim.wall_time_s);
   std::printf("  slam  : %zu scans, median %.1f ms per scan, %.1fx real time, map %zu points\n",
               r.slam.scans.size(), r.slam.median_scan_ms, rt, r.slam.map_points);
+  PrintScanHealth(r.slam.scans);
   std::printf("  ATE   : RMSE %.4f m (mean %.4f, max %.4f) over %zu poses, SE(3) Umeyama alignment\n",
               r.ape.stats.rmse, r.ape.stats.mean, r.ape.stats.max, r.ape.num_associated);
   if (r.evaluation.has_map_metrics)
@@ -183,6 +199,7 @@ int CmdSlam(int argc, char** argv) {
     return Fail(s);
   std::printf("%zu scans, median %.1f ms per scan, %.1fx real time; outputs in %s\n", r.scans.size(),
               r.median_scan_ms, r.wall_time_s > 0 ? r.data_duration_s / r.wall_time_s : 0.0, p.Get("out").c_str());
+  PrintScanHealth(r.scans);
   RunEvaluationOptions score;  // the ATE when the recording has truth (bench may read truth/); map metrics on --score
   score.map_metrics = p.Flag("score");
   if (score.map_metrics) std::fprintf(stderr, "scoring the map against the scene (--score)\n");

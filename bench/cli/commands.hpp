@@ -1,6 +1,10 @@
 #pragma once
 // The `rotolidar` subcommands. Each takes the arguments after its name and returns a process exit code
 // (0 ok, 1 failure, 2 usage error); messages go to stderr, results to stdout.
+#include <vector>
+
+#include "core/pipeline/estimator.hpp"
+
 namespace rotolidar::bench {
 
 int CmdDemo(int argc, char** argv);
@@ -16,5 +20,9 @@ int CmdSlamKitti(int argc, char** argv);  ///< `slam --kitti DIR` (CmdSlam dispa
 int CmdKittiTwin(int argc, char** argv);  ///< bench/cli/kitti_twin_commands.cpp
 int CmdMapEval(int argc, char** argv);
 int CmdStudy(int argc, char** argv);
+
+/// One "warning:" line per registration-problem stretch (at most 10, then a count) and a summary line, on
+/// stdout; nothing when every registration converged undegenerate (bench/run/scan_health.hpp).
+void PrintScanHealth(const std::vector<ScanReport>& scans);
 
 }  // namespace rotolidar::bench

@@ -89,6 +89,7 @@ int CmdSlamKitti(int argc, char** argv) {
                                       std::to_string(r.frames_imu_initialized) + " frames from the sliding window")
                                          .c_str()
                                    : "LiDAR-only (no IMU used)");
+  PrintScanHealth(r.scans);
   std::printf("deskew: %s\n", r.deskewed ? "by the estimator from the per-point times" : "none (compensated bins)");
   if (r.nominal_times) std::printf("note: no times file: nominal 10 Hz frame times\n");
   if (r.has_ground_truth) {

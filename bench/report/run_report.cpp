@@ -1,5 +1,6 @@
 #include "bench/report/run_report.hpp"
 
+
 #include <fstream>
 #include <sstream>
 
@@ -7,6 +8,7 @@
 
 #include "bench/report/html_report.hpp"
 #include "bench/report/run_report_sections.hpp"
+#include "bench/run/scan_health.hpp"
 #include "core/util/log.hpp"
 
 namespace rotolidar::bench {
@@ -98,6 +100,7 @@ std::string RenderRunReport(const RunReportInput& in) {
   report::AddTrajectorySection(in, &html);
   report::AddApeSection(in, &html);
   report::AddRpeSection(in, &html);
+  report::AddHealthSection(in, &html);
   report::AddTimingSection(in, &html);
   report::AddMapSection(in, &html);
   report::AddCoverageSection(in, &html);
@@ -120,6 +123,7 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
                {"bad_packets", s.bad_packets}};
   for (const report::StageTiming& t : report::ComputeStageTimings(s.scans))
     j["slam"]["stage_mean_ms"][t.stage] = t.mean_ms;
+  j["health"] = ScanHealthJson(AssessScanHealth(s.scans));
   if (!ev.has_truth) return;
   const ErrorStatistics& a = ev.ape.stats;
   j["ape_translation_m"] = {{"alignment", "se3"}, {"poses", ev.ape.num_associated}, {"rmse", a.rmse},

@@ -6,6 +6,8 @@
 //   trajectory   top view of the estimate (SE(3)-aligned) against the truth [scene frame, m]
 //   ape          APE per pose over time                                      (truth only)
 //   rpe          histogram of the translation RPE over 1 m of path           (truth only)
+//   health       registration problems: stretches of scans that did not converge or were degenerate (also
+//                shaded in the ape and timing plots)
 //   timing       time per scan against the real-time budget, per-stage timing table and bars
 //   map          top view of the map coloured by map-to-truth distance (truth) or by height (no truth)
 //   coverage     covered vs missed surface samples (top view), coverage per surface class (map metrics only)
@@ -40,6 +42,7 @@ std::string RenderRunReport(const RunReportInput& input);
 Status WriteRunReport(const std::string& path, const RunReportInput& input);
 
 /// metrics.json members of a run: "slam" (scans, timings, real-time factor, map points, per-stage mean ms),
+/// "health" (ScanHealthJson: registration problems),
 /// and with truth "ape_translation_m", "rpe_translation_m", "deskew_error_m" (when evaluation.has_deskew:
 /// points, scans, scan_stride, median, p90, p95, rmse, mean, max [m], not_deskewed, outside_truth) and "map"
 /// (map_metrics.hpp ToJson). Existing members of `out` are kept.

@@ -1,11 +1,13 @@
 #include "bench/report/run_report_sections.hpp"
 
+
 #include <algorithm>
 #include <cmath>
 
 #include "bench/metrics/coverage.hpp"
 #include "bench/report/svg_plot.hpp"
 #include "bench/report/svg_raster.hpp"
+#include "bench/run/scan_health.hpp"
 
 namespace rotolidar::bench::report {
 namespace {
@@ -47,6 +49,15 @@ void RobustLimits(const std::vector<Eigen::Vector2d>& xy, const std::vector<Plot
 }
 
 double T0(const RunReportInput& in) { return in.slam->trajectory.empty() ? 0.0 : in.slam->trajectory.front().t_s; }
+
+/// The run's problem stretches as shaded spans (red: registration failed, orange: degenerate), relative to t0.
+std::vector<XSpan> ProblemSpans(const RunReportInput& in, double t0) {
+  std::vector<XSpan> spans;
+  for (const ScanProblemStretch& s : AssessScanHealth(in.slam->scans).stretches)
+    spans.push_back({s.t_start_s - t0, s.t_end_s - t0,
+                     s.problem == ScanProblem::kNotConverged ? "#d62728" : "#ff7f0e"});
+  return spans;
+}
 
 }  // namespace
 
@@ -106,8 +117,10 @@ void AddApeSection(const RunReportInput& in, HtmlReport* html) {
   o.legend = false;
   o.hlines = {{ev.ape.stats.rmse, "RMSE " + Fmt("%.4f m", ev.ape.stats.rmse), "#d62728"},
               {ev.ape.stats.median, "median " + Fmt("%.4f m", ev.ape.stats.median), "#7f7f7f"}};
+  o.xspans = ProblemSpans(in, t0);
   html->Figure(LinePlotSvg({s}, o), "Translation error of each pose after alignment (evo's APE, trans_part), " +
-                                        std::to_string(ev.ape.num_associated) + " poses.");
+                                        std::to_string(ev.ape.num_associated) + " poses. Shaded: scans whose "
+                                        "registration failed (red) or was degenerate (orange).");
 }
 
 void AddRpeSection(const RunReportInput& in, HtmlReport* html) {
@@ -156,6 +169,27 @@ std::vector<StageTiming> ComputeStageTimings(const std::vector<ScanReport>& scan
   return any ? out : std::vector<StageTiming>{};
 }
 
+void AddHealthSection(const RunReportInput& in, HtmlReport* html) {
+  const ScanHealth h = AssessScanHealth(in.slam->scans);
+  html->BeginSection("health", "Registration problems");
+  if (h.stretches.empty()) {
+    html->Note("none: every attempted registration converged and none was degenerate (" + std::to_string(h.scans) +
+               " scans)");
+    return;
+  }
+  const double t0 = T0(in);
+  std::vector<std::vector<std::string>> rows;
+  for (const ScanProblemStretch& s : h.stretches) {
+    if (rows.size() == 50) break;
+    rows.push_back({ScanProblemName(s.problem), Fmt("%.2f", s.t_start_s - t0), Fmt("%.2f", s.t_end_s - t0),
+                    std::to_string(s.scans()), s.reason});
+  }
+  html->Table({"problem", "from [s]", "to [s]", "scans", "reason"}, rows,
+              std::to_string(h.not_converged) + " of " + std::to_string(h.scans) + " scans did not converge, " +
+                  std::to_string(h.degenerate) + " were degenerate (the IMU held the unobserved directions)" +
+                  (h.stretches.size() > rows.size() ? "; the first 50 stretches (all: metrics.json)" : ""));
+}
+
 void AddTimingSection(const RunReportInput& in, HtmlReport* html) {
   const std::vector<ScanReport>& scans = in.slam->scans;
   if (scans.empty()) return;
@@ -178,6 +212,7 @@ void AddTimingSection(const RunReportInput& in, HtmlReport* html) {
   o.height_px = 300;
   const double budget_ms = Quantile(periods, 0.5);
   o.hlines = {{budget_ms, "real-time budget (median scan span " + Fmt("%.0f ms)", budget_ms), "#d62728"}};
+  o.xspans = ProblemSpans(in, scans.front().t_start_s);
   html->Figure(LinePlotSvg({s}, o), "Wall time of the estimator's Process for each scan; below the red line the "
                                     "core keeps up with the data.");
   const std::vector<StageTiming> stages = ComputeStageTimings(scans);

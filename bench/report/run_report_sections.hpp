@@ -9,6 +9,7 @@ namespace rotolidar::bench::report {
 void AddTrajectorySection(const RunReportInput& in, HtmlReport* html);
 void AddApeSection(const RunReportInput& in, HtmlReport* html);
 void AddRpeSection(const RunReportInput& in, HtmlReport* html);
+void AddHealthSection(const RunReportInput& in, HtmlReport* html);
 void AddTimingSection(const RunReportInput& in, HtmlReport* html);
 void AddMapSection(const RunReportInput& in, HtmlReport* html);
 void AddCoverageSection(const RunReportInput& in, HtmlReport* html);

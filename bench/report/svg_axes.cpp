@@ -207,6 +207,13 @@ void Canvas::DrawRefLines() {
   // Labels alternate (vertical lines: first row / second row; horizontal: left / right end) so that two
   // nearby lines (RMSE and median) keep readable labels.
   std::ostringstream& o = body_;
+  for (const XSpan& span : options_.xspans) {
+    if (options_.log_x || !(span.x1 >= x_.lo && span.x0 <= x_.hi)) continue;
+    const double p0 = X(std::max(span.x0, x_.lo)), p1 = X(std::min(span.x1, x_.hi));
+    o << "<rect class=\"span\" x=\"" << Px(std::min(p0, p1)) << "\" y=\"" << Px(top_) << "\" width=\""
+      << Px(std::max(std::fabs(p1 - p0), 1.5)) << "\" height=\"" << Px(height_) << "\" fill=\"" << span.color
+      << "\" fill-opacity=\"0.15\"/>\n";
+  }
   int k = 0;
   for (const RefLine& l : options_.vlines) {
     if (!InX(l.value) || l.value < x_.lo || l.value > x_.hi) continue;

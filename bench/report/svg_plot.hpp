@@ -38,6 +38,12 @@ struct RefLine {
   std::string color = "#555555";
 };
 
+/// A shaded stretch of the x axis (e.g. scans whose registration failed), translucent over the plot area.
+struct XSpan {
+  double x0 = 0.0, x1 = 0.0;  ///< in data units, x0 <= x1
+  std::string color = "#d62728";
+};
+
 struct PlotOptions {
   std::string title;
   std::string x_label;  ///< with the unit, e.g. "time [s]"
@@ -58,6 +64,7 @@ struct PlotOptions {
   bool y_include_zero = false;  ///< extend the automatic y range to 0 (ignored on a log axis)
   std::vector<RefLine> vlines;  ///< vertical reference lines at x = value
   std::vector<RefLine> hlines;  ///< horizontal reference lines at y = value
+  std::vector<XSpan> xspans;    ///< shaded x stretches (clipped to the plot; linear x only)
   /// Legend in one row above the plot area (never covers data) instead of inside its top-right corner.
   bool legend_above = false;
 };

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "bench/run/scan_health.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/point_cloud_io.hpp"
@@ -202,6 +203,7 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
   j["imu"] = {{"used", r.imu_used}, {"file", seq.imu_path}, {"calib", seq.imu_calib_path},
               {"samples_fed", r.imu_samples_fed}, {"frames_from_window", r.frames_imu_initialized}};
   j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
+  j["health"] = ScanHealthJson(AssessScanHealth(r.scans));
   if (r.has_ground_truth) {
     j["ground_truth"] = seq.poses_path;
     j["ape_translation_m"] = StatsJson(r.ape, "none");

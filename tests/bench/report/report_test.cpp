@@ -249,6 +249,7 @@ SyntheticRun MakeRun(const std::string& name, bool with_truth) {
     ScanReport r;
     r.t_start_s = p.t_s, r.t_end_s = p.t_s + 0.1;
     r.registration.attempted = r.registration.converged = i > 0;
+    if (i >= 40 && i < 43) r.registration.converged = false, r.registration.message = "test failure";  // one stretch
     r.timings = {2.0, 3.0, 4.0, 10.0 + i % 7, 1.0, 2.0, 22.0 + i % 7};
     run.slam.scans.push_back(r);
   }
@@ -292,8 +293,16 @@ TEST(RunReport, SyntheticRunWithTruthHasEverySection) {
   const std::string html = ReadAll(run.slam_dir + "/report.html");
   std::string why;
   ASSERT_TRUE(WellFormed(html, &why)) << why;
-  for (const char* id : {"headline", "trajectory", "ape", "rpe", "timing", "map", "coverage", "elements", "config"})
+  for (const char* id : {"headline", "trajectory", "ape", "rpe", "health", "timing", "map", "coverage", "elements",
+                         "config"})
     EXPECT_NE(html.find(std::string("<section id=\"") + id + "\">"), std::string::npos) << id;
+  // The 3 failed scans: one row in the health table, shaded in the APE and timing plots.
+  EXPECT_NE(html.find("<td>registration failed</td>"), std::string::npos);
+  EXPECT_NE(html.find("3 of 100 scans did not converge"), std::string::npos);
+  size_t spans = 0;
+  for (size_t at = html.find("class=\"span\""); at != std::string::npos; at = html.find("class=\"span\"", at + 1))
+    ++spans;
+  EXPECT_EQ(spans, 2u);
   EXPECT_NE(html.find(Fmt("%.4f m", ev.ape.stats.rmse)), std::string::npos);
   EXPECT_NE(html.find("main_door"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);

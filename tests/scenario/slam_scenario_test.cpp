@@ -9,6 +9,7 @@
 
 #include "bench/run/slam_run.hpp"
 #include "bench/run/truth_eval.hpp"
+#include "core/io/trajectory_io.hpp"
 #include "sim/sim_runner.hpp"
 
 namespace rotolidar::bench {
@@ -18,6 +19,7 @@ namespace fs = std::filesystem;
 
 struct ScenarioResult {
   SlamRunResult slam;
+  Trajectory truth;  ///< truth/base.tum
   EvalResult ape;
 };
 
@@ -38,6 +40,8 @@ ScenarioResult RunScenario(const std::string& scene, double seconds) {
   EXPECT_TRUE(slam_status.ok) << slam_status.message;
   const Status eval_status = EvaluateAgainstTruth(dir + "/recording", r.slam.trajectory, &r.ape);
   EXPECT_TRUE(eval_status.ok) << eval_status.message;
+  const Status truth_status = ReadTrajectory(dir + "/recording/truth/base.tum", TrajectoryFormat::kTum, &r.truth);
+  EXPECT_TRUE(truth_status.ok) << truth_status.message;
   std::printf("%s %.0f s: ATE RMSE %.4f m over %zu poses\n", scene.c_str(), seconds, r.ape.stats.rmse,
               r.ape.num_associated);
   return r;
@@ -61,17 +65,35 @@ void ExpectHealthy(const ScenarioResult& r, double seconds) {
   for (const ScanReport& s : r.slam.scans) imu_scans += s.imu_initialized ? 1 : 0;
   // The handheld walk starts at rest: the IMU initialises (static start) after imu_init_scans = 10 scans.
   EXPECT_GE(imu_scans, r.slam.scans.size() - 12);
-  // Until then the pose is held (the IMU is still; the walk sets off after ~2.2 s): every scan after the first
-  // up to the one that initialises the IMU, and none after it.
+  // The pose is held while the IMU is still (the walk sets off after ~2.2 s), across the IMU's initialisation:
+  // a prefix of scans after the first (measured 26 on lab and corridor: the stillness test looks back 1 s), and
+  // none once the rig moved.
   size_t held = 0;
-  bool initialized_before = false;
-  for (const ScanReport& s : r.slam.scans) {
+  bool moved = false;
+  for (size_t i = 1; i < r.slam.scans.size(); ++i) {
+    const ScanReport& s = r.slam.scans[i];
+    moved = moved || !s.held_static;
+    EXPECT_FALSE(s.held_static && moved) << s.t_start_s;
     held += s.held_static ? 1 : 0;
-    EXPECT_FALSE(s.held_static && initialized_before) << s.t_start_s;
-    initialized_before = s.imu_initialized;
   }
-  EXPECT_GE(held, 8u);
-  EXPECT_LE(held, 10u);
+  EXPECT_GE(held, 15u);
+  EXPECT_LE(held, 32u);
+  // The hand-over from the held pose to the window is continuous: through the hold and the first two scans
+  // after it, each scan-to-scan rotation matches the truth's (nearest truth pose in time) within 0.1 deg. The
+  // hold used to end at IMU initialisation with a 1.2-1.4 deg step (a young map's registration pulled it).
+  const Trajectory& t = r.slam.trajectory;
+  const auto truth_at = [&](Seconds ts) {
+    return std::min_element(r.truth.begin(), r.truth.end(), [&](const StampedPose& a, const StampedPose& b) {
+             return std::abs(a.t_s - ts) < std::abs(b.t_s - ts);
+           })->T_ref_body.linear();
+  };
+  ASSERT_FALSE(r.truth.empty());
+  for (size_t i = 1; i < std::min(t.size(), held + 3); ++i) {
+    const Eigen::Matrix3d est = t[i - 1].T_ref_body.linear().transpose() * t[i].T_ref_body.linear();
+    const Eigen::Matrix3d tru = truth_at(t[i - 1].t_s).transpose() * truth_at(t[i].t_s);
+    const double error_deg = Eigen::AngleAxisd(tru.transpose() * est).angle() * 180 / M_PI;
+    EXPECT_LT(error_deg, 0.1) << "pose " << i << " at " << t[i].t_s << " s";
+  }
 }
 
 TEST(SlamScenario, LabHandheld) {
@@ -80,7 +102,9 @@ TEST(SlamScenario, LabHandheld) {
   ExpectHealthy(r, seconds);
   std::printf("lab: median weakest lambda %.4f\n", MedianWeakestLambda(r));
   // Typical realism, seeds 1-5 (rotolidar sim --realism typical --seed k, then slam): median 0.0106 m, worst
-  // 0.0135 m; the bound is 2.2x the worst. Ideal realism (seed 1, 8 s: ~2.2 s at rest, ~6 m walked): 0.0109 m RMSE (0.0131 m with a keyframe every
+  // 0.0135 m; the bound is 2.2x the worst (measured before the hold lasted through the IMU initialisation, which
+  // lowered seed 1 from 0.0134 to 0.0122 m on 20 s; bench/studies/scenario_seeds.yaml gives the p90 over 10 seeds).
+  // Ideal realism (seed 1, 8 s: ~2.2 s at rest, ~6 m walked): 0.0109 m RMSE (0.0131 m with a keyframe every
   // scan, exact neighbour reuse and denser planar sets; 0.0143 m before the visibility check and 5 neighbours;
   // 0.0243 m without the static-start hold: the first bands drifted 3.8 deg). ~3x headroom. Frame, time or
   // gravity bugs gave decimetres to metres while this was built.

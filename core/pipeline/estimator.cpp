@@ -99,37 +99,35 @@ ScanReport Estimator::ProcessScan(const LidarScan& scan) {
 }
 
 ScanReport Estimator::ProcessDeskewedScan(Seconds t_s, std::vector<ScanPoint> points) {
-  const Stopwatch total;
-  ScanReport report;
-  report.t_start_s = report.t_end_s = t_s;
-  for (const ScanPoint& p : points) report.t_end_s = std::max(report.t_end_s, p.t_s);
-  report.num_points = points.size();
-  const Prediction prediction = Predict(t_s, t_s);
-  ProcessCloud(t_s, std::move(points), prediction, &report);
-  RecordMeasuredPose(t_s, t_s, nullptr);
-  report.timings.total_ms = total.ms();
-  return report;
+  return ProcessBaseFrameScan(t_s, std::move(points), false);
 }
 
-// The carrier's motion over the revolution moves each point to the start's base frame; then the shared back half.
 ScanReport Estimator::ProcessTimedScan(Seconds t_s, std::vector<ScanPoint> points) {
+  return ProcessBaseFrameScan(t_s, std::move(points), true);
+}
+
+// A cloud already in the base frame; with `deskew`, the carrier's motion over the revolution first moves each
+// point from its own time to t_s. Then the shared back half.
+ScanReport Estimator::ProcessBaseFrameScan(Seconds t_s, std::vector<ScanPoint> points, bool deskew) {
   const Stopwatch total;
   ScanReport report;
   report.t_start_s = report.t_end_s = t_s;
   for (const ScanPoint& p : points) report.t_end_s = std::max(report.t_end_s, p.t_s);
   report.num_points = points.size();
-  const Prediction prediction = Predict(t_s, report.t_end_s);
-  const Stopwatch deskew;
-  MotionInterpolator motion(prediction.motion);
-  for (ScanPoint& p : points) {
-    bool outside = false;
-    p.p_base = motion.Apply(p.t_s, p.p_base.cast<double>(), &outside).cast<float>();
-    report.num_motion_extrapolated += outside ? 1 : 0;
+  const Prediction prediction = Predict(t_s, deskew ? report.t_end_s : t_s);
+  if (deskew) {
+    const Stopwatch watch;
+    MotionInterpolator motion(prediction.motion);
+    for (ScanPoint& p : points) {
+      bool outside = false;
+      p.p_base = motion.Apply(p.t_s, p.p_base.cast<double>(), &outside).cast<float>();
+      report.num_motion_extrapolated += outside ? 1 : 0;
+    }
+    report.imu_deskew = prediction.imu_motion;
+    report.timings.deskew_ms = watch.ms();
   }
-  report.imu_deskew = prediction.imu_motion;
-  report.timings.deskew_ms = deskew.ms();
   ProcessCloud(t_s, std::move(points), prediction, &report);
-  RecordMeasuredPose(t_s, report.t_end_s, &prediction.motion);
+  RecordMeasuredPose(t_s, report.t_end_s, deskew ? &prediction.motion : nullptr);
   report.timings.total_ms = total.ms();
   return report;
 }

@@ -133,6 +133,7 @@ class Estimator {
   struct Prediction;
 
   ScanReport ProcessScan(const LidarScan& scan);
+  ScanReport ProcessBaseFrameScan(Seconds t_s, std::vector<ScanPoint> points, bool deskew);
   /// The shared back half: preprocess -> features -> register -> fuse -> map.
   void ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const Prediction& prediction, ScanReport* report);
   std::vector<ScanPoint> Deskew(const LidarScan& scan, const Prediction& prediction, ScanReport* report);

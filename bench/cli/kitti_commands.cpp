@@ -64,12 +64,12 @@ int CmdSlamKitti(int argc, char** argv) {
   p.Add("imu", "auto", "-", "auto: use DIR/imu.csv when present | on: require it | off: LiDAR-only");
   p.Add("deskew", "auto", "-", "auto: deskew raw bins (sequence_info.txt's deskew: none...) | on | off");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
-  if (!ParseKittiImuUse(p.Get("deskew"), &o.deskew)) return Fail(Status::Error("--deskew: auto, on or off"));
+  if (!ParseKittiSwitch(p.Get("deskew"), &o.deskew)) return Fail(Status::Error("--deskew: auto, on or off"));
   o.paths.dir = p.Get("kitti");
   o.paths.calib_path = p.Get("calib");
   o.paths.times_path = p.Get("times");
   o.paths.poses_path = p.Get("poses");
-  if (!ParseKittiImuUse(p.Get("imu"), &o.imu)) return Fail(Status::Error("--imu: auto, on or off"));
+  if (!ParseKittiSwitch(p.Get("imu"), &o.imu)) return Fail(Status::Error("--imu: auto, on or off"));
   o.out_dir = p.Get("out");
   if (Status s = GetCount(p, "frames", &o.max_frames); !s) return Fail(s);
   if (Status s = GetCount(p, "start", &o.start_frame); !s) return Fail(s);

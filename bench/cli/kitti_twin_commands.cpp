@@ -65,8 +65,8 @@ int CmdKittiTwin(int argc, char** argv) {
   OptionParser p("kitti-twin", "Simulate KITTI's HDL-64E car on a KITTI ground-truth path through a generated street "
                                "scene and write it as a KITTI odometry sequence: velodyne/ bins (motion-"
                                "compensated with the true poses except under --realism harsh), velodyne_times/, "
-                               "poses.txt, times.txt, calib.txt, sequence_info.txt, imu.csv, calib_imu_to_velo.txt; read it with `slam --kitti DIR` "
-                               "(docs/kitti.md).");
+                               "poses.txt, times.txt, calib.txt, sequence_info.txt, imu.csv, "
+                               "calib_imu_to_velo.txt; read it with `slam --kitti DIR` (docs/kitti.md).");
   p.Add("seq", defaults.sequence, "-", "KITTI sequence (07 has the committed scene urban_loop)");
   p.Add("out", "", "-", "output sequence folder (required)");
   p.Add("frames", "0", "-", "frames from frame 0 (0 = all the poses cover)");

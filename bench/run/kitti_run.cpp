@@ -84,13 +84,18 @@ RigCalib KittiRunCalib(const KittiSequence& seq, const KittiRunResult& r) {
   return calib;
 }
 
+/// The estimator config as the run uses it: the options' with use_imu as resolved (the sequence's IMU, --imu).
+EstimatorConfig RunEstimatorConfig(const KittiRunOptions& o, const KittiRunResult& r) {
+  EstimatorConfig config = o.estimator;
+  config.use_imu = r.imu_used;
+  return config;
+}
+
 /// Feeds the picked frames to a fresh estimator; fills the per-frame parts of *r and the dense map [velo(first)].
 Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, const KittiRunOptions& o,
                  KittiRunResult* r, std::vector<Eigen::Vector3d>* map,
                  const std::function<void(double)>& progress) {
-  EstimatorConfig config = o.estimator;
-  config.use_imu = r->imu_used;
-  Estimator estimator(KittiRunCalib(seq, *r), config);
+  Estimator estimator(KittiRunCalib(seq, *r), RunEstimatorConfig(o, *r));
   double estimator_s = 0.0;
   size_t next_imu = 0;
   size_t next_report = picked.size() / 10;
@@ -112,11 +117,12 @@ Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, co
     Seconds t_last_s = t_s;  // the IMU must reach the last point for a deskew
     if (r->deskewed)
       for (const ScanPoint& q : points) t_last_s = std::max(t_last_s, q.t_s);
-    for (; r->imu_used && next_imu < seq.imu.size() && seq.imu[next_imu].t_s <= t_last_s; ++next_imu) {
+    // Up to and including the first sample after t_last_s (it brackets the frame's end).
+    for (; r->imu_used && next_imu < seq.imu.size() && (next_imu == 0 || seq.imu[next_imu - 1].t_s <= t_last_s);
+         ++next_imu) {
       estimator.Feed(seq.imu[next_imu]);
       ++r->imu_samples_fed;
     }
-    if (r->imu_used && next_imu < seq.imu.size()) estimator.Feed(seq.imu[next_imu]);  // brackets t_last_s
     r->scans.push_back(r->deskewed ? estimator.ProcessTimedScan(t_s, std::move(points))
                                    : estimator.ProcessDeskewedScan(t_s, std::move(points)));
     r->frames_imu_initialized += r->scans.back().imu_initialized ? 1 : 0;
@@ -233,9 +239,7 @@ Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const st
   if (Status s = SavePointCloud(d + "/map.ply", map); !s) return s;
   if (Status s = WriteScanTable(d + "/scans.csv", r); !s) return s;
   YAML::Emitter out;
-  EstimatorConfig config = o.estimator;
-  config.use_imu = r.imu_used;
-  EmitEstimatorConfig(out, ResolveFromCalib(config, KittiRunCalib(seq, r)));  // as the estimator ran
+  EmitEstimatorConfig(out, ResolveFromCalib(RunEstimatorConfig(o, r), KittiRunCalib(seq, r)));  // as the estimator ran
   std::ofstream file(d + "/slam_config.yaml");
   file << "# Resolved estimator configuration of this run (rotolidar slam --kitti).\n" << out.c_str() << "\n";
   if (!file) return Status::Error(d + "/slam_config.yaml: write failed");
@@ -244,10 +248,10 @@ Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const st
 
 }  // namespace
 
-bool ParseKittiImuUse(const std::string& word, KittiImuUse* use) {
-  if (word == "auto") *use = KittiImuUse::kAuto;
-  else if (word == "on") *use = KittiImuUse::kOn;
-  else if (word == "off") *use = KittiImuUse::kOff;
+bool ParseKittiSwitch(const std::string& word, KittiSwitch* value) {
+  if (word == "auto") *value = KittiSwitch::kAuto;
+  else if (word == "on") *value = KittiSwitch::kOn;
+  else if (word == "off") *value = KittiSwitch::kOff;
   else return false;
   return true;
 }
@@ -292,11 +296,11 @@ Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
   KittiRunResult r;
   r.nominal_times = seq.nominal_times;
   r.point_times = !seq.point_time_paths.empty();
-  if (options.imu == KittiImuUse::kOn && seq.imu.empty())
+  if (options.imu == KittiSwitch::kOn && seq.imu.empty())
     return Status::Error(options.paths.dir + ": --imu on, but the sequence has no imu.csv");
-  r.imu_used = options.imu != KittiImuUse::kOff && options.estimator.use_imu && !seq.imu.empty();
-  r.deskewed = options.deskew == KittiImuUse::kOn ||
-               (options.deskew == KittiImuUse::kAuto && seq.info.deskew.rfind("none", 0) == 0);
+  r.imu_used = options.imu != KittiSwitch::kOff && options.estimator.use_imu && !seq.imu.empty();
+  r.deskewed = options.deskew == KittiSwitch::kOn ||
+               (options.deskew == KittiSwitch::kAuto && seq.info.deskew.rfind("none", 0) == 0);
   ResolveSensor(seq, options, &r);
   std::vector<Eigen::Vector3d> map;
   if (Status s = RunFrames(seq, picked, options, &r, &map, progress); !s) return s;

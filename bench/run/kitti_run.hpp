@@ -38,9 +38,9 @@ EstimatorConfig KittiEstimatorConfig();
 /// no calib.yaml; docs/features.md).
 inline constexpr double kKittiDefaultRangeSigmaM = 0.01;
 
-/// Whether to use the sequence's IMU: kAuto when it has one, kOn requires one (error without), kOff never.
-enum class KittiImuUse { kAuto, kOn, kOff };
-bool ParseKittiImuUse(const std::string& word, KittiImuUse* use);  ///< "auto" | "on" | "off"
+/// An auto / on / off option of the run (KittiRunOptions::imu, ::deskew; each says what its kAuto decides).
+enum class KittiSwitch { kAuto, kOn, kOff };
+bool ParseKittiSwitch(const std::string& word, KittiSwitch* value);  ///< "auto" | "on" | "off"
 
 struct KittiRunOptions {
   KittiSequencePaths paths;          ///< the sequence folder and optional calib / times / poses files
@@ -49,10 +49,11 @@ struct KittiRunOptions {
   int max_frames = 0;                ///< at most this many frames from start_frame; 0 = all
   EstimatorConfig estimator = KittiEstimatorConfig();
   KittiScanConfig scan;
-  KittiImuUse imu = KittiImuUse::kAuto;
+  /// Use the sequence's IMU: kAuto when it has one, kOn requires one (error without), kOff never.
+  KittiSwitch imu = KittiSwitch::kAuto;
   /// Deskew each bin with its per-point times: kAuto when sequence_info.txt's deskew starts with "none" (raw
   /// bins), kOn always, kOff never (KITTI's own bins are already compensated).
-  KittiImuUse deskew = KittiImuUse::kAuto;
+  KittiSwitch deskew = KittiSwitch::kAuto;
   bool Validate(std::string* error) const;  ///< false naming the field (start_frame, max_frames, sub-configs)
 };
 

@@ -176,7 +176,7 @@ TEST(KittiTwin, ImuStreamFollowsTheDrive) {
 /// `slam --kitti` on the raw twin (no motion compensation): the bins' skew (1 m of travel and 1.1 deg of turn
 /// within each revolution) taken as is, deskewed with the constant twist of the last two measured poses, and
 /// deskewed with the IMU (LiDAR-inertial).
-KittiRunResult RunOnTwin(const std::string& seq_dir, const std::string& out, KittiImuUse imu, KittiImuUse deskew) {
+KittiRunResult RunOnTwin(const std::string& seq_dir, const std::string& out, KittiSwitch imu, KittiSwitch deskew) {
   KittiRunOptions o;
   o.paths.dir = seq_dir;
   o.out_dir = out;
@@ -196,9 +196,9 @@ TEST(KittiTwin, RawBinsAreDeskewedWithAConstantTwistOrTheImu) {
   o.lidar.firings_per_revolution = 1000;  // 360 columns leave too little for the registration at 10 m/s
   KittiTwinResult twin;
   ASSERT_TRUE(RunKittiTwin(o, &twin));
-  const KittiRunResult none = RunOnTwin(o.out_dir, dir + "/none", KittiImuUse::kOff, KittiImuUse::kOff);
-  const KittiRunResult twist = RunOnTwin(o.out_dir, dir + "/twist", KittiImuUse::kOff, KittiImuUse::kAuto);
-  const KittiRunResult imu = RunOnTwin(o.out_dir, dir + "/imu", KittiImuUse::kAuto, KittiImuUse::kAuto);
+  const KittiRunResult none = RunOnTwin(o.out_dir, dir + "/none", KittiSwitch::kOff, KittiSwitch::kOff);
+  const KittiRunResult twist = RunOnTwin(o.out_dir, dir + "/twist", KittiSwitch::kOff, KittiSwitch::kAuto);
+  const KittiRunResult imu = RunOnTwin(o.out_dir, dir + "/imu", KittiSwitch::kAuto, KittiSwitch::kAuto);
   ASSERT_TRUE(none.ape.status && twist.ape.status && imu.ape.status);
   EXPECT_FALSE(none.deskewed);
   EXPECT_TRUE(twist.deskewed);  // auto: sequence_info.txt says the bins are raw

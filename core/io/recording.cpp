@@ -17,6 +17,12 @@ namespace {
 
 const std::vector<std::string> kImuColumns{"t_s",          "gyro_x_radps", "gyro_y_radps", "gyro_z_radps",
                                            "accel_x_mps2", "accel_y_mps2", "accel_z_mps2"};
+/// One imu.csv row in kImuColumns' order.
+std::vector<double> ImuRow(const ImuSample& s) {
+  return {s.t_s, s.gyro_radps.x(), s.gyro_radps.y(), s.gyro_radps.z(),
+          s.accel_mps2.x(), s.accel_mps2.y(), s.accel_mps2.z()};
+}
+
 const std::vector<std::string> kEncoderColumns{"t_s", "count"};
 const std::vector<std::string> kCameraColumns{"t_s", "index"};
 
@@ -97,8 +103,7 @@ Status SaveImuCsv(const std::string& path, const std::vector<ImuSample>& samples
   CsvWriter csv;
   if (Status s = csv.Open(path, kImuColumns); !s) return s;
   for (const ImuSample& s : samples)
-    csv.Row({s.t_s, s.gyro_radps.x(), s.gyro_radps.y(), s.gyro_radps.z(), s.accel_mps2.x(), s.accel_mps2.y(),
-             s.accel_mps2.z()});
+    csv.Row(ImuRow(s));
   return csv.Close();
 }
 
@@ -160,8 +165,7 @@ Status RecordingWriter::Open(const std::string& dir, const RigCalib& calib) {
 Status RecordingWriter::Write(const LidarPacket& packet) { return impl_->pcap.Write(packet); }
 
 Status RecordingWriter::Write(const ImuSample& s) {
-  impl_->imu.Row({s.t_s, s.gyro_radps.x(), s.gyro_radps.y(), s.gyro_radps.z(), s.accel_mps2.x(), s.accel_mps2.y(),
-                  s.accel_mps2.z()});
+  impl_->imu.Row(ImuRow(s));
   return Status::Ok();
 }
 

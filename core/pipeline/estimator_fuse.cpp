@@ -94,8 +94,6 @@ Estimator::Prediction Estimator::PredictFromWindow(Seconds t0_s, Seconds t1_s) c
   return out;
 }
 
-// Before the IMU is initialised (or without one): constant velocity from the last two poses; where IMU samples
-// cover the span, the rotation comes from the gyro (accelerometer unused: gravity is not known yet).
 // The pose the registration measured best: the scan's middle, T_world_base(t0) * table(t_mid); with no deskew
 // applied (ProcessDeskewedScan), the scan start itself.
 void Estimator::RecordMeasuredPose(Seconds t0_s, Seconds t1_s, const MotionTable* applied) {
@@ -105,6 +103,8 @@ void Estimator::RecordMeasuredPose(Seconds t0_s, Seconds t1_s, const MotionTable
   while (measured_poses_.size() > 2) measured_poses_.pop_front();
 }
 
+// Before the IMU is initialised (or without one): constant velocity from the last two measured poses; where IMU
+// samples cover the span, the rotation comes from the gyro (accelerometer unused: gravity is not known yet).
 Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const {
   Prediction out;
   out.motion = IdentityTable(t0_s, t1_s);

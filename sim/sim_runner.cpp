@@ -98,12 +98,24 @@ Status WriteResolvedConfig(const SimConfig& config, const SimWorld& world, const
   return WriteText(dir + "/rig_model.xml", rig.mjcf());  // the exact MJCF the physics ran
 }
 
+/// True when a reported echo of the firing (either slot) is the central ray's first surface: its noise-free
+/// range lies within half the echo separation of that surface's (echoes closer than the separation merge, so
+/// such an echo formed on it; a strongest echo from a wall behind a walker's edge does not count).
+bool ReportsFirstSurface(const LidarTruthPoint& p, double echo_separation_m) {
+  const bool returned[2] = {p.returned, p.returned2};
+  for (int s = 0; s < 2; ++s)
+    if (returned[s] && std::abs(p.echo_range_m[s] - p.true_range_m) < 0.5 * echo_separation_m) return true;
+  return false;
+}
+
 /// The LiDAR stream: fires the head packet by packet along the true lidar pose (interpolated from the physics
 /// trace) and writes VLP-16 data packets plus position packets. Fires every packet whose last firing lies within
-/// the trace; returns the time before which the trace is no longer needed.
+/// the trace; returns the time before which the trace is no longer needed. With dynamic objects in the scene it
+/// also writes each return of a packet that came from one to truth/dynamic_hits.csv (every fired sequence goes
+/// out in a packet: one Fire call fills exactly one).
 class LidarStream {
  public:
-  LidarStream(const SimConfig& config, const SimWorld& world, const RigCalib& calib)
+  LidarStream(const SimConfig& config, const SimWorld& world, const RigCalib& calib, TruthWriter* truth)
       : config_(config),
         calib_(calib),
         kinematics_(calib, config.rig_errors.wobble),
@@ -111,7 +123,9 @@ class LidarStream {
         caster_(*world.embree, calib.lidar, world.lidar, config.seed),
         encoder_(config.return_mode, calib.lidar_clock_offset_s, config.clocks.Lidar().drift_ppm),
         positions_(PositionConfig(calib, config.clocks)),
-        capture_(config.clocks.lidar_capture, config.seed) {}
+        capture_(config.clocks.lidar_capture, config.seed),
+        truth_(truth),
+        echo_separation_m_(world.lidar.echo_separation_m) {}
 
   Status FireCovered(const RigTrace& trace, RecordingWriter* writer, SimSummary* summary) {
     const int per_packet = encoder_.SequencesPerPacket();
@@ -125,7 +139,10 @@ class LidarStream {
       if (t_last > config_.duration_s || !trace.Covers(NextFiringTime(), t_last)) break;
       embree_.SetTime(NextFiringTime());  // dynamic objects at the packet's time (moving < 1 mm in 1.3 ms)
       sequences_.clear();
-      caster_.Fire(per_packet, T_world_lidar_at, &sequences_, nullptr);
+      truth_points_.clear();
+      const bool dynamic = embree_.num_dynamic_objects() > 0;
+      caster_.Fire(per_packet, T_world_lidar_at, &sequences_, dynamic ? &truth_points_ : nullptr);
+      if (Status s = WriteDynamicHits(); !s) return s;
       for (const Vlp16FiringSequence& seq : sequences_) {
         for (uint16_t d : seq.distance_2mm) summary->lidar_returns += d != 0;
         summary->lidar_rays += 16;
@@ -156,6 +173,13 @@ class LidarStream {
     if (!clocks.lidar_pps_synced || !c.Validate(&why)) c.pps_status = 0, c.gps_fix = false;
     return c;
   }
+  Status WriteDynamicHits() {
+    for (const LidarTruthPoint& p : truth_points_) {
+      if (!p.hit || p.object_id < 0 || !ReportsFirstSurface(p, echo_separation_m_)) continue;
+      if (Status s = truth_->WriteDynamicHit({p.t_s, p.object_id, p.p_world}); !s) return s;
+    }
+    return Status::Ok();
+  }
   Status WritePositionsUntil(Seconds t_s, RecordingWriter* writer) {
     position_packets_.clear();
     positions_.EmitUntil(t_s - Vlp16PositionConfig{}.transmit_latency_s, &position_packets_);
@@ -176,6 +200,9 @@ class LidarStream {
   CaptureJitter capture_;  // host receive delay of every packet written
   std::vector<Vlp16FiringSequence> sequences_;
   std::vector<LidarPacket> position_packets_;
+  TruthWriter* truth_;
+  double echo_separation_m_;
+  std::vector<LidarTruthPoint> truth_points_;  ///< of the packet being fired (only with dynamic objects)
 };
 
 /// Truth on its own channel at truth_rate_hz, interpolated from the physics trace.
@@ -228,7 +255,7 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
   state.Reset(world.carrier->At(0.0), ref0.theta_rad, ref0.omega_radps);
   RigTrace trace;
   trace.Append({0.0, state.T_world_base(), state.rotor_angle_rad()});
-  LidarStream lidar(config, world, calib);
+  LidarStream lidar(config, world, calib, truth_writer);
   TruthStream truth(config, calib, truth_writer);
   std::unique_ptr<CameraStream> camera;
   if (Status s = MakeCameraStream(config, world, calib, &camera); !s) return s;

@@ -151,6 +151,8 @@ int CmdDemo(int argc, char** argv) {
     std::printf("  map   : map-to-truth median %.4f m, coverage %.1f %%, element size RMSE %.3f m\n",
                 r.evaluation.map.map_to_truth.median_m, 100 * r.evaluation.map.coverage.total.coverage,
                 r.evaluation.map.element_summary.rmse_m);
+  if (r.evaluation.has_dynamic && r.evaluation.dynamic.returns_seen > 0)
+    std::printf("  %s\n", DynamicShareLine(r.evaluation.dynamic).c_str());
   if (r.evaluation.has_deskew)
     std::printf("  deskew: per-point error median %.4f m, p90 %.4f m over %zu points\n",
                 r.evaluation.deskew.all.median_m, r.evaluation.deskew.all.p90_m, r.evaluation.deskew.all.count);
@@ -202,6 +204,7 @@ int CmdSlam(int argc, char** argv) {
   PrintScanHealth(r.scans);
   RunEvaluationOptions score;  // the ATE when the recording has truth (bench may read truth/); map metrics on --score
   score.map_metrics = p.Flag("score");
+  score.dynamic.voxel_m = config.output_map_voxel_m;  // voxels seen counted in the dense map's own voxel
   if (score.map_metrics) std::fprintf(stderr, "scoring the map against the scene (--score)\n");
   RunEvaluation ev;
   if (Status s = WriteSlamRunReport(p.Get("RECORDING"), p.Get("out"), r, score, &ev); !s) return Fail(s);
@@ -213,6 +216,7 @@ int CmdSlam(int argc, char** argv) {
                 ev.map_metrics_wall_s);
   else if (score.map_metrics)
     std::printf("no map metrics: %s\n", ev.map_note.c_str());
+  if (ev.has_dynamic && ev.dynamic.returns_seen > 0) std::printf("%s\n", DynamicShareLine(ev.dynamic).c_str());
   std::printf("report: %s/report.html\n", p.Get("out").c_str());
   return 0;
 }

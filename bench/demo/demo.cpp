@@ -50,7 +50,9 @@ Status RunDemo(const DemoOptions& options, DemoResult* result) {
   slam_config.keep_deskewed = true;
   if (Status s = RunSlam(recording, slam_config, slam_dir, &result->slam, MakeProgressPrinter("slam")); !s) return s;
   LOG_INFO("evaluating against truth (trajectory, deskew error, map metrics)");
-  if (Status s = EvaluateRun(recording, slam_dir, result->slam, options.sim.scene, options.evaluation,
+  RunEvaluationOptions evaluation = options.evaluation;
+  evaluation.dynamic.voxel_m = slam_config.output_map_voxel_m;  // voxels seen counted in the dense map's voxel
+  if (Status s = EvaluateRun(recording, slam_dir, result->slam, options.sim.scene, evaluation,
                              &result->evaluation);
       !s)
     return s;

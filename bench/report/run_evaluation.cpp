@@ -3,11 +3,13 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 
 #include "bench/eval/alignment.hpp"
 #include "bench/eval/statistics.hpp"
 #include "bench/eval/trajectory_lookup.hpp"
 #include "bench/eval/trajectory_metrics.hpp"
+#include "bench/metrics/surface_distance.hpp"
 #include "bench/report/html_report.hpp"
 #include "bench/run/progress.hpp"
 #include "bench/run/truth_eval.hpp"
@@ -97,26 +99,29 @@ Status EvaluateDeskewError(const std::string& recording_dir, const SlamRunResult
   return Status::Ok();
 }
 
-/// Map metrics of out->map_points (scene frame) against the run's scene; notes instead of errors for what is
-/// missing (no scene, no sim_config.yaml).
-Status EvaluateMap(const std::string& recording_dir, const std::string& scene_name_or_path,
-                   const RunEvaluationOptions& options, RunEvaluation* out) {
+/// The run's scene (`scene_name_or_path`, or when empty the one <recording_dir>/sim_config.yaml names). Ok with
+/// *note set (and *scene untouched) when there is none to load; an error only for a sim_config.yaml that exists
+/// and does not read.
+Status LoadRunScene(const std::string& recording_dir, const std::string& scene_name_or_path, sim::Scene* scene,
+                    std::string* note) {
   std::string scene_name = scene_name_or_path;
   if (scene_name.empty()) {
     const std::string config_path = recording_dir + "/sim_config.yaml";
     if (!fs::exists(config_path)) {
-      out->map_note = "no map metrics: the recording has no sim_config.yaml naming its scene";
+      *note = "the recording has no sim_config.yaml naming its scene";
       return Status::Ok();
     }
     sim::SimConfig config = sim::DefaultSimConfig();
     if (Status s = sim::LoadSimConfig(config_path, &config); !s) return s;
     scene_name = config.scene;
   }
-  sim::Scene scene;
-  if (Status s = sim::LoadScene(sim::ResolveScenePath(scene_name), &scene); !s) {
-    out->map_note = "no map metrics: scene '" + scene_name + "' does not load: " + s.message;
-    return Status::Ok();
-  }
+  if (Status s = sim::LoadScene(sim::ResolveScenePath(scene_name), scene); !s)
+    *note = "scene '" + scene_name + "' does not load: " + s.message;
+  return Status::Ok();
+}
+
+/// Map metrics of out->map_points (scene frame) against the run's scene.
+Status EvaluateMap(const sim::Scene& scene, const RunEvaluationOptions& options, RunEvaluation* out) {
   out->scene_name = scene.name;
   MapMetricsConfig config = options.map;
   config.keep_per_point = true;
@@ -136,6 +141,53 @@ Status EvaluateMap(const std::string& recording_dir, const std::string& scene_na
   return Status::Ok();
 }
 
+/// The dynamic-object share of out->map_points (scene frame) against `hits`; the static surface is the scene's
+/// static mesh. `scene` is null when it did not load (`scene_note` says why): a note then, unless there are no
+/// hits (no map point is asked about).
+Status EvaluateDynamic(const std::vector<sim::DynamicHitSample>& hits, const sim::Scene* scene,
+                       const std::string& scene_note, const RunEvaluationOptions& options, RunEvaluation* out) {
+  std::unique_ptr<SurfaceDistance> surface;
+  StaticDistanceFn static_distance = [](const Eigen::Vector3d&, double at_least_m) { return 2.0 * at_least_m; };
+  if (!hits.empty()) {
+    if (!scene) {
+      out->dynamic_note = "no dynamic share: " + scene_note;
+      return Status::Ok();
+    }
+    if (Status s = SurfaceDistance::Create(sim::BuildMesh(*scene), &surface); !s) return s;
+    static_distance = StaticDistanceOf(*surface);
+  }
+  if (Status s = ComputeDynamicShare(hits, out->map_points, static_distance, options.dynamic, &out->dynamic); !s)
+    return s;
+  out->dynamic_config = options.dynamic;
+  out->has_dynamic = true;
+  return Status::Ok();
+}
+
+/// Map metrics (when asked for) and the dynamic share (when the truth has dynamic_hits.csv) of the non-empty map
+/// in the scene frame; the scene is loaded only when one of them needs it.
+Status EvaluateMapAgainstScene(const std::string& recording_dir, const std::string& scene_name_or_path,
+                               const RunEvaluationOptions& options, RunEvaluation* out) {
+  const bool has_hits_file = fs::exists(recording_dir + "/truth/dynamic_hits.csv");
+  std::vector<sim::DynamicHitSample> hits;
+  if (Status s = sim::ReadDynamicHits(recording_dir, &hits); !s) return s;
+  sim::Scene scene;
+  std::string scene_note;
+  if (options.map_metrics || !hits.empty())
+    if (Status s = LoadRunScene(recording_dir, scene_name_or_path, &scene, &scene_note); !s) return s;
+  const sim::Scene* loaded = scene_note.empty() ? &scene : nullptr;
+  if (!options.map_metrics)
+    out->map_note = "map metrics not computed (`rotolidar slam --score` or `rotolidar mapeval` compute them)";
+  else if (!loaded)
+    out->map_note = "no map metrics: " + scene_note;
+  else if (Status s = EvaluateMap(scene, options, out); !s)
+    return s;
+  if (!has_hits_file) {
+    out->dynamic_note = "no dynamic share: the truth has no dynamic_hits.csv (a recording from before it)";
+    return Status::Ok();
+  }
+  return EvaluateDynamic(hits, loaded, scene_note, options, out);
+}
+
 }  // namespace
 
 bool RunEvaluationOptions::Validate(std::string* error) const {
@@ -151,6 +203,7 @@ bool RunEvaluationOptions::Validate(std::string* error) const {
     *error = "map: " + *error;
     return false;
   }
+  if (!dynamic.Validate(error)) return false;  // names dynamic.<field>
   return true;
 }
 
@@ -165,23 +218,24 @@ Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir
   const std::string map_path = slam_dir + "/map.ply";
   if (!fs::exists(map_path)) {
     out->map_note = "no map (" + map_path + " does not exist)";
+    out->dynamic_note = "no dynamic share: " + out->map_note;
     return Status::Ok();
   }
   if (Status s = LoadMapInSceneFrame(map_path, out->T_scene_slam, &out->map_points); !s) return s;
   out->map_in_scene_frame = out->has_truth;
   if (!out->has_truth) {
     out->map_note = "no map metrics: they need the sim's truth";
-    return Status::Ok();
-  }
-  if (!options.map_metrics) {
-    out->map_note = "map metrics not computed (`rotolidar slam --score` or `rotolidar mapeval` compute them)";
+    out->dynamic_note = "no dynamic share: it needs the sim's truth";
     return Status::Ok();
   }
   if (out->map_points.empty()) {
-    out->map_note = "no map metrics: the map is empty";
+    out->map_note = options.map_metrics
+                        ? "no map metrics: the map is empty"
+                        : "map metrics not computed (`rotolidar slam --score` or `rotolidar mapeval` compute them)";
+    out->dynamic_note = "no dynamic share: the map is empty";
     return Status::Ok();
   }
-  return EvaluateMap(recording_dir, scene_name_or_path, options, out);
+  return EvaluateMapAgainstScene(recording_dir, scene_name_or_path, options, out);
 }
 
 }  // namespace rotolidar::bench

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "bench/metrics/deskew_error.hpp"
+#include "bench/metrics/dynamic_share.hpp"
 #include "bench/metrics/map_metrics.hpp"
 #include "bench/run/eval_run.hpp"
 #include "bench/run/slam_run.hpp"
@@ -27,6 +28,9 @@ struct RunEvaluationOptions {
   bool map_metrics = true;       ///< compute map metrics when truth and the scene are available
   bool completeness = true;      ///< visibility from the true base positions (Embree rays; costs time)
   MapMetricsConfig map;          ///< viewpoints are filled from the truth when `completeness`
+  /// The dynamic-object share (dynamic_share.hpp), computed whenever the truth has dynamic_hits.csv and the
+  /// scene loads; set voxel_m to the run's dense-map voxel (EstimatorConfig::output_map_voxel_m).
+  DynamicShareConfig dynamic;
   double rpe_delta_m = 1.0;      ///< RPE pair distance along the path [m]
   int rpe_fallback_frames = 10;  ///< used instead when the path is too short for one metric pair
 
@@ -62,13 +66,22 @@ struct RunEvaluation {
   MapMetrics map;  ///< per-point distances follow map_points' order
   MapMetricsConfig map_config;  ///< the config the metrics were computed with (viewpoints included)
   double map_metrics_wall_s = 0.0;
+
+  // Dynamic-object share (has_dynamic = truth, <recording>/truth/dynamic_hits.csv, a non-empty map and, when
+  // there are hits, a loadable scene): how many points of the walkers and cars reached the dense map.
+  bool has_dynamic = false;
+  std::string dynamic_note;  ///< why there is no dynamic share; empty when has_dynamic
+  DynamicShare dynamic;
+  DynamicShareConfig dynamic_config;  ///< the thresholds used
 };
 
 /// Evaluates a finished run. Reads <slam_dir>/map.ply; with <recording_dir>/truth/base.tum computes APE / RPE;
 /// with truth, truth/lidar.tum and slam.deskew_scan_stride > 0 the deskew error; with truth and a scene
 /// (`scene_name_or_path`, or when empty the scene of <recording_dir>/sim_config.yaml) computes map metrics.
-/// Missing truth, lidar truth, deskew data or scene is not an error (notes say what is missing); an unreadable
-/// map or a failing metric is an error only for files that exist (the Status names the file).
+/// With truth and <recording_dir>/truth/dynamic_hits.csv the dynamic-object share of the map (against the same
+/// scene's static surface). Missing truth, lidar truth, dynamic hits, deskew data or scene is not an error
+/// (notes say what is missing); an unreadable map or a failing metric is an error only for files that exist
+/// (the Status names the file).
 Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,
                    const std::string& scene_name_or_path, const RunEvaluationOptions& options, RunEvaluation* out);
 

@@ -155,6 +155,11 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
     map["alignment"] = "se3 (the APE's)";
     j["map"] = map;
   }
+  if (ev.has_dynamic) {
+    nlohmann::json dynamic;
+    ToJson(ev.dynamic, ev.dynamic_config, &dynamic);
+    j["dynamic"] = dynamic;
+  }
 }
 
 Status WriteSlamRunReport(const std::string& recording_dir, const std::string& slam_dir, const SlamRunResult& slam,

@@ -277,6 +277,11 @@ void AddMapSection(const RunReportInput& in, HtmlReport* html) {
                std::to_string(ev.map_points.size()) + " map points, " +
                    (ev.map_in_scene_frame ? "scene frame (SE(3) alignment of the APE)" : "SLAM world frame") +
                    "; each pixel shows the mean over the points above it.");
+  if (ev.has_dynamic && ev.dynamic.returns_seen > 0)  // docs/metrics.md, 'Dynamic objects in the map'
+    html->Paragraph(DynamicShareLine(ev.dynamic) + Fmt(": map points farther than %g m from the static scene",
+                                                       ev.dynamic_config.static_clearance_m) +
+                    Fmt(" and within %g m of a return the sim saw from a walker or car.",
+                        ev.dynamic_config.hit_radius_m));
   if (!by_error) return;
   std::vector<double> d(ev.map.point_distance_m.begin(), ev.map.point_distance_m.end());
   HistogramOptions h;

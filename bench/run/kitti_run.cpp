@@ -138,6 +138,8 @@ Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, co
   if (r->trajectory_velo.size() != r->scans.size())
     return Status::Error("estimator returned " + std::to_string(r->trajectory_velo.size()) + " poses for " +
                          std::to_string(r->scans.size()) + " frames");
+  const FreeSpaceCounts flushed = estimator.FlushMap();  // the last free_space.delay_s of points
+  if (!r->scans.empty()) r->scans.back().map_free_space += flushed;
   *map = estimator.map().Points();
   r->map_points = map->size();
   std::vector<double> ms;

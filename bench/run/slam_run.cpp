@@ -62,7 +62,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "degen_tx", "degen_ty", "degen_tz", "degen_rx", "degen_ry", "degen_rz",
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
                                  "total_ms", "held_static", "vx_mps", "vy_mps", "vz_mps", "bgx_radps", "bgy_radps",
-                                 "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2", "keyframe", "neighbour_searches"});
+                                 "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2", "keyframe", "neighbour_searches",
+                                 "dynamic_features", "map_judged", "map_dynamic"});
       !s)
     return s;
   for (const ScanReport& r : scans) {
@@ -85,6 +86,9 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
       for (int i = 0; i < 3; ++i) row.push_back((*v)[i]);
     row.push_back(double(r.keyframe));
     row.push_back(double(g.neighbour_searches));
+    row.push_back(double(r.num_dynamic_features));
+    row.push_back(double(r.map_free_space.judged));
+    row.push_back(double(r.map_free_space.dynamic));
     csv.Row(row);
   }
   return csv.Close();

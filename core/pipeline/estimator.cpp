@@ -21,6 +21,14 @@ Vlp16DecoderConfig DecoderConfigFor(const RigCalib& calib) {
   return c;
 }
 
+/// The sensor origin in the base frame for the free-space images: the lidar origin averaged over a rotor turn
+/// (on the motor axis it does not move; off the axis this is its circle's centre).
+Eigen::Vector3d SensorOrigin(const RigCalib& calib) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 4; ++k) sum += calib.T_base_lidar(0.5 * M_PI * k).translation();
+  return 0.25 * sum;
+}
+
 }  // namespace
 
 Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
@@ -34,6 +42,8 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
   std::string why;
   ROTOLIDAR_CHECK(calib_.Validate(&why), why);
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
+  if (config_.free_space.enabled)
+    free_space_ = std::make_unique<FreeSpaceFilter>(config_.free_space, SensorOrigin(calib_));
 }
 
 Estimator::~Estimator() = default;
@@ -79,6 +89,8 @@ std::vector<ScanReport> Estimator::Finish() {
     reports.push_back(ProcessScan(pending_scans_.front()));
     pending_scans_.pop_front();
   }
+  const FreeSpaceCounts flushed = FlushMap();  // the last delay_s of points, in the last scan's report
+  if (!reports.empty()) reports.back().map_free_space += flushed;
   return reports;
 }
 
@@ -139,7 +151,7 @@ void Estimator::ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const P
   Matrix6d information_base = Matrix6d::Zero();
   const Pose3 T_world_base_lidar = Register(features, prediction.T_world_base, report, &information_base);
   const Pose3 T_world_base = Fuse(t_s, T_world_base_lidar, information_base, prediction, report);
-  UpdateMap(features, T_world_base, report);
+  UpdateMap(t_s, features, T_world_base, report);
   DropOldData(t_s);
 }
 

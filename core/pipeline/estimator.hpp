@@ -22,6 +22,7 @@
 #include "core/wire/vlp16.hpp"
 #include "core/pipeline/estimator_config.hpp"
 #include "core/deskew/rotary.hpp"
+#include "core/pipeline/free_space.hpp"
 #include "core/pipeline/voxel_map.hpp"
 #include "core/types/trajectory.hpp"
 
@@ -84,6 +85,11 @@ struct ScanReport {
   bool imu_deskew = false;        ///< carrier motion came from the IMU (false: constant velocity / none)
   bool held_static = false;       ///< static start: the IMU was still, the pose was held (no registration)
   bool keyframe = false;          ///< the scan's features went into the local map (UpdateMap)
+  /// Free-space test (core/pipeline/free_space.hpp): keyframe features that earlier scans saw through (kept out
+  /// of the local map), and the dense-map points released at this scan (those of the scan delay_s earlier):
+  /// how many were tested and how many were dynamic (kept out of the dense map).
+  size_t num_dynamic_features = 0;
+  FreeSpaceCounts map_free_space;
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
   Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< imu origin velocity from the window, world [m/s] (0 before IMU init)
@@ -125,7 +131,12 @@ class Estimator {
   ScanReport ProcessTimedScan(Seconds t_s, std::vector<ScanPoint> points);
 
   const Trajectory& trajectory() const { return trajectory_; }  ///< T_world_base at each scan start
-  const VoxelMap& map() const { return dense_map_; }            ///< dense map of deskewed points [world]
+  /// Dense map of deskewed points [world]. With the free-space test on, a scan's points enter it
+  /// free_space.delay_s later (or at Finish / FlushMap).
+  const VoxelMap& map() const { return dense_map_; }
+  /// Hands the points still waiting for the free-space test to the dense map (Finish does this; callers of
+  /// ProcessDeskewedScan / ProcessTimedScan call it after their last scan). Returns what the test did.
+  FreeSpaceCounts FlushMap();
   size_t bad_packets() const { return bad_packets_; }
   bool imu_initialized() const;
 
@@ -146,7 +157,9 @@ class Estimator {
   /// LiDAR pose + IMU in the sliding window (or LiDAR-only before initialisation / without IMU).
   Pose3 Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix6d& information_base,
              const Prediction& prediction, ScanReport* report);
-  void UpdateMap(const FeatureSet& features, const Pose3& T_world_base, ScanReport* report);
+  void UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& T_world_base, ScanReport* report);
+  /// The scan's points (or, with the free-space test, those of the scan delay_s ago) into the dense map.
+  FreeSpaceCounts AddToDenseMap(Seconds t_s, const Pose3& T_world_base, bool flush);
 
   /// The motion prior for a scan spanning [t0_s, t1_s].
   Prediction Predict(Seconds t0_s, Seconds t1_s) const;
@@ -168,6 +181,7 @@ class Estimator {
   std::vector<LidarPoint> packet_points_;
   LocalMap local_map_;
   VoxelMap dense_map_;
+  std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
   std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;
   std::deque<StampedPose> measured_poses_;  ///< the last two scans' mid-scan poses (constant-twist prediction)

@@ -7,6 +7,7 @@
 #include "core/backend/imu_init.hpp"
 #include "core/backend/sliding_window.hpp"
 #include "core/features/curvature_features.hpp"
+#include "core/pipeline/free_space.hpp"
 #include "core/preprocess/filters.hpp"
 #include "core/registration/local_map.hpp"
 #include "core/registration/scan_to_map.hpp"
@@ -72,6 +73,9 @@ struct EstimatorConfig {
   double output_map_voxel_m = 0.05;  ///< [m]
   int output_map_points_per_voxel = 1;
   double output_map_max_range_m = 40.0;  ///< points farther from the lidar are not added to the output map [m]
+  /// Moving objects out of the maps: keyframe features and dense-map points that other scans saw through
+  /// (core/pipeline/free_space.hpp). The dense map then lags delay_s behind the latest scan.
+  FreeSpaceConfig free_space;
 
   /// Keep each scan's decoded points and their deskewed positions in the ScanReport (deskew evaluation; memory
   /// grows with the run: ~30 k points x 44 B per scan).

@@ -71,6 +71,14 @@ void Visit(V& v, LocalMapConfig& c) {
 }
 
 template <class V>
+void Visit(V& v, FreeSpaceConfig& c) {
+  v("enabled", &c.enabled), v("delay_s", &c.delay_s), v("window_s", &c.window_s);
+  v("bins_per_face", &c.bins_per_face), v("margin_m", &c.margin_m), v("margin_per_m", &c.margin_per_m);
+  v("min_later_through", &c.min_later_through), v("vote_every_scans", &c.vote_every_scans);
+  v("min_looked_bins", &c.min_looked_bins);
+}
+
+template <class V>
 void Visit(V& v, SlidingWindowConfig& c) {
   v("window_size", &c.window_size), v("marginalization", &c.marginalization);
   v("estimate_gravity", &c.estimate_gravity);
@@ -109,7 +117,8 @@ void Visit(V& v, EstimatorConfig& c) {
   v("hold_static_start", &c.hold_static_start);
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
   v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);
-  v("output_map_max_range_m", &c.output_map_max_range_m), v("keep_deskewed", &c.keep_deskewed);
+  v("output_map_max_range_m", &c.output_map_max_range_m), v("free_space", &c.free_space);
+  v("keep_deskewed", &c.keep_deskewed);
   v("preprocess", &c.preprocess), v("features", &c.features), v("registration", &c.registration);
   v("local_map", &c.local_map), v("window", &c.window), v("imu_init", &c.imu_init);
 }

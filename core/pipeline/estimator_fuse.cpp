@@ -231,29 +231,75 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
   return T_world_base;
 }
 
-void Estimator::UpdateMap(const FeatureSet& features, const Pose3& T_world_base, ScanReport* report) {
+namespace {
+
+/// Drops the points of `cloud` (base frame at T_world_base) that scans before t_s saw through; returns how many.
+size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
+                       pcl::PointCloud<pcl::PointXYZI>* cloud) {
+  const size_t before = cloud->size();
+  auto seen_through = [&](const pcl::PointXYZI& q) {
+    return filter.SeenThroughBefore(t_s, T_world_base * Eigen::Vector3d(q.x, q.y, q.z));
+  };
+  cloud->points.erase(std::remove_if(cloud->points.begin(), cloud->points.end(), seen_through), cloud->points.end());
+  cloud->width = uint32_t(cloud->size());
+  cloud->height = 1;
+  return before - cloud->size();
+}
+
+}  // namespace
+
+// A keyframe's map-side features into the local map, less those arriving where earlier scans saw free space
+// (moving objects); then the dense map.
+void Estimator::UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& T_world_base, ScanReport* report) {
   const Stopwatch watch;
   const bool young = int(local_map_.num_keyframes()) < config_.initial_keyframes;
   const bool forced = config_.keyframe_every_scans > 0 && ++scans_since_keyframe_ >= config_.keyframe_every_scans;
   if (young || local_map_.NeedsKeyframe(T_world_base) || forced) {
-    local_map_.AddKeyframe(features, T_world_base);
+    if (free_space_) {
+      FeatureSet kept;
+      kept.less_sharp = features.less_sharp;
+      kept.less_flat = features.less_flat;
+      report->num_dynamic_features = DropSeenThrough(*free_space_, t_s, T_world_base, &kept.less_sharp) +
+                                     DropSeenThrough(*free_space_, t_s, T_world_base, &kept.less_flat);
+      local_map_.AddKeyframe(kept, T_world_base);
+    } else {
+      local_map_.AddKeyframe(features, T_world_base);
+    }
     scans_since_keyframe_ = 0;
     report->keyframe = true;
   }
-  // World points in stack chunks (no per-scan heap buffer; the map sees the same sequence as in one call).
+  report->map_free_space = AddToDenseMap(t_s, T_world_base, false);
+  report->timings.map_ms = watch.ms();
+}
+
+FreeSpaceCounts Estimator::FlushMap() {
+  return free_space_ ? AddToDenseMap(0.0, Pose3::Identity(), true) : FreeSpaceCounts{};
+}
+
+// World points in stack chunks (no per-scan heap buffer; the map sees the same sequence as in one call). With the
+// free-space test, the scan waits in the filter and the points of the scan delay_s older come out, less the
+// dynamic ones (only points the map would take are tested).
+FreeSpaceCounts Estimator::AddToDenseMap(Seconds t_s, const Pose3& T_world_base, bool flush) {
   constexpr size_t kChunk = 256;
   Eigen::Vector3d chunk[kChunk];
   size_t n = 0;
-  for (const ScanPoint& p : preprocessed_) {
-    if (!(p.range_m <= config_.output_map_max_range_m)) continue;
-    chunk[n++] = T_world_base * p.p_base.cast<double>();
+  auto accept = [&](const Eigen::Vector3d& p_world) {
+    chunk[n++] = p_world;
     if (n == kChunk) {
       dense_map_.Add(chunk, n);
       n = 0;
     }
+  };
+  FreeSpaceCounts counts;
+  if (free_space_) {
+    if (!flush) free_space_->AddScan(t_s, T_world_base, preprocessed_, config_.output_map_max_range_m);
+    counts = free_space_->Release(flush, [&](const Eigen::Vector3d& p) { return !dense_map_.Full(p); }, accept);
+  } else {
+    for (const ScanPoint& p : preprocessed_)
+      if (p.range_m <= config_.output_map_max_range_m) accept(T_world_base * p.p_base.cast<double>());
   }
   dense_map_.Add(chunk, n);
-  report->timings.map_ms = watch.ms();
+  return counts;
 }
 
 void Estimator::DropOldData(Seconds t_s) {

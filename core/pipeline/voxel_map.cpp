@@ -11,7 +11,8 @@ namespace rotolidar {
 VoxelMap::VoxelMap(double voxel_size_m, int max_points_per_voxel)
     : voxel_size_m_(voxel_size_m),
       max_points_per_voxel_(max_points_per_voxel),
-      min_spacing_m_(voxel_size_m / std::sqrt(double(max_points_per_voxel))) {
+      min_spacing_m_(voxel_size_m / std::sqrt(double(max_points_per_voxel))),
+      points_(size_t(std::max(1, max_points_per_voxel)) << 13) {  // chunks of whole voxels
   ROTOLIDAR_CHECK(voxel_size_m > 0 && max_points_per_voxel >= 1, "bad VoxelMap parameters");
 }
 
@@ -46,6 +47,10 @@ void VoxelMap::Rehash(size_t num_slots) {
   for (size_t v = 0; v < keys_.size(); ++v) table_[SlotOf(keys_[v])] = Slot{keys_[v], uint32_t(v)};
 }
 
+VoxelMap::Key VoxelMap::KeyOfVoxel(size_t v) const {
+  return max_points_per_voxel_ == 1 ? KeyOf(points_[v]) : keys_[v];
+}
+
 inline VoxelMap::Key VoxelMap::BlockKeyOf(const Key& v) {
   return {v.x >> kBlockBits, v.y >> kBlockBits, v.z >> kBlockBits};  // arithmetic shift: floor division
 }
@@ -73,15 +78,9 @@ VoxelMap::BlockBits* VoxelMap::FindBlock(const Key& block_key, bool create) {
     std::vector<BlockSlot> old = std::move(block_table_);
     block_table_.assign(std::max<size_t>(256, 2 * old.size()), BlockSlot{{0, 0, 0}, kEmpty});
     for (const BlockSlot& b : old)
-      if (b.block != kEmpty) {
-        size_t slot = size_t(VoxelHash(b.key.x, b.key.y, b.key.z)) & (block_table_.size() - 1);
-        while (block_table_[slot].block != kEmpty) slot = (slot + 1) & (block_table_.size() - 1);
-        block_table_[slot] = b;
-      }
+      if (b.block != kEmpty) block_table_[BlockSlotOf(b.key)] = b;
   }
-  const size_t mask = block_table_.size() - 1;
-  size_t slot = size_t(VoxelHash(block_key.x, block_key.y, block_key.z)) & mask;
-  while (block_table_[slot].block != kEmpty && !(block_table_[slot].key == block_key)) slot = (slot + 1) & mask;
+  const size_t slot = BlockSlotOf(block_key);
   if (block_table_[slot].block == kEmpty) {
     if (!create) return nullptr;
     block_table_[slot] = BlockSlot{block_key, uint32_t(blocks_.size())};
@@ -90,6 +89,29 @@ VoxelMap::BlockBits* VoxelMap::FindBlock(const Key& block_key, bool create) {
   }
   cached = BlockCacheEntry{block_key, blocks_[block_table_[slot].block].get()};
   return cached.bits;
+}
+
+size_t VoxelMap::BlockSlotOf(const Key& block_key) const {
+  const size_t mask = block_table_.size() - 1;
+  size_t slot = size_t(VoxelHash(block_key.x, block_key.y, block_key.z)) & mask;
+  while (block_table_[slot].block != kEmpty && !(block_table_[slot].key == block_key)) slot = (slot + 1) & mask;
+  return slot;
+}
+
+bool VoxelMap::Full(const Eigen::Vector3d& p_world) const {
+  const Key key = KeyOf(p_world);
+  const Key block_key = BlockKeyOf(key);
+  const BlockBits* bits = nullptr;
+  const BlockCacheEntry& cached = block_cache_[CacheSlotOf(block_key)];
+  if (cached.bits != nullptr && cached.key == block_key) {
+    bits = cached.bits;
+  } else if (!block_table_.empty()) {
+    const size_t slot = BlockSlotOf(block_key);
+    if (block_table_[slot].block != kEmpty) bits = blocks_[block_table_[slot].block].get();
+  }
+  if (bits == nullptr) return false;
+  const size_t bit = BitOf(key);
+  return ((*bits)[bit >> 6] >> (bit & 63)) & 1;
 }
 
 void VoxelMap::MarkFull(const Key& voxel) {
@@ -101,8 +123,8 @@ void VoxelMap::RebuildFullBits() {
   block_table_.clear();
   blocks_.clear();
   block_cache_.fill(BlockCacheEntry{});
-  for (size_t v = 0; v < keys_.size(); ++v)
-    if (counts_[v] >= uint32_t(max_points_per_voxel_)) MarkFull(keys_[v]);
+  for (size_t v = 0; v < num_voxels_; ++v)
+    if (CountOf(v) >= uint32_t(max_points_per_voxel_)) MarkFull(KeyOfVoxel(v));
 }
 
 // One point per voxel: a voxel exists iff it is full, so its bit is the whole index and the large voxel table is
@@ -127,9 +149,8 @@ void VoxelMap::AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n) {
     for (size_t i = 0; i < count; ++i) {
       if (*words[i] & masks[i]) continue;  // the voxel is full
       *words[i] |= masks[i];
-      keys_.push_back(keys[i]);
-      counts_.push_back(1);
       points_.push_back(p_world[begin + i]);
+      ++num_voxels_;
       ++num_points_;
     }
   }
@@ -158,11 +179,12 @@ void VoxelMap::Add(const Eigen::Vector3d* p_world, size_t n) {
       keys_.push_back(key);
       counts_.push_back(0);
       points_.resize(points_.size() + per_voxel);
+      ++num_voxels_;
     }
     const size_t v = table_[slot].voxel;
     uint32_t& count = counts_[v];
     if (count >= per_voxel) continue;
-    Eigen::Vector3d* pts = points_.data() + v * per_voxel;
+    Eigen::Vector3d* pts = &points_[v * per_voxel];  // a chunk holds whole voxels: contiguous
     bool far_enough = true;
     for (uint32_t j = 0; j < count; ++j) far_enough = far_enough && (pts[j] - p).squaredNorm() >= min_sq;
     if (!far_enough) continue;
@@ -175,18 +197,24 @@ void VoxelMap::Add(const Eigen::Vector3d* p_world, size_t n) {
 void VoxelMap::RemoveFar(const Eigen::Vector3d& center_world, double max_distance_m) {
   const double max_sq = max_distance_m * max_distance_m;
   const size_t per_voxel = size_t(max_points_per_voxel_);
+  const bool one = per_voxel == 1;
   size_t kept = 0;
   num_points_ = 0;
-  for (size_t v = 0; v < keys_.size(); ++v) {  // compact in place, insertion order kept
-    if (counts_[v] == 0 || (points_[v * per_voxel] - center_world).squaredNorm() > max_sq) continue;
-    keys_[kept] = keys_[v];
-    counts_[kept] = counts_[v];
-    std::copy_n(points_.begin() + long(v * per_voxel), per_voxel, points_.begin() + long(kept * per_voxel));
-    num_points_ += counts_[kept];
+  for (size_t v = 0; v < num_voxels_; ++v) {  // compact in place, insertion order kept
+    if (CountOf(v) == 0 || (points_[v * per_voxel] - center_world).squaredNorm() > max_sq) continue;
+    if (!one) {
+      keys_[kept] = keys_[v];
+      counts_[kept] = counts_[v];
+    }
+    for (size_t j = 0; j < per_voxel; ++j) points_[kept * per_voxel + j] = points_[v * per_voxel + j];
+    num_points_ += CountOf(kept);
     ++kept;
   }
-  keys_.resize(kept);
-  counts_.resize(kept);
+  num_voxels_ = kept;
+  if (!one) {
+    keys_.resize(kept);
+    counts_.resize(kept);
+  }
   points_.resize(kept * per_voxel);
   if (!table_.empty()) Rehash(table_.size());
   RebuildFullBits();
@@ -196,8 +224,8 @@ std::vector<Eigen::Vector3d> VoxelMap::Points() const {
   std::vector<Eigen::Vector3d> out;
   out.reserve(num_points_);
   const size_t per_voxel = size_t(max_points_per_voxel_);
-  for (size_t v = 0; v < keys_.size(); ++v)
-    out.insert(out.end(), points_.begin() + long(v * per_voxel), points_.begin() + long(v * per_voxel + counts_[v]));
+  for (size_t v = 0; v < num_voxels_; ++v)
+    for (uint32_t j = 0; j < CountOf(v); ++j) out.push_back(points_[v * per_voxel + j]);
   return out;
 }
 

@@ -11,6 +11,8 @@
 
 #include <Eigen/Core>
 
+#include "core/util/chunked_vector.hpp"
+
 namespace rotolidar {
 
 class VoxelMap {
@@ -24,12 +26,14 @@ class VoxelMap {
   /// The same for n points at p_world (not kept; the caller may reuse the buffer, e.g. in chunks: adding a
   /// sequence in pieces gives the same map as adding it at once).
   void Add(const Eigen::Vector3d* p_world, size_t n);
+  /// True when p_world's voxel holds max_points_per_voxel points already (Add would turn p away).
+  bool Full(const Eigen::Vector3d& p_world) const;
   /// Removes voxels whose centre is farther than max_distance_m from `center_world`.
   void RemoveFar(const Eigen::Vector3d& center_world, double max_distance_m);
   /// All points (order unspecified but deterministic for the same insertion sequence).
   std::vector<Eigen::Vector3d> Points() const;
   size_t NumPoints() const;
-  bool Empty() const { return keys_.empty(); }
+  bool Empty() const { return num_voxels_ == 0; }
   double voxel_size_m() const { return voxel_size_m_; }
 
  private:
@@ -64,6 +68,8 @@ class VoxelMap {
   static Key BlockKeyOf(const Key& voxel);
   static size_t BitOf(const Key& voxel);
   BlockBits* FindBlock(const Key& block_key, bool create);
+  /// The block key's slot in block_table_ (non-empty), or the empty slot where it would go.
+  size_t BlockSlotOf(const Key& block_key) const;
   void MarkFull(const Key& voxel);
   void RebuildFullBits();
 
@@ -80,12 +86,18 @@ class VoxelMap {
   double voxel_size_m_;
   int max_points_per_voxel_;
   double min_spacing_m_;
+  Key KeyOfVoxel(size_t v) const;  ///< voxel v's key (one point per voxel: derived from its point)
+  uint32_t CountOf(size_t v) const { return max_points_per_voxel_ == 1 ? 1u : counts_[v]; }
+
   // Flat storage instead of a node-based hash map of vectors: a dense map of ~1e6 voxels gets ~3e4 lookups per
-  // scan, and one probe into a flat table (plus one into the voxel's points) is what they cost.
-  std::vector<Slot> table_;              ///< linear probing, power-of-two size, at most half full
-  std::vector<Key> keys_;                ///< per voxel, in insertion order (keeps Points() deterministic)
-  std::vector<uint32_t> counts_;         ///< per voxel: points kept
-  std::vector<Eigen::Vector3d> points_;  ///< voxel v's points at [v * max_points_per_voxel, + counts_[v])
+  // scan, and one probe into a flat table (plus one into the voxel's points) is what they cost. Chunked, not one
+  // vector: the dense map of an hour-long run grows to 1e7+ points, and a doubling copy would stall a scan.
+  // One point per voxel keeps only points_ (a voxel's key is its point's, its count is 1).
+  std::vector<Slot> table_;                ///< linear probing, power-of-two size, at most half full
+  ChunkedVector<Key> keys_;                ///< per voxel, in insertion order (keeps Points() deterministic)
+  ChunkedVector<uint32_t> counts_;         ///< per voxel: points kept
+  ChunkedVector<Eigen::Vector3d> points_;  ///< voxel v's points at [v * max_points_per_voxel, + count)
+  size_t num_voxels_ = 0;
   size_t num_points_ = 0;
 };
 

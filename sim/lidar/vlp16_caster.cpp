@@ -321,6 +321,7 @@ void Vlp16Caster::Measure(const Firing& firing, std::size_t firing_index, int la
     truth->dir_world = firing.dir_world;
     if (central.hit) {
       truth->true_range_m = central.distance_m;
+      truth->object_id = central.object_id;
       truth->p_world = firing.origin_world + central.distance_m * firing.dir_world;
     }
   }

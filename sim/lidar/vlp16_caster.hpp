@@ -121,6 +121,7 @@ struct LidarTruthPoint {
   bool returned2 = false;
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();  ///< exact first hit of the central ray (valid when hit)
   double true_range_m = 0.0;  ///< of p_world from the laser's origin
+  int object_id = -1;  ///< what p_world lies on: -1 the static world, k Scene::dynamic_objects[k] (valid when hit)
   Eigen::Vector3d origin_world = Eigen::Vector3d::Zero();  ///< the laser's origin at its firing time
   Eigen::Vector3d dir_world = Eigen::Vector3d::UnitX();    ///< unit central ray
   std::array<double, 2> echo_range_m{};  ///< noise-free range of the echo in slot 0 / 1 (0 = none)

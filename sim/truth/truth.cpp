@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string_view>
 #include <system_error>
+#include <type_traits>
 
 #include <Eigen/Geometry>
 
@@ -14,6 +15,7 @@ namespace fs = std::filesystem;
 
 constexpr const char* kRotorHeader = "t_s,theta_rad";
 constexpr const char* kImuBiasHeader = "t_s,bgx,bgy,bgz,bax,bay,baz";
+constexpr const char* kDynamicHitsHeader = "t_s,object_id,x_m,y_m,z_m";
 
 /// Appends `values` separated by `sep` and a newline, each in shortest round-trip form.
 void WriteRow(std::ofstream& out, const double* values, int n, char sep) {
@@ -67,6 +69,7 @@ Status RowError(const std::string& path, int line_no, int bad_field, int n, cons
 }
 
 /// Reads lines of `n` numbers; '#' comments and blank lines are skipped, as is a first line equal to `header`.
+/// on_row(values) may return an int: the index of a field whose value it rejects (-1 = accepted).
 template <typename OnRow>
 Status ReadRows(const std::string& path, char sep, int n, const char* const* names, const char* header,
                 OnRow on_row) {
@@ -85,7 +88,12 @@ Status ReadRows(const std::string& path, char sep, int n, const char* const* nam
     }
     const int bad = ParseRow(line, sep, n, v);
     if (bad >= 0) return RowError(path, line_no, bad, n, names);
-    on_row(v);
+    if constexpr (std::is_same_v<decltype(on_row(v)), int>) {
+      if (const int invalid = on_row(v); invalid >= 0)
+        return Status::Error(path + ":" + std::to_string(line_no) + ": bad value in field '" + names[invalid] + "'");
+    } else {
+      on_row(v);
+    }
   }
   if (in.bad()) return Status::Error(path + ": read error");
   return Status::Ok();
@@ -99,9 +107,9 @@ Status TruthWriter::Open(const std::string& recording_dir) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) return Status::Error(dir_ + ": cannot create directory: " + ec.message());
-  File* files[] = {&base_, &lidar_, &rotor_, &imu_bias_, &cam_};
-  const char* names[] = {"base.tum", "lidar.tum", "rotor.csv", "imu_bias.csv", "cam.tum"};
-  for (int i = 0; i < 5; ++i) {
+  File* files[] = {&base_, &lidar_, &rotor_, &imu_bias_, &cam_, &dynamic_hits_};
+  const char* names[] = {"base.tum", "lidar.tum", "rotor.csv", "imu_bias.csv", "cam.tum", "dynamic_hits.csv"};
+  for (int i = 0; i < 6; ++i) {
     files[i]->path = (fs::path(dir_) / names[i]).string();
     files[i]->stream.open(files[i]->path, std::ios::out | std::ios::trunc);
     if (!files[i]->stream) return Status::Error(files[i]->path + ": cannot open for writing");
@@ -111,6 +119,7 @@ Status TruthWriter::Open(const std::string& recording_dir) {
   cam_.stream << "# T_world_cam (camera optical frame, mid-exposure): t_s tx ty tz qx qy qz qw\n";
   rotor_.stream << kRotorHeader << "\n";
   imu_bias_.stream << kImuBiasHeader << "\n";
+  dynamic_hits_.stream << kDynamicHitsHeader << "\n";
   open_ = true;
   return Status::Ok();
 }
@@ -150,10 +159,17 @@ Status TruthWriter::WriteImuBias(const ImuBiasSample& s) {
   return Check(imu_bias_);
 }
 
+Status TruthWriter::WriteDynamicHit(const DynamicHitSample& s) {
+  const Eigen::Vector3d& p = s.p_world;
+  const double v[5] = {s.t_s, static_cast<double>(s.object_id), p.x(), p.y(), p.z()};
+  if (open_) WriteRow(dynamic_hits_.stream, v, 5, ',');
+  return Check(dynamic_hits_);
+}
+
 Status TruthWriter::Close() {
   if (!open_) return Status::Error("TruthWriter: not open");
   Status first = Status::Ok();
-  for (File* f : {&base_, &lidar_, &rotor_, &imu_bias_, &cam_}) {
+  for (File* f : {&base_, &lidar_, &rotor_, &imu_bias_, &cam_, &dynamic_hits_}) {
     f->stream.flush();
     const bool ok = static_cast<bool>(f->stream);
     f->stream.close();
@@ -176,6 +192,8 @@ Status WriteTruth(const std::string& recording_dir, const TruthLog& log) {
     if (s.ok) s = w.WriteImuBias(b);
   for (const auto& p : log.cam)
     if (s.ok) s = w.WriteCam(p);
+  for (const auto& h : log.dynamic_hits)
+    if (s.ok) s = w.WriteDynamicHit(h);
   if (!w.is_open()) return s;
   const Status c = w.Close();
   return s.ok ? c : s;
@@ -205,7 +223,21 @@ Status ReadTruth(const std::string& recording_dir, TruthLog* out) {
       out->imu_bias.push_back({v[0], Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector3d(v[4], v[5], v[6])});
     });
   if (s.ok && fs::exists(dir / "cam.tum")) s = ReadTum((dir / "cam.tum").string(), &out->cam);
+  if (s.ok) s = ReadDynamicHits(recording_dir, &out->dynamic_hits);
   return s;
+}
+
+Status ReadDynamicHits(const std::string& recording_dir, std::vector<DynamicHitSample>* out) {
+  static const char* const kNames[] = {"t_s", "object_id", "x_m", "y_m", "z_m"};
+  const fs::path path = fs::path(recording_dir) / "truth" / "dynamic_hits.csv";
+  out->clear();
+  if (!fs::exists(path)) return Status::Ok();
+  return ReadRows(path.string(), ',', 5, kNames, kDynamicHitsHeader, [out](const double* v) {
+    // An object index: a whole number in int's range (written as one by WriteDynamicHit).
+    if (!(v[1] >= 0.0 && v[1] <= 2147483647.0) || v[1] != static_cast<double>(static_cast<int>(v[1]))) return 1;
+    out->push_back({v[0], static_cast<int>(v[1]), Eigen::Vector3d(v[2], v[3], v[4])});
+    return -1;
+  });
 }
 
 }  // namespace rotolidar::sim

@@ -337,6 +337,47 @@ TEST(RunReport, WithoutScoreTheMapIsNotScored) {
   EXPECT_NE(html.find("--score"), std::string::npos);
 }
 
+// A walker's returns in truth/dynamic_hits.csv: three map points next to those in free space count, the floor
+// points next to its foot do not (static surface); the share reaches metrics.json and the report's map section.
+TEST(RunReport, DynamicShareReachesMetricsJsonAndTheReport) {
+  const SyntheticRun run = MakeRun("dynamic", true);
+  // MakeRun's SLAM world is the base at the first truth pose: (2.5, 0, 1.2), yawed by 90 deg.
+  const Pose3 T_slam_scene =
+      MakePose({2.5, 0.0, 1.2}, Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()))).inverse();
+  const Eigen::Vector3d c(-1.0, -1.5, 1.2);  // free space in the box room
+  std::vector<Eigen::Vector3d> map;
+  ASSERT_TRUE(LoadPointCloud(run.slam_dir + "/map.ply", &map).ok);
+  for (const Eigen::Vector3d& d : {Eigen::Vector3d(0.02, 0.01, 0.0), Eigen::Vector3d(0.0, 0.03, 0.02),
+                                   Eigen::Vector3d(0.04, -0.02, 0.01)})
+    map.push_back(T_slam_scene * (c + d));
+  ASSERT_TRUE(SavePointCloud(run.slam_dir + "/map.ply", map).ok);
+  {
+    std::ofstream hits(run.recording + "/truth/dynamic_hits.csv");
+    hits << "t_s,object_id,x_m,y_m,z_m\n";
+    for (int i = 0; i < 4; ++i) hits << 1.0 + i << ",0," << c.x() + 0.01 * i << "," << c.y() << "," << c.z() << "\n";
+    hits << "5,0,-1.0,-1.5,0.04\n5.1,0,-1.02,-1.5,0.06\n";  // its foot, just above the floor
+  }
+  RunEvaluationOptions options;
+  options.map_metrics = false;  // the dynamic share does not need them
+  RunEvaluation ev;
+  const Status s = WriteSlamRunReport(run.recording, run.slam_dir, run.slam, options, &ev);
+  ASSERT_TRUE(s.ok) << s.message;
+  ASSERT_TRUE(ev.has_dynamic) << ev.dynamic_note;
+  EXPECT_EQ(ev.dynamic.returns_seen, 6u);
+  EXPECT_EQ(ev.dynamic.map_points_dynamic, 3u);
+  const nlohmann::json j = nlohmann::json::parse(ReadAll(run.slam_dir + "/metrics.json"));
+  ASSERT_TRUE(j.contains("dynamic"));
+  EXPECT_EQ(j["dynamic"]["map_points_dynamic"].get<size_t>(), 3u);
+  EXPECT_EQ(j["dynamic"]["static_clearance_m"].get<double>(), 0.15);
+  EXPECT_NE(ReadAll(run.slam_dir + "/report.html").find("dynamic objects: 6 returns seen"), std::string::npos);
+
+  fs::remove(run.recording + "/truth/dynamic_hits.csv");  // a recording from before the file: a note, no share
+  ASSERT_TRUE(WriteSlamRunReport(run.recording, run.slam_dir, run.slam, options, &ev).ok);
+  EXPECT_FALSE(ev.has_dynamic);
+  EXPECT_NE(ev.dynamic_note.find("dynamic_hits.csv"), std::string::npos) << ev.dynamic_note;
+  EXPECT_FALSE(nlohmann::json::parse(ReadAll(run.slam_dir + "/metrics.json")).contains("dynamic"));
+}
+
 TEST(RunReport, RunWithoutTruthLeavesTruthSectionsOut) {
   const SyntheticRun run = MakeRun("no_truth", false);
   RunEvaluation ev;

@@ -159,5 +159,61 @@ TEST_F(TruthTest, ClockTruthRoundTrips) {
   EXPECT_FALSE(ReadClockTruth((dir_ / "missing").string(), &back).ok);
 }
 
+// truth/dynamic_hits.csv: every field back bit for bit (shortest round-trip form), the object index exact.
+TEST_F(TruthTest, DynamicHitsRoundTrip) {
+  TruthLog log = MakeLog();
+  for (int i = 0; i < 50; ++i)
+    log.dynamic_hits.push_back({0.1 + i / 7.0, i % 3, Eigen::Vector3d(1.0 / 3.0 + i, -2.5e-3 * i, 0.1 * i + 1e-9)});
+  ASSERT_TRUE(WriteTruth(dir_.string(), log).ok);
+  TruthLog back;
+  const Status r = ReadTruth(dir_.string(), &back);
+  ASSERT_TRUE(r.ok) << r.message;
+  ASSERT_EQ(back.dynamic_hits.size(), log.dynamic_hits.size());
+  for (size_t i = 0; i < log.dynamic_hits.size(); ++i) {
+    EXPECT_EQ(back.dynamic_hits[i].t_s, log.dynamic_hits[i].t_s);
+    EXPECT_EQ(back.dynamic_hits[i].object_id, log.dynamic_hits[i].object_id);
+    EXPECT_EQ(back.dynamic_hits[i].p_world, log.dynamic_hits[i].p_world);
+  }
+  std::vector<DynamicHitSample> alone;
+  ASSERT_TRUE(ReadDynamicHits(dir_.string(), &alone).ok);
+  EXPECT_EQ(alone.size(), log.dynamic_hits.size());
+}
+
+// No hits: the file is there with its header only; a recording without the file (older) reads as no hits.
+TEST_F(TruthTest, DynamicHitsHeaderOnlyAndMissingFileReadAsEmpty) {
+  ASSERT_TRUE(WriteTruth(dir_.string(), MakeLog()).ok);
+  const fs::path path = dir_ / "truth" / "dynamic_hits.csv";
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), "t_s,object_id,x_m,y_m,z_m\n");
+  TruthLog back;
+  ASSERT_TRUE(ReadTruth(dir_.string(), &back).ok);
+  EXPECT_TRUE(back.dynamic_hits.empty());
+  fs::remove(path);
+  back.dynamic_hits.push_back({});
+  const Status r = ReadTruth(dir_.string(), &back);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_TRUE(back.dynamic_hits.empty());
+}
+
+TEST_F(TruthTest, DynamicHitsBadLinesNameFileLineAndField) {
+  TruthLog log = MakeLog();
+  log.dynamic_hits = {{0.5, 0, Eigen::Vector3d(1, 2, 3)}, {0.6, 1, Eigen::Vector3d(4, 5, 6)}};
+  const fs::path path = dir_ / "truth" / "dynamic_hits.csv";
+  const std::pair<const char*, const char*> cases[] = {
+      {"0.7,0,1,2,x\n", "z_m"}, {"0.7,1.5,1,2,3\n", "object_id"}, {"0.7,-1,1,2,3\n", "object_id"},
+      {"0.7,0,1,2\n", "5 fields"}};
+  for (const auto& [bad_line, field] : cases) {
+    ASSERT_TRUE(WriteTruth(dir_.string(), log).ok);
+    { std::ofstream(path, std::ios::app) << bad_line; }
+    TruthLog out;
+    const Status s = ReadTruth(dir_.string(), &out);
+    ASSERT_FALSE(s.ok) << bad_line;
+    EXPECT_NE(s.message.find("dynamic_hits.csv:4"), std::string::npos) << s.message;  // header + 2 rows + bad
+    EXPECT_NE(s.message.find(field), std::string::npos) << s.message;
+  }
+}
+
 }  // namespace
 }  // namespace rotolidar::sim

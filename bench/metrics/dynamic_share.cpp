@@ -1,0 +1,125 @@
+#include "bench/metrics/dynamic_share.hpp"
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <set>
+
+#include <nlohmann/json.hpp>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include "bench/metrics/surface_distance.hpp"
+#include "core/util/validation.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+bool PositiveFinite(double v) { return v > 0.0 && std::isfinite(v); }
+
+using VoxelKey = std::array<int64_t, 3>;
+
+/// The voxel (floor(p / voxel_m) per axis) of a hit.
+VoxelKey VoxelOf(const sim::DynamicHitSample& h, double voxel_m) {
+  VoxelKey key;
+  for (int a = 0; a < 3; ++a) key[a] = static_cast<int64_t>(std::floor(h.p_world[a] / voxel_m));
+  return key;
+}
+
+/// Distinct voxels of the hits.
+std::size_t CountVoxels(const std::vector<sim::DynamicHitSample>& hits, double voxel_m) {
+  std::set<VoxelKey> voxels;
+  for (const sim::DynamicHitSample& h : hits) voxels.insert(VoxelOf(h, voxel_m));
+  return voxels.size();
+}
+
+/// Map points within radius_m of some hit and farther than clearance_m from the static surface; *voxels_reached:
+/// the distinct voxels of those points' nearest hits.
+std::size_t CountDynamicPoints(const std::vector<sim::DynamicHitSample>& hits,
+                               const std::vector<Eigen::Vector3f>& map_world, const StaticDistanceFn& static_distance,
+                               const DynamicShareConfig& config, std::size_t* voxels_reached) {
+  *voxels_reached = 0;
+  if (hits.empty() || map_world.empty()) return 0;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->reserve(hits.size());
+  for (const sim::DynamicHitSample& h : hits) {
+    const Eigen::Vector3f p = h.p_world.cast<float>();
+    cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  }
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  std::vector<int> index(1);
+  std::vector<float> sq_dist(1);
+  const double r2 = config.hit_radius_m * config.hit_radius_m;
+  std::size_t count = 0;
+  std::set<VoxelKey> reached;
+  for (const Eigen::Vector3f& p : map_world) {
+    const pcl::PointXYZ q(p.x(), p.y(), p.z());
+    if (tree.nearestKSearch(q, 1, index, sq_dist) != 1 || sq_dist[0] > r2) continue;
+    if (static_distance(p.cast<double>(), config.static_clearance_m) <= config.static_clearance_m) continue;
+    ++count;
+    reached.insert(VoxelOf(hits[std::size_t(index[0])], config.voxel_m));
+  }
+  *voxels_reached = reached.size();
+  return count;
+}
+
+}  // namespace
+
+bool DynamicShareConfig::Validate(std::string* error) const {
+  if (!PositiveFinite(voxel_m)) return FailValidation(error, "dynamic.voxel_m must be > 0 and finite");
+  if (!PositiveFinite(static_clearance_m))
+    return FailValidation(error, "dynamic.static_clearance_m must be > 0 and finite");
+  if (!PositiveFinite(hit_radius_m)) return FailValidation(error, "dynamic.hit_radius_m must be > 0 and finite");
+  return true;
+}
+
+Status ComputeDynamicShare(const std::vector<sim::DynamicHitSample>& hits,
+                           const std::vector<Eigen::Vector3f>& map_world, const StaticDistanceFn& static_distance,
+                           const DynamicShareConfig& config, DynamicShare* out) {
+  std::string why;
+  if (!config.Validate(&why)) return Status::Error("dynamic share: " + why);
+  if (!static_distance) return Status::Error("dynamic share: no static distance function");
+  *out = DynamicShare{};
+  out->returns_seen = hits.size();
+  out->voxels_seen = CountVoxels(hits, config.voxel_m);
+  out->map_points = map_world.size();
+  out->map_points_dynamic = CountDynamicPoints(hits, map_world, static_distance, config, &out->voxels_reached);
+  if (out->voxels_seen > 0)
+    out->share_of_seen = static_cast<double>(out->voxels_reached) / static_cast<double>(out->voxels_seen);
+  if (out->map_points > 0)
+    out->share_of_map = static_cast<double>(out->map_points_dynamic) / static_cast<double>(out->map_points);
+  return Status::Ok();
+}
+
+StaticDistanceFn StaticDistanceOf(const SurfaceDistance& surface) {
+  // Searching a little beyond the clearance is enough: farther answers only need to exceed it.
+  return [&surface](const Eigen::Vector3d& p, double at_least_m) { return surface.Distance(p, 2.0 * at_least_m); };
+}
+
+void ToJson(const DynamicShare& s, const DynamicShareConfig& c, nlohmann::json* out) {
+  *out = {{"returns_seen", s.returns_seen},
+          {"voxels_seen", s.voxels_seen},
+          {"map_points", s.map_points},
+          {"map_points_dynamic", s.map_points_dynamic},
+          {"voxels_reached", s.voxels_reached},
+          {"share_of_seen", s.share_of_seen},
+          {"share_of_map", s.share_of_map},
+          {"voxel_m", c.voxel_m},
+          {"static_clearance_m", c.static_clearance_m},
+          {"hit_radius_m", c.hit_radius_m}};
+}
+
+std::string DynamicShareLine(const DynamicShare& s) {
+  char line[200];
+  std::snprintf(line, sizeof(line),
+                "dynamic objects: %zu returns seen in %zu voxels; the dense map reached %zu of those voxels "
+                "(%.2f %%) with %zu points (%.2f %% of the map)",
+                s.returns_seen, s.voxels_seen, s.voxels_reached, 100.0 * s.share_of_seen, s.map_points_dynamic,
+                100.0 * s.share_of_map);
+  return line;
+}
+
+}  // namespace rotolidar::bench

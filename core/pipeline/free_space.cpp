@@ -1,0 +1,163 @@
+#include "core/pipeline/free_space.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/util/log.hpp"
+#include "core/util/validation.hpp"
+
+namespace rotolidar {
+
+bool FreeSpaceConfig::Validate(std::string* error) const {
+  auto fail = [error](const char* m) { return FailValidation(error, m); };
+  if (!(delay_s >= 0.0 && delay_s <= 60.0)) return fail("free_space.delay_s must be in [0, 60]");
+  if (!(window_s >= 0.0 && window_s <= 60.0)) return fail("free_space.window_s must be in [0, 60]");
+  if (bins_per_face < 3 || bins_per_face > 1000) return fail("free_space.bins_per_face must be in [3, 1000]");
+  if (!(margin_m >= 0.0 && margin_m <= 10.0)) return fail("free_space.margin_m must be in [0, 10]");
+  if (!(margin_per_m >= 0.0 && margin_per_m <= 1.0)) return fail("free_space.margin_per_m must be in [0, 1]");
+  if (min_later_through < 1) return fail("free_space.min_later_through must be >= 1");
+  if (vote_every_scans < 1) return fail("free_space.vote_every_scans must be >= 1");
+  if (min_looked_bins < 1 || min_looked_bins > 9) return fail("free_space.min_looked_bins must be in [1, 9]");
+  return true;
+}
+
+RangeImage::RangeImage(int bins_per_face, int min_looked_bins)
+    : n_(bins_per_face),
+      min_looked_(min_looked_bins),
+      nearest_cm_(size_t(6 * n_ * n_), 0),
+      looked_around_(size_t(6 * n_ * n_), 0) {}
+
+bool RangeImage::BinOf(const Eigen::Vector3f& d, int* face, int* u, int* v) const {
+  const Eigen::Vector3f a = d.cwiseAbs();
+  int axis = 0;
+  if (a.y() > a[axis]) axis = 1;
+  if (a.z() > a[axis]) axis = 2;
+  const float m = a[axis];
+  if (!(m > 0.f)) return false;  // also NaN
+  *face = 2 * axis + (d[axis] < 0.f ? 1 : 0);
+  const float inv = 0.5f * float(n_) / m;
+  const float s = d[(axis + 1) % 3] * inv + 0.5f * float(n_);  // in [0, n]
+  const float t = d[(axis + 2) % 3] * inv + 0.5f * float(n_);
+  *u = std::min(n_ - 1, std::max(0, int(s)));
+  *v = std::min(n_ - 1, std::max(0, int(t)));
+  return true;
+}
+
+void RangeImage::Add(const Eigen::Vector3f& d_sensor) {
+  int face, u, v;
+  if (!BinOf(d_sensor, &face, &u, &v)) return;
+  uint16_t& nearest = nearest_cm_[Index(face, u, v)];
+  // Rounded up to whole cm, at least 1 (0 marks an empty bin), at most 655.35 m.
+  const uint16_t r_cm = uint16_t(std::min(65535.f, std::max(1.f, std::ceil(100.f * d_sensor.norm()))));
+  if (nearest == 0) {  // a bin's first return: its 3x3 neighbours (on this face) have one more bin looked at
+    for (int dv = -1; dv <= 1; ++dv)
+      for (int du = -1; du <= 1; ++du)
+        if (u + du >= 0 && u + du < n_ && v + dv >= 0 && v + dv < n_)
+          ++looked_around_[Index(face, u + du, v + dv)];
+  }
+  if (nearest == 0 || r_cm < nearest) nearest = r_cm;
+}
+
+RangeImage::Verdict RangeImage::Judge(const Eigen::Vector3f& d_sensor, float margin_m) const {
+  int face, u, v;
+  if (!BinOf(d_sensor, &face, &u, &v)) return Verdict::kUnknown;
+  const float r_cm = 100.f * d_sensor.norm(), margin_cm = 100.f * margin_m;
+  const uint16_t centre = nearest_cm_[Index(face, u, v)];
+  if (centre > 0 && std::abs(float(centre) - r_cm) <= margin_cm) return Verdict::kHit;
+  // Outside the scan's band (most of the sphere for one rotary scan): one read decides.
+  if (looked_around_[Index(face, u, v)] < min_looked_) return Verdict::kUnknown;
+  if (u == 0 || v == 0 || u == n_ - 1 || v == n_ - 1) return Verdict::kUnknown;  // neighbours on another face
+  const float beyond_cm = r_cm + margin_cm;
+  int looked = 0;
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du) {
+      const uint16_t b = nearest_cm_[Index(face, u + du, v + dv)];
+      if (b == 0) continue;  // no return in this bin: not looked at
+      if (float(b) <= beyond_cm) return Verdict::kUnknown;  // something at or before the point
+      ++looked;
+    }
+  return looked >= min_looked_ ? Verdict::kSeenThrough : Verdict::kUnknown;
+}
+
+FreeSpaceFilter::FreeSpaceFilter(const FreeSpaceConfig& config, const Eigen::Vector3d& origin_base)
+    : config_(config), origin_base_(origin_base.cast<float>()) {
+  std::string why;
+  ROTOLIDAR_CHECK(config_.Validate(&why), why);
+}
+
+void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points,
+                              double max_range_m) {
+  Scan scan{t_s, T_world_base, Eigen::Matrix3f(), Eigen::Vector3f(),
+            RangeImage(config_.bins_per_face, config_.min_looked_bins), {}};
+  const Pose3 T_base_world = T_world_base.inverse();
+  scan.R_base_world = T_base_world.linear().cast<float>();
+  scan.t_sensor_world = T_base_world.translation().cast<float>() - origin_base_;
+  scan.waiting_world.reserve(points.size());
+  for (const ScanPoint& p : points) {
+    if (!p.p_base.allFinite()) continue;
+    scan.image.Add(p.p_base - origin_base_);
+    if (p.range_m <= max_range_m) scan.waiting_world.push_back(T_world_base * p.p_base.cast<double>());
+  }
+  scans_.push_back(std::move(scan));
+}
+
+// Votes of every vote_every_scans-th scan within window_s of scans_[k] (k itself excluded), one image at a time
+// (its bins stay in cache). Dynamic when the space was seen free after the point by min_later_through scans (the
+// object left, however long it stood there), or when at least one scan saw through it and no more hit it than
+// saw through it (it passed by within the window).
+void FreeSpaceFilter::MarkDynamic(size_t k) {
+  const size_t n = candidates_.size();
+  through_.assign(n, 0);
+  later_through_.assign(n, 0);
+  hits_.assign(n, 0);
+  dynamic_.assign(n, 0);
+  std::vector<Eigen::Vector3f> p(n);
+  for (size_t i = 0; i < n; ++i) p[i] = candidates_[i].cast<float>();
+  const size_t stride = size_t(config_.vote_every_scans);
+  for (size_t j = k % stride; j < scans_.size(); j += stride) {
+    if (j == k || std::abs(scans_[j].t_s - scans_[k].t_s) > config_.window_s) continue;
+    const Scan& scan = scans_[j];
+    const uint16_t later = j > k ? 1 : 0;
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3f d = scan.R_base_world * p[i] + scan.t_sensor_world;
+      const RangeImage::Verdict verdict = scan.image.Judge(d, MarginAt(d.norm()));
+      if (verdict == RangeImage::Verdict::kSeenThrough) {
+        ++through_[i];
+        later_through_[i] += later;
+      } else if (verdict == RangeImage::Verdict::kHit) {
+        ++hits_[i];
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+    dynamic_[i] = later_through_[i] >= config_.min_later_through || PassedBy(through_[i], hits_[i]);
+}
+
+bool FreeSpaceFilter::SeenThroughBefore(Seconds t_s, const Eigen::Vector3d& p_world) const {
+  const Eigen::Vector3f p = p_world.cast<float>();
+  int through = 0, hits = 0, eligible = 0;
+  for (auto it = scans_.rbegin(); it != scans_.rend(); ++it) {  // newest first: every vote_every_scans-th votes
+    const Scan& scan = *it;
+    if (scan.t_s >= t_s) continue;
+    if (t_s - scan.t_s > config_.window_s) break;
+    if (eligible++ % config_.vote_every_scans != 0) continue;
+    const Eigen::Vector3f d = scan.R_base_world * p + scan.t_sensor_world;
+    const RangeImage::Verdict verdict = scan.image.Judge(d, MarginAt(d.norm()));
+    through += verdict == RangeImage::Verdict::kSeenThrough ? 1 : 0;
+    hits += verdict == RangeImage::Verdict::kHit ? 1 : 0;
+  }
+  return PassedBy(through, hits);
+}
+
+// Images stay while a waiting scan's window or SeenThroughBefore may still need them.
+void FreeSpaceFilter::DropOld() {
+  if (scans_.empty()) return;
+  const Seconds oldest_needed =
+      (released_ < scans_.size() ? scans_[released_].t_s : scans_.back().t_s) - config_.window_s;
+  while (released_ > 0 && scans_.front().t_s < oldest_needed) {
+    scans_.pop_front();
+    --released_;
+  }
+}
+
+}  // namespace rotolidar

@@ -1,0 +1,116 @@
+// Free-space test (core/pipeline/free_space.hpp) on ray-cast scans of a room with a moving ball: the ball's
+// points where it no longer is are seen through by later scans, arriving points by earlier ones, and the
+// room's walls, floor and the ball's own current surface are not.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <optional>
+
+#include "core/pipeline/free_space.hpp"
+
+namespace rotolidar {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+/// Room: the box [-8, 8] x [-5, 5] x [-1.5, 2.5] around the sensor at the origin.
+double RoomRange(const Eigen::Vector3d& d) {
+  const Eigen::Vector3d lo(-8, -5, -1.5), hi(8, 5, 2.5);
+  double t = 1e9;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] > 1e-12) t = std::min(t, hi[a] / d[a]);
+    if (d[a] < -1e-12) t = std::min(t, lo[a] / d[a]);
+  }
+  return t;
+}
+
+/// Ray from the origin along unit d against a ball (centre c, radius r): the entry distance, if hit.
+std::optional<double> BallRange(const Eigen::Vector3d& d, const Eigen::Vector3d& c, double r) {
+  const double b = d.dot(c), disc = b * b - (c.squaredNorm() - r * r);
+  if (disc < 0 || b - std::sqrt(disc) <= 0) return std::nullopt;
+  return b - std::sqrt(disc);
+}
+
+/// One scan: rays every 0.5 deg of azimuth and 1 deg of elevation, the ball (if any) in front of the room.
+std::vector<ScanPoint> Scan(const std::optional<Eigen::Vector3d>& ball) {
+  std::vector<ScanPoint> points;
+  for (double el = -80; el <= 80; el += 1.0)
+    for (double az = 0; az < 360; az += 0.5) {
+      const Eigen::Vector3d d(std::cos(el * kDeg) * std::cos(az * kDeg), std::cos(el * kDeg) * std::sin(az * kDeg),
+                              std::sin(el * kDeg));
+      double r = RoomRange(d);
+      if (ball)
+        if (auto rb = BallRange(d, *ball, 0.3)) r = std::min(r, *rb);
+      ScanPoint p;
+      p.p_base = (r * d).cast<float>();
+      p.range_m = float(r);
+      points.push_back(p);
+    }
+  return points;
+}
+
+bool OnBall(const Eigen::Vector3d& p, const Eigen::Vector3d& c) { return std::abs((p - c).norm() - 0.3) < 0.01; }
+
+TEST(RangeImage, SeesThroughFreeSpaceNotSurfacesOrGrazingFloor) {
+  const FreeSpaceConfig config;
+  RangeImage image(config.bins_per_face, config.min_looked_bins);
+  for (const ScanPoint& p : Scan(std::nullopt)) image.Add(p.p_base);
+  const float margin = 0.1f;
+  // In front of the +x wall (8 m): free; on it: hit; behind it: occluded, unknown.
+  EXPECT_EQ(image.Judge({4.f, 0.3f, 0.2f}, margin), RangeImage::Verdict::kSeenThrough);
+  EXPECT_EQ(image.Judge({8.f, 0.3f, 0.2f}, margin), RangeImage::Verdict::kHit);
+  EXPECT_EQ(image.Judge({12.f, 0.45f, 0.3f}, margin), RangeImage::Verdict::kUnknown);
+  // The floor 1.5 m below, 7 m away (12 deg grazing): the neighbouring bins hold nearer floor, so never free.
+  EXPECT_NE(image.Judge({7.f, 0.5f, -1.5f}, margin), RangeImage::Verdict::kSeenThrough);
+  // Straight down past the scan's -80 deg elevation: never looked at.
+  EXPECT_EQ(image.Judge({0.05f, 0.02f, -1.f}, margin), RangeImage::Verdict::kUnknown);
+}
+
+// The ball stands at A for 1 s, then at B: its points at A are dynamic (later scans see through A, however
+// long it stood), the room is not, and the ball's points at B are arrivals (earlier scans saw through B).
+TEST(FreeSpaceFilter, KeepsMovedBallOutAndRoomIn) {
+  FreeSpaceConfig config;
+  config.delay_s = 1.5;
+  config.window_s = 1.5;
+  FreeSpaceFilter filter(config, Eigen::Vector3d::Zero());
+  const Eigen::Vector3d a(3.0, 1.0, 0.0), b(-2.0, -2.5, 0.5);
+  size_t ball_a = 0, room = 0, ball_a_accepted = 0;
+  size_t judged = 0, dynamic = 0;
+  for (int k = 0; k < 25; ++k) {
+    const double t = 0.1 * k;
+    const Eigen::Vector3d ball = t < 1.0 ? a : b;
+    filter.AddScan(t, Pose3::Identity(), Scan(ball), 40.0);
+    if (k == 10 || k == 11) {  // just arrived at B: earlier scans saw through B (and through nothing of the room)
+      EXPECT_TRUE(filter.SeenThroughBefore(t + 0.05, b - 0.3 * b.normalized()));  // the ball's near side
+      EXPECT_FALSE(filter.SeenThroughBefore(t + 0.05, Eigen::Vector3d(8.0, 0.5, 0.5)));
+    }
+    const FreeSpaceCounts c = filter.Release(
+        k == 24, [](const Eigen::Vector3d&) { return true; },
+        [&](const Eigen::Vector3d& p) {
+          if (OnBall(p, a)) ++ball_a_accepted;
+        });
+    judged += c.judged;
+    dynamic += c.dynamic;
+  }
+  for (int k = 0; k < 10; ++k)
+    for (const ScanPoint& p : Scan(a)) (OnBall(p.p_base.cast<double>(), a) ? ball_a : room) += 1;
+  ASSERT_GT(ball_a, 1000u);
+  EXPECT_EQ(ball_a_accepted, 0u) << "of " << ball_a << " points on the ball at A";
+  // Every point of the 25 scans was judged; the dynamic ones are the ball at A plus, at most, a sliver of the
+  // room's edges around the ball's outline (a 3x3 neighbourhood straddles the ball and the wall behind it).
+  EXPECT_EQ(judged, 25u * Scan(std::nullopt).size());
+  EXPECT_GE(dynamic, ball_a);
+  EXPECT_LT(dynamic - ball_a, room / 1000) << "room points called dynamic";
+}
+
+TEST(FreeSpaceConfig, ValidateNamesTheField) {
+  FreeSpaceConfig c;
+  std::string why;
+  EXPECT_TRUE(c.Validate(&why));
+  c.bins_per_face = 1;
+  EXPECT_FALSE(c.Validate(&why));
+  EXPECT_NE(why.find("bins_per_face"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rotolidar

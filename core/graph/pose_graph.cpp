@@ -313,7 +313,8 @@ Status InformationFromCovariance(const Matrix6d& covariance, const InformationFl
   if (!floor.Validate(&error)) return Status::Error("InformationFromCovariance: " + error);
   if (!covariance.allFinite()) return Status::Error("InformationFromCovariance: covariance is not finite");
   Vector6d d;
-  d << Eigen::Vector3d::Constant(floor.min_sigma_translation_m), Eigen::Vector3d::Constant(floor.min_sigma_rotation_rad);
+  d << Eigen::Vector3d::Constant(floor.min_sigma_translation_m),
+      Eigen::Vector3d::Constant(floor.min_sigma_rotation_rad);
   const Vector6d d_inv = d.cwiseInverse();
   // Dimensionless covariance in units of the floors; clamp its eigenvalues to >= 1 (sigma >= floor) and invert.
   const Matrix6d scaled = d_inv.asDiagonal() * (0.5 * (covariance + covariance.transpose())) * d_inv.asDiagonal();

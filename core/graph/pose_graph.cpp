@@ -13,7 +13,6 @@
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "core/util/log.hpp"
 #include "core/util/validation.hpp"
@@ -70,17 +69,6 @@ ceres::LossFunction* MakeLoopLoss(LoopLossKind kind, double scale) {
   return nullptr;
 }
 
-/// The outcome of one Ceres solve.
-struct SolveOutcome {
-  bool usable = false;
-  bool converged = false;
-  int iterations = 0;
-  double initial_cost = 0.0;
-  double final_cost = 0.0;
-  std::vector<bool> in_problem;  ///< per node: touched by a residual of this solve
-  std::string report;            ///< Ceres' one-line report when not converged
-};
-
 std::string EdgeName(size_t index, const PoseGraphEdge& e) {
   std::ostringstream os;
   os << "edge " << index << " (" << ToString(e.kind) << ", from " << e.from_id << " to " << e.to_id << ")";
@@ -111,16 +99,6 @@ bool PoseGraphConfig::Validate(std::string* error) const {
   if (!positive(loop_rejection_chi2)) return FailValidation(error, "pose_graph.loop_rejection_chi2 must be > 0");
   if (max_resolve_rounds < 1) return FailValidation(error, "pose_graph.max_resolve_rounds must be >= 1");
   if (num_threads < 1) return FailValidation(error, "pose_graph.num_threads must be >= 1");
-  return true;
-}
-
-bool InformationFloor::Validate(std::string* error) const {
-  if (!(std::isfinite(min_sigma_translation_m) && min_sigma_translation_m > 0.0)) {
-    return FailValidation(error, "information_floor.min_sigma_translation_m must be > 0");
-  }
-  if (!(std::isfinite(min_sigma_rotation_rad) && min_sigma_rotation_rad > 0.0)) {
-    return FailValidation(error, "information_floor.min_sigma_rotation_rad must be > 0");
-  }
   return true;
 }
 
@@ -176,41 +154,73 @@ std::vector<int> PoseGraph::NodeIds() const {
 
 namespace {
 
-/// Builds and solves the problem over `params` (one per node, same order as nodes) with every edge except the
-/// `excluded` ones (indices). The shared manifold outlives the problem (DO_NOT_TAKE_OWNERSHIP).
-SolveOutcome Solve(const PoseGraphConfig& config, const std::vector<PoseGraphEdge>& edges,
-                   const std::vector<Matrix6d>& sqrt_information, const std::vector<size_t>& from_index,
-                   const std::vector<size_t>& to_index, const std::vector<bool>& fixed,
-                   const std::unordered_set<size_t>& excluded, std::vector<NodeParams>* params) {
+/// One Optimize call's view of the graph in node / edge index space, and Ceres' copy of the node poses.
+struct SolveContext {
+  const PoseGraphConfig& config;
+  const std::vector<PoseGraphEdge>& edges;
+  const std::vector<Matrix6d>& sqrt_information;
+  std::vector<size_t> from_index, to_index;  // per edge
+  std::vector<bool> fixed;                   // per node
+  std::vector<NodeParams> params;            // per node
+};
+
+/// A Ceres problem over SolveContext::params. The manifold is declared first, so it outlives the problem, which
+/// does not own it (one manifold shared by every quaternion block).
+struct GraphProblem {
+  static ceres::Problem::Options Options() {
+    ceres::Problem::Options options;
+    options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return options;
+  }
   ceres::EigenQuaternionManifold quaternion_manifold;
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  SolveOutcome out;
-  std::vector<bool>& added = out.in_problem;
-  added.assign(params->size(), false);
-  for (size_t k = 0; k < edges.size(); ++k) {
+  ceres::Problem problem{Options()};
+  std::vector<bool> in_problem;  // per node: touched by a residual
+};
+
+/// All edges except the `excluded` ones; loop edges get `loop_loss` (scale from the config).
+std::unique_ptr<GraphProblem> BuildProblem(SolveContext& ctx, LoopLossKind loop_loss,
+                                           const std::unordered_set<size_t>& excluded) {
+  auto gp = std::make_unique<GraphProblem>();
+  gp->in_problem.assign(ctx.params.size(), false);
+  for (size_t k = 0; k < ctx.edges.size(); ++k) {
     if (excluded.count(k) != 0) continue;
-    const bool loop = edges[k].kind == EdgeKind::kLoop;
-    NodeParams& a = (*params)[from_index[k]];
-    NodeParams& b = (*params)[to_index[k]];
-    problem.AddResidualBlock(RelativePoseResidual::Create(edges[k].T_from_to, sqrt_information[k]),
-                             loop ? MakeLoopLoss(config.loop_loss, config.loop_loss_scale) : nullptr,
-                             a.data(), a.data() + 3, b.data(), b.data() + 3);
-    for (const size_t n : {from_index[k], to_index[k]}) {
-      if (added[n]) continue;
-      added[n] = true;
-      double* p = (*params)[n].data();
-      problem.SetManifold(p + 3, &quaternion_manifold);
-      if (fixed[n]) {
-        problem.SetParameterBlockConstant(p);
-        problem.SetParameterBlockConstant(p + 3);
+    const PoseGraphEdge& edge = ctx.edges[k];
+    double* a = ctx.params[ctx.from_index[k]].data();
+    double* b = ctx.params[ctx.to_index[k]].data();
+    ceres::LossFunction* loss =
+        edge.kind == EdgeKind::kLoop ? MakeLoopLoss(loop_loss, ctx.config.loop_loss_scale) : nullptr;
+    gp->problem.AddResidualBlock(RelativePoseResidual::Create(edge.T_from_to, ctx.sqrt_information[k]), loss, a,
+                                 a + 3, b, b + 3);
+    for (const size_t n : {ctx.from_index[k], ctx.to_index[k]}) {
+      if (gp->in_problem[n]) continue;
+      gp->in_problem[n] = true;
+      double* p = ctx.params[n].data();
+      gp->problem.SetManifold(p + 3, &gp->quaternion_manifold);
+      if (ctx.fixed[n]) {
+        gp->problem.SetParameterBlockConstant(p);
+        gp->problem.SetParameterBlockConstant(p + 3);
       }
     }
   }
-  if (problem.NumResidualBlocks() == 0) {  // nothing to solve (every edge excluded): a trivially converged solve
-    out.usable = out.converged = true;
-    return out;
+  return gp;
+}
+
+double Cost(GraphProblem& gp) {
+  double cost = 0.0;
+  if (gp.problem.NumResidualBlocks() > 0) {
+    gp.problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+  }
+  return cost;
+}
+
+/// Solves `gp` in place and accumulates into `result`. Returns false when Ceres has no usable solution. A stage
+/// that is only a starting point (the warm start) does not need to converge: `must_converge` = false.
+bool RunSolve(const PoseGraphConfig& config, const std::string& stage, bool must_converge, GraphProblem* gp,
+              PoseGraphResult* result) {
+  ++result->num_solves;
+  if (gp->problem.NumResidualBlocks() == 0) {  // nothing to solve (no edges): trivially converged
+    result->final_cost = 0.0;
+    return true;
   }
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
@@ -219,15 +229,40 @@ SolveOutcome Solve(const PoseGraphConfig& config, const std::vector<PoseGraphEdg
   options.num_threads = config.num_threads;
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  out.usable = summary.IsSolutionUsable();
-  out.converged = summary.termination_type == ceres::CONVERGENCE;
-  out.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
-  out.initial_cost = summary.initial_cost;
-  out.final_cost = summary.final_cost;
-  if (!out.converged) out.report = summary.BriefReport();
-  return out;
+  ceres::Solve(options, &gp->problem, &summary);
+  result->iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+  result->final_cost = summary.final_cost;
+  if (!summary.IsSolutionUsable()) {
+    result->converged = false;
+    result->message = "pose graph: " + stage + ": Ceres found no usable solution (poses unchanged): " +
+                      summary.BriefReport();
+    return false;
+  }
+  if (must_converge && summary.termination_type != ceres::CONVERGENCE) {
+    result->converged = false;
+    result->message = "pose graph: " + stage + " did not converge: " + summary.BriefReport();
+  }
+  return true;
 }
+
+/// Adds to `rejected` every loop edge not yet in it whose chi2 at the current params exceeds the threshold.
+/// Returns whether any was added.
+bool RejectLoops(const SolveContext& ctx, std::unordered_set<size_t>* rejected) {
+  bool added = false;
+  for (size_t k = 0; k < ctx.edges.size(); ++k) {
+    const PoseGraphEdge& edge = ctx.edges[k];
+    if (edge.kind != EdgeKind::kLoop || rejected->count(k) != 0) continue;
+    const Vector6d e = RelativePoseError(FromParams(ctx.params[ctx.from_index[k]]),
+                                         FromParams(ctx.params[ctx.to_index[k]]), edge.T_from_to);
+    if (e.dot(edge.information * e) > ctx.config.loop_rejection_chi2) {
+      rejected->insert(k);
+      added = true;
+    }
+  }
+  return added;
+}
+
+bool Redescending(LoopLossKind kind) { return kind == LoopLossKind::kCauchy || kind == LoopLossKind::kTukey; }
 
 }  // namespace
 
@@ -242,98 +277,60 @@ PoseGraphResult PoseGraph::Optimize() {
     result.message = "pose graph: no nodes";
     return result;
   }
-  std::vector<NodeParams> params;
-  std::vector<bool> fixed;
+  SolveContext ctx{config_, edges_, sqrt_information_, {}, {}, {}, {}};
   for (const Node& n : nodes_) {
-    params.push_back(ToParams(n.T_world_node));
-    fixed.push_back(IsFixed(n.id));
+    ctx.params.push_back(ToParams(n.T_world_node));
+    ctx.fixed.push_back(IsFixed(n.id));
   }
-  std::vector<size_t> from_index, to_index;
   for (const PoseGraphEdge& e : edges_) {
-    from_index.push_back(index_of_.at(e.from_id));
-    to_index.push_back(index_of_.at(e.to_id));
+    ctx.from_index.push_back(index_of_.at(e.from_id));
+    ctx.to_index.push_back(index_of_.at(e.to_id));
   }
-
   const auto start = std::chrono::steady_clock::now();
-  std::unordered_set<size_t> rejected;
-  std::vector<bool> in_last_problem;
+  const auto finish = [&]() {
+    result.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  };
   result.converged = true;
-  for (int round = 0; round <= config_.max_resolve_rounds; ++round) {
-    const SolveOutcome solve = Solve(config_, edges_, sqrt_information_, from_index, to_index, fixed, rejected,
-                                     &params);
-    ++result.num_solves;
-    result.iterations += solve.iterations;
-    if (round == 0) result.initial_cost = solve.initial_cost;
-    result.final_cost = solve.final_cost;
-    in_last_problem = solve.in_problem;
-    if (!solve.usable) {
-      result.converged = false;
-      result.message = "pose graph: Ceres found no usable solution (poses unchanged): " + solve.report;
-      result.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      return result;
-    }
-    if (!solve.converged) {
-      result.converged = false;
-      result.message = "pose graph: solve " + std::to_string(round) + " did not converge: " + solve.report;
-    }
-    // Reject loops (still in the problem) whose chi2 at this solution exceeds the threshold.
-    bool new_rejections = false;
-    for (size_t k = 0; k < edges_.size(); ++k) {
-      if (edges_[k].kind != EdgeKind::kLoop || rejected.count(k) != 0) continue;
-      const Vector6d e = RelativePoseError(FromParams(params[from_index[k]]), FromParams(params[to_index[k]]),
-                                           edges_[k].T_from_to);
-      if (e.dot(edges_[k].information * e) > config_.loop_rejection_chi2) {
-        rejected.insert(k);
-        new_rejections = true;
-      }
-    }
-    if (!new_rejections || !config_.resolve_without_rejected || round == config_.max_resolve_rounds) break;
+  std::unordered_set<size_t> rejected;
+  std::unique_ptr<GraphProblem> main = BuildProblem(ctx, config_.loop_loss, rejected);
+  result.initial_cost = Cost(*main);
+  if (config_.huber_warm_start && Redescending(config_.loop_loss)) {
+    const std::unique_ptr<GraphProblem> warm = BuildProblem(ctx, LoopLossKind::kHuber, rejected);
+    if (!RunSolve(config_, "huber warm start", false, warm.get(), &result)) return finish();
   }
-  result.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!RunSolve(config_, "robust solve", true, main.get(), &result)) return finish();
+  for (int round = 1; round <= config_.max_resolve_rounds; ++round) {
+    if (!RejectLoops(ctx, &rejected) || !config_.resolve_without_rejected) break;
+    main = BuildProblem(ctx, config_.loop_loss, rejected);
+    if (!RunSolve(config_, "re-solve " + std::to_string(round), true, main.get(), &result)) return finish();
+  }
+  RejectLoops(ctx, &rejected);  // after the last solve (a no-op when the loop above ended on no new rejection)
+  WriteBack(ctx.params, ctx.fixed, main->in_problem);
+  ReportLoops(rejected, &result);
+  return finish();
+}
 
+void PoseGraph::WriteBack(const std::vector<std::array<double, 7>>& params, const std::vector<bool>& fixed,
+                          const std::vector<bool>& in_problem) {
   // Nodes outside the last problem (no edges, or only rejected loops) keep their input pose bit for bit.
   for (size_t n = 0; n < nodes_.size(); ++n) {
-    if (!fixed[n] && in_last_problem[n]) nodes_[n].T_world_node = FromParams(params[n]);
+    if (!fixed[n] && in_problem[n]) nodes_[n].T_world_node = FromParams(params[n]);
   }
+}
+
+void PoseGraph::ReportLoops(const std::unordered_set<size_t>& rejected, PoseGraphResult* result) const {
   for (size_t k = 0; k < edges_.size(); ++k) {
     const PoseGraphEdge& edge = edges_[k];
     if (edge.kind != EdgeKind::kLoop) continue;
     const Vector6d e = RelativePoseError(Pose(edge.from_id), Pose(edge.to_id), edge.T_from_to);
     const bool is_rejected = rejected.count(k) != 0;
-    result.loops.push_back({k, edge.from_id, edge.to_id, e.dot(edge.information * e), is_rejected});
-    (is_rejected ? result.rejected_loop_edges : result.accepted_loop_edges).push_back(k);
+    result->loops.push_back({k, edge.from_id, edge.to_id, e.dot(edge.information * e), is_rejected});
+    (is_rejected ? result->rejected_loop_edges : result->accepted_loop_edges).push_back(k);
   }
-  return result;
 }
 
 // ---------------------------------------------------------------------------------------------------- helpers
-
-Status InformationFromCovariance(const Matrix6d& covariance, const InformationFloor& floor, Matrix6d* information) {
-  std::string error;
-  if (!floor.Validate(&error)) return Status::Error("InformationFromCovariance: " + error);
-  if (!covariance.allFinite()) return Status::Error("InformationFromCovariance: covariance is not finite");
-  Vector6d d;
-  d << Eigen::Vector3d::Constant(floor.min_sigma_translation_m),
-      Eigen::Vector3d::Constant(floor.min_sigma_rotation_rad);
-  const Vector6d d_inv = d.cwiseInverse();
-  // Dimensionless covariance in units of the floors; clamp its eigenvalues to >= 1 (sigma >= floor) and invert.
-  const Matrix6d scaled = d_inv.asDiagonal() * (0.5 * (covariance + covariance.transpose())) * d_inv.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(scaled);
-  if (eig.info() != Eigen::Success) return Status::Error("InformationFromCovariance: eigen-decomposition failed");
-  const Vector6d inv_values = eig.eigenvalues().cwiseMax(1.0).cwiseInverse();
-  const Matrix6d scaled_inv = eig.eigenvectors() * inv_values.asDiagonal() * eig.eigenvectors().transpose();
-  const Matrix6d info = d_inv.asDiagonal() * scaled_inv * d_inv.asDiagonal();
-  *information = 0.5 * (info + info.transpose());
-  return Status::Ok();
-}
-
-Matrix6d InformationInToFrame(const Matrix6d& information_from, const Pose3& T_from_to) {
-  Matrix6d A = Matrix6d::Zero();
-  A.topLeftCorner<3, 3>() = T_from_to.linear();
-  A.bottomRightCorner<3, 3>() = T_from_to.linear();
-  const Matrix6d info = A.transpose() * information_from * A;
-  return 0.5 * (info + info.transpose());
-}
 
 namespace {
 

@@ -10,20 +10,24 @@
 // Edges: a measured relative pose T_from_to with a 6x6 information matrix in the error coordinates of
 // pose_graph_factors.hpp: e = [t(E); Log(R(E))], E = T_from_to_meas^-1 (T_world_from^-1 T_world_to), i.e. the
 // right perturbation of the measurement, translation [m] first, rotation [rad] second, both expressed in the
-// `to` frame. InformationInToFrame() converts an information matrix given in the `from` frame convention used by
-// the rest of core/ (T (+) xi = (t + dt, Exp(dtheta) R), xi in frame `from`).
+// `to` frame. pose_graph_factors.hpp also has InformationInToFrame(), which converts an information matrix given
+// in the `from`-frame convention of the rest of core/ (T (+) xi = (t + dt, Exp(dtheta) R), xi in frame `from`),
+// and InformationFromCovariance(), a floored inverse of a registration covariance.
 //
-// Robust back end: odometry edges are trusted (plain least squares). Loop edges get a robust loss (default Cauchy,
-// see PoseGraphConfig) so that a wrong loop's pull decays as its residual grows. After the solve, each loop edge's
+// Robust back end: odometry edges are trusted (plain least squares). Loop edges get a robust loss (default Cauchy
+// after a Huber warm start, see PoseGraphConfig) so that a wrong loop's pull decays as its residual grows while a
+// correct one still closes from a drifted start. After the solve, each loop edge's
 // chi2 = e^T information e is compared with a threshold (default 16.81, the 99 % quantile of chi2 with 6 degrees
 // of freedom); loops above it are rejected and, by default, the graph is re-solved without them so that they have
 // no influence at all on the returned poses.
 //
 // Thread safety: PoseGraph is not thread-safe (no internal locking); use one instance per thread. It is copyable,
 // so an integrator can copy the graph, optimise the copy in its own thread and read the poses back.
+#include <array>
 #include <cstddef>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include <Eigen/Core>
@@ -50,16 +54,26 @@ const char* ToString(EdgeKind kind);
 const char* ToString(LoopLossKind kind);
 
 struct PoseGraphConfig {
-  /// Cauchy: a wrong loop's pull decays (a^2 / |r|) yet, unlike the redescending Tukey or the bounded kernel that
-  /// Dynamic Covariance Scaling amounts to (Agarwal et al., "Robust map optimization using dynamic covariance
-  /// scaling", ICRA 2013), a correct loop whose initial residual is large (accumulated drift) still pulls with a
-  /// non-zero force and closes from the odometry initialisation. The chi2 rejection below then removes outliers.
+  /// The loss on loop edges. Cauchy: a wrong loop's pull decays (a^2 / |r| for |r| >> a, |r| the whitened residual
+  /// norm), so it barely bends the map, and its chi2 then flags it. Its weakness: a correct loop whose initial
+  /// residual is large (drift well beyond what the odometry information admits) is also barely pulled and can stay
+  /// open. Hence the Huber warm start below. Dynamic Covariance Scaling (Agarwal et al., "Robust map optimization
+  /// using dynamic covariance scaling", ICRA 2013) amounts to a similar redescending kernel; Ceres' Cauchy is used.
   LoopLossKind loop_loss = LoopLossKind::kCauchy;
   /// a [whitened residual norm, i.e. sqrt(chi2)]: sqrt(16.81) ~ 4.1, so inlier loops (chi2 below the rejection
-  /// threshold) are weighted >= 1/2 and stay close to least squares. > 0.
+  /// threshold) get weight >= 1/2 and stay close to least squares. > 0. Also the Huber warm start's scale.
   double loop_loss_scale = 4.1;
+  /// With a redescending loop_loss (Cauchy, Tukey): first solve with HuberLoss(loop_loss_scale), whose pull on a
+  /// loop never decays, from the input poses, then the robust solve from there. The convex first stage closes
+  /// correct loops however far the odometry drifted (up to what the odometry information allows), the second
+  /// lets wrong loops go slack again: graduated robustness in the spirit of GNC (Yang et al., "Graduated
+  /// non-convexity for robust spatial perception", RA-L 2020) and of MM-estimators (a convex start, then a
+  /// redescending refinement).
+  bool huber_warm_start = true;
   int max_iterations = 100;              ///< Levenberg-Marquardt iterations per solve, >= 1
-  double function_tolerance = 1e-6;      ///< Ceres: stop when |d cost| / cost < this; in (0, 1)
+  /// Ceres: stop when |d cost| / cost < this; in (0, 1). Tighter than Ceres' 1e-6, which leaves ~1 mm between
+  /// two solves of the same graph from different starts; pose graphs are cheap to iterate.
+  double function_tolerance = 1e-8;
   /// A loop edge whose chi2 = e^T information e after the solve exceeds this is rejected (an outlier). 16.81 is
   /// the 99 % quantile of chi2 with 6 dof: a correct loop with an honest information matrix is rejected 1 % of the
   /// time. > 0.
@@ -67,7 +81,7 @@ struct PoseGraphConfig {
   /// Re-solve without the rejected loops (from the robust solution), so rejected loops have zero influence.
   bool resolve_without_rejected = true;
   /// At most this many re-solves; a re-solve may reveal more rejected loops (each one then triggers another).
-  /// >= 1 (used only when resolve_without_rejected).
+  /// Loops rejected after the last allowed re-solve are flagged but did take part in it. >= 1.
   int max_resolve_rounds = 3;
   int num_threads = 1;                   ///< Ceres threads, >= 1
 
@@ -95,10 +109,12 @@ struct LoopEdgeReport {
 };
 
 struct PoseGraphResult {
-  bool converged = false;   ///< every solve ended with Ceres CONVERGENCE (false on bad input, see message)
+  /// The robust solve and every re-solve ended with Ceres CONVERGENCE (false on bad input, see message). The Huber
+  /// warm start is only a starting point and may stop at max_iterations.
+  bool converged = false;
   int iterations = 0;       ///< Levenberg-Marquardt iterations, summed over the solves
-  int num_solves = 0;       ///< 1 + re-solves without rejected loops
-  double initial_cost = 0.0;  ///< Ceres cost 0.5 sum rho(|r|^2) before the first solve (all edges)
+  int num_solves = 0;       ///< Ceres solves: Huber warm start + robust solve + re-solves without rejected loops
+  double initial_cost = 0.0;  ///< Ceres cost 0.5 sum rho(|r|^2) at the input poses, all edges, loop_loss
   double final_cost = 0.0;    ///< the same after the last solve (without the rejected loops when re-solved)
   double solve_time_s = 0.0;  ///< wall time of the solves [s]
   std::vector<LoopEdgeReport> loops;        ///< one per loop edge, in edge order
@@ -143,6 +159,10 @@ class PoseGraph {
     bool fixed = false;
   };
 
+  void WriteBack(const std::vector<std::array<double, 7>>& params, const std::vector<bool>& fixed,
+                 const std::vector<bool>& in_problem);
+  void ReportLoops(const std::unordered_set<size_t>& rejected, PoseGraphResult* result) const;
+
   PoseGraphConfig config_;
   std::vector<Node> nodes_;                     // insertion order
   std::unordered_map<int, size_t> index_of_;    // id -> position in nodes_
@@ -151,27 +171,7 @@ class PoseGraph {
   bool any_fixed_ = false;
 };
 
-// ------------------------------------------------------------------------------------------------------ helpers
-
-/// Floors on the standard deviations of an information matrix made from a registration covariance.
-struct InformationFloor {
-  double min_sigma_translation_m = 0.01;   ///< > 0
-  double min_sigma_rotation_rad = 0.001;   ///< > 0 (~0.06 deg)
-  bool Validate(std::string* error) const;
-};
-
-/// Information from an ICP/GICP 6x6 covariance ([translation m; rotation rad], in the edge's error coordinates):
-/// a regularised inverse. With D = diag(floor_t x3, floor_r x3), the dimensionless D^-1 C D^-1 is symmetrised and
-/// its eigenvalues are clamped to >= 1 before inverting, so the result satisfies information <= D^-2 (no direction
-/// is more certain than its floor, whatever the conditioning of C: a near-singular covariance cannot make one
-/// loop dominate) and equals C^-1 when every direction of C is already above the floor. Negative (round-off or
-/// indefinite) eigenvalues are clamped as well. Fails on a non-finite covariance or an invalid floor.
-Status InformationFromCovariance(const Matrix6d& covariance, const InformationFloor& floor, Matrix6d* information);
-
-/// Converts an information matrix given in the `from`-frame convention of core/ (T_from_to (+) xi = (t + dt,
-/// Exp(dtheta) R), xi = [dt; dtheta] in frame `from`) into the edge's `to`-frame error coordinates. The map is
-/// exact and linear: xi = blockdiag(R, R) e with R = T_from_to.linear(), so information_to = A^T information_from A.
-Matrix6d InformationInToFrame(const Matrix6d& information_from, const Pose3& T_from_to);
+// ------------------------------------------------------------------------------------------ trajectory correction
 
 /// A keyframe's pose before and after a graph correction, with its time stamp.
 struct KeyframeCorrection {

@@ -1,6 +1,7 @@
 #pragma once
 // The relative-pose residual of the SE(3) pose graph (core/graph/pose_graph.hpp), exposed for tests and for anyone
-// who wants to add the same constraint to another Ceres problem.
+// who wants to add the same constraint to another Ceres problem, and the helpers that make an edge's information
+// matrix (from a registration covariance, or from the `from`-frame convention).
 //
 // Parameter blocks of a node (the pose T_world_node): translation t (3, metres, world frame) and the unit
 // quaternion q (4, Eigen memory order x y z w, Ceres' EigenQuaternionManifold).
@@ -10,17 +11,24 @@
 //   e   = [t(E) (m); Log(R(E)) (rad)]                                  (translation FIRST, then rotation)
 // E is the right perturbation of the measurement, T_from_to_est = T_from_to_meas * E, so both parts of e are
 // expressed in the `to` keyframe frame as the measurement places it: t_est = t_meas + R_meas t(E) and
-// R_est = R_meas Exp(Log(R(E))). An edge's information matrix lives in these coordinates (see pose_graph.hpp for
-// converting an information matrix given in the `from` frame).
+// R_est = R_meas Exp(Log(R(E))). An edge's information matrix lives in these coordinates (InformationInToFrame
+// below converts one given in the `from` frame).
 // Whitened residual r = S e with S = L^T, information = L L^T (Cholesky), so |r|^2 = e^T information e = chi2.
 //
-// Thread safety: the functor is immutable after construction; evaluation is const and may run concurrently.
+// Thread safety: the functor is immutable after construction; evaluation is const and may run concurrently. The
+// helpers are pure functions.
+#include <cmath>
+#include <string>
+
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/rotation.h>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "core/types/geometry.hpp"
+#include "core/util/status.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::graph {
 
@@ -83,5 +91,60 @@ class RelativePoseResidual {
   Eigen::Quaterniond q_meas_inv_;
   Matrix6d sqrt_information_;
 };
+
+// --------------------------------------------------------------------------------- edge information helpers
+
+/// Floors on the standard deviations of an information matrix made from a registration covariance.
+struct InformationFloor {
+  double min_sigma_translation_m = 0.01;   ///< > 0
+  double min_sigma_rotation_rad = 0.001;   ///< > 0 (~0.06 deg)
+
+  bool Validate(std::string* error) const {
+    if (!(std::isfinite(min_sigma_translation_m) && min_sigma_translation_m > 0.0)) {
+      return FailValidation(error, "information_floor.min_sigma_translation_m must be > 0");
+    }
+    if (!(std::isfinite(min_sigma_rotation_rad) && min_sigma_rotation_rad > 0.0)) {
+      return FailValidation(error, "information_floor.min_sigma_rotation_rad must be > 0");
+    }
+    return true;
+  }
+};
+
+/// Information from an ICP/GICP 6x6 covariance ([translation m; rotation rad], in the edge's error coordinates):
+/// a regularised inverse. With D = diag(floor_t x3, floor_r x3), the dimensionless D^-1 C D^-1 is symmetrised and
+/// its eigenvalues are clamped to >= 1 before inverting, so the result satisfies information <= D^-2 (no direction
+/// is more certain than its floor, whatever the conditioning of C: a near-singular covariance cannot make one
+/// loop dominate) and equals C^-1 when every direction of C is already above the floor. Negative (round-off or
+/// indefinite) eigenvalues are clamped as well. Fails on a non-finite covariance or an invalid floor.
+inline Status InformationFromCovariance(const Matrix6d& covariance, const InformationFloor& floor,
+                                        Matrix6d* information) {
+  std::string error;
+  if (!floor.Validate(&error)) return Status::Error("InformationFromCovariance: " + error);
+  if (!covariance.allFinite()) return Status::Error("InformationFromCovariance: covariance is not finite");
+  Vector6d d_inv;
+  d_inv << Eigen::Vector3d::Constant(1.0 / floor.min_sigma_translation_m),
+      Eigen::Vector3d::Constant(1.0 / floor.min_sigma_rotation_rad);
+  // Dimensionless covariance in units of the floors; clamp its eigenvalues to >= 1 (sigma >= floor) and invert.
+  const Matrix6d scaled = d_inv.asDiagonal() * (0.5 * (covariance + covariance.transpose())) * d_inv.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(scaled);
+  if (eig.info() != Eigen::Success) return Status::Error("InformationFromCovariance: eigen-decomposition failed");
+  const Vector6d inv_values = eig.eigenvalues().cwiseMax(1.0).cwiseInverse();
+  const Matrix6d scaled_inv = eig.eigenvectors() * inv_values.asDiagonal() * eig.eigenvectors().transpose();
+  const Matrix6d info = d_inv.asDiagonal() * scaled_inv * d_inv.asDiagonal();
+  *information = 0.5 * (info + info.transpose());
+  return Status::Ok();
+}
+
+/// Converts an information matrix given in the `from`-frame convention of core/ (T_from_to (+) xi = (t + dt,
+/// Exp(dtheta) R), xi = [dt; dtheta] in frame `from`, as core/backend/pose_factors.hpp) into this edge's `to`-frame
+/// error coordinates. The map is exact and linear: xi = A e with A = blockdiag(R, R), R = T_from_to.linear(), so
+/// information_to = A^T information_from A.
+inline Matrix6d InformationInToFrame(const Matrix6d& information_from, const Pose3& T_from_to) {
+  Matrix6d A = Matrix6d::Zero();
+  A.topLeftCorner<3, 3>() = T_from_to.linear();
+  A.bottomRightCorner<3, 3>() = T_from_to.linear();
+  const Matrix6d info = A.transpose() * information_from * A;
+  return 0.5 * (info + info.transpose());
+}
 
 }  // namespace rotolidar::graph

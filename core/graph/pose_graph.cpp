@@ -330,7 +330,7 @@ void PoseGraph::ReportLoops(const std::unordered_set<size_t>& rejected, PoseGrap
   }
 }
 
-// ---------------------------------------------------------------------------------------------------- helpers
+// ---------------------------------------------------------------------------------------- trajectory correction
 
 namespace {
 
@@ -367,8 +367,9 @@ Status CorrectTrajectory(const std::vector<KeyframeCorrection>& keyframes, Corre
     const KeyframeCorrection& kf = keyframes[k];
     const std::string name = "CorrectTrajectory: keyframe " + std::to_string(k);
     if (!std::isfinite(kf.t_s)) return Status::Error(name + ": t_s is not finite");
-    if (k > 0 && kf.t_s < keyframes[k - 1].t_s) return Status::Error(name + ": t_s earlier than keyframe " +
-                                                                      std::to_string(k - 1) + "'s (unsorted)");
+    if (k > 0 && kf.t_s < keyframes[k - 1].t_s) {
+      return Status::Error(name + ": t_s earlier than keyframe " + std::to_string(k - 1) + "'s (unsorted)");
+    }
     if (!IsValidPose(kf.T_world_kf_old) || !IsValidPose(kf.T_world_kf_new)) {
       return Status::Error(name + ": pose is not finite or not a rotation");
     }

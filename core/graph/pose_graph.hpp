@@ -16,10 +16,10 @@
 //
 // Robust back end: odometry edges are trusted (plain least squares). Loop edges get a robust loss (default Cauchy
 // after a Huber warm start, see PoseGraphConfig) so that a wrong loop's pull decays as its residual grows while a
-// correct one still closes from a drifted start. After the solve, each loop edge's
-// chi2 = e^T information e is compared with a threshold (default 16.81, the 99 % quantile of chi2 with 6 degrees
-// of freedom); loops above it are rejected and, by default, the graph is re-solved without them so that they have
-// no influence at all on the returned poses.
+// correct one still closes from a drifted start. After the solve, each loop edge's chi2 = e^T information e is
+// compared with a threshold (default 16.81, the 99 % quantile of chi2 with 6 degrees of freedom); loops above it
+// are rejected and, by default, the graph is re-solved without them so that they have no influence at all on the
+// returned poses.
 //
 // Thread safety: PoseGraph is not thread-safe (no internal locking); use one instance per thread. It is copyable,
 // so an integrator can copy the graph, optimise the copy in its own thread and read the poses back.
@@ -142,7 +142,8 @@ class PoseGraph {
   PoseGraphResult Optimize();
 
   /// The current pose of node `id`. Precondition: HasNode(id); violating it is a programmer error
-  /// (ROTOLIDAR_CHECK throws rotolidar::InternalError). The reference stays valid until the next AddNode.
+  /// (ROTOLIDAR_CHECK throws rotolidar::InternalError). The reference stays valid until the next AddNode (Optimize
+  /// updates the pose it refers to).
   const Pose3& Pose(int id) const;
   bool HasNode(int id) const;
   bool IsFixed(int id) const;     ///< held constant in Optimize (explicitly, or as the default gauge); false if absent
@@ -194,7 +195,8 @@ enum class CorrectionMode {
 /// graph, in place. `keyframes` sorted by t_s (non-decreasing). Poses before the first keyframe use the first
 /// correction, after the last the last one. A keyframe whose new pose equals its old one bit for bit applies no
 /// correction, so a pose governed only by such keyframes stays bit-identical. The trajectory need not be sorted.
-/// Fails (trajectory untouched) on no keyframes, unsorted or non-finite stamps (naming the keyframe index).
+/// Fails (trajectory untouched) on no keyframes, unsorted or non-finite keyframe stamps, an invalid keyframe pose
+/// (naming the keyframe index) or a non-finite trajectory stamp (naming the pose index).
 Status CorrectTrajectory(const std::vector<KeyframeCorrection>& keyframes, CorrectionMode mode,
                          Trajectory* trajectory);
 

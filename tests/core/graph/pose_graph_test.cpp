@@ -7,7 +7,6 @@
 #include <memory>
 #include <vector>
 
-#include <ceres/gradient_checker.h>
 #include <ceres/manifold.h>
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>

@@ -7,7 +7,8 @@
 // The descriptor is a rings x sectors polar grid on the horizontal plane around the keyframe origin: ring i holds
 // the horizontal ranges [i, i+1) * max_radius_m / num_rings, sector j the azimuths [-pi + j w, -pi + (j+1) w),
 // w = 2 pi / num_sectors. A yaw of the sensor shifts the columns (sectors) cyclically and changes nothing else, so
-//  - the ring key (the mean cell value of each ring) is invariant to yaw (exactly for whole-sector rotations),
+//  - the ring key (the share of occupied cells of each ring) is invariant to yaw (exactly for whole-sector
+//    rotations),
 //  - the full distance is the minimum over the cyclic column shifts, and the best shift gives the yaw between the
 //    two keyframes (resolution: one sector, 6 deg by default), the initial guess of the ICP verification.
 // Roll and pitch are NOT searched: the caller levels the points first (gravity-aligned frame, z up, origin at the
@@ -64,7 +65,7 @@ struct LidarDescriptorConfig {
 /// all-zero matrix and num_points == 0; its distance to any descriptor is 1 (DescriptorDistance).
 struct LidarDescriptor {
   Eigen::MatrixXf cells;      ///< num_rings x num_sectors; 0 = empty bin, > 0 = occupied (see CellValue)
-  Eigen::VectorXf ring_key;   ///< num_rings: mean of each ring's cells over the sectors (yaw-invariant)
+  Eigen::VectorXf ring_key;   ///< num_rings: share of each ring's cells that are occupied, in [0, 1] (yaw-invariant)
   Eigen::VectorXf sector_key; ///< num_sectors: mean of each sector's cells over the rings (shifts with yaw)
   size_t num_points = 0;      ///< points that fell inside the grid and the height limits
   int num_rings() const { return int(cells.rows()); }
@@ -121,7 +122,10 @@ struct PlaceQuery {
   double exclude_recent_s = 0.0;  ///< keyframes with t_s > query t_s - exclude_recent_s are skipped (own trail)
   std::vector<int64_t> exclude_ids;  ///< keyframes skipped by id (e.g. the query's neighbours in the graph)
   int num_results = 1;               ///< at most this many candidates are returned
-  double max_distance = 1.0;         ///< candidates whose full distance exceeds this are dropped
+  /// Candidates whose full distance exceeds this are dropped. 0.35: true revisits (0.5 m away, any yaw) measured up
+  /// to 0.28 on synthetic streets and halls, places 20 m down a street >= 0.4; but inside one hall other places
+  /// came as close as 0.11, so the descriptor only proposes: the geometric verification decides.
+  double max_distance = 0.35;
 };
 
 /// One retrieved keyframe.

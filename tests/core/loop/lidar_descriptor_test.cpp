@@ -204,30 +204,13 @@ TEST_P(DescriptorPlaces, RevisitWithYawAndOffsetMatchesAndAFarPlaceDoesNot) {
   // yaw_rad is the yaw of T_b_a = yaw_a - yaw_b; one sector (6 deg) is the resolution of the shift search.
   EXPECT_LE(std::abs(WrapAngle(same.yaw_rad - (10 - 83) * kDeg)), kSectorRad);
   EXPECT_EQ(fast.best_shift, same.best_shift);  // the sector key finds the same shift here
-  EXPECT_LT(same.distance, 0.2);
-  EXPECT_GT(far.distance, same.distance + 0.15);
+  EXPECT_LT(same.distance, 0.25);  // measured 0.17 (bands) / 0.19 (max height)
+  EXPECT_GT(far.distance, same.distance + 0.15);  // measured margins 0.26 and 0.35
   EXPECT_GT(other_scene.distance, same.distance + 0.15);
   EXPECT_LT(RingKeyDistance(a, b), RingKeyDistance(a, c));
 }
 
 INSTANTIATE_TEST_SUITE_P(CellValues, DescriptorPlaces, ::testing::Values(CellValue::kHeightBands, CellValue::kMaxHeight));
-
-TEST(LidarDescriptor, HeightBandsSeparateHallPlacesBetterThanMaxHeight) {
-  // Under a ceiling every cell's max height is the ceiling's: the paper's cell value sees only the footprint.
-  const Scene hall = Hall(3);
-  double margin[2];
-  for (const CellValue value : {CellValue::kHeightBands, CellValue::kMaxHeight}) {
-    RandomStream rng(5, "hall-places");
-    const LidarDescriptorConfig config = ConfigWith(value);
-    const LidarDescriptor a = ComputeLidarDescriptor(Scan(hall, KeyframePose(-6, -2, 1.5, 0.2), &rng), config);
-    const LidarDescriptor b = ComputeLidarDescriptor(Scan(hall, KeyframePose(-5.6, -2.3, 1.5, 1.5), &rng), config);
-    const LidarDescriptor c = ComputeLidarDescriptor(Scan(hall, KeyframePose(2, -2, 1.5, 0.2), &rng), config);
-    const double same = DescriptorDistance(a, b).distance, other = DescriptorDistance(a, c).distance;
-    margin[value == CellValue::kHeightBands ? 0 : 1] = other - same;
-    std::printf("[%s] hall: revisit %.3f, 8 m away %.3f\n", Name(value), same, other);
-  }
-  EXPECT_GT(margin[0], 1.5 * margin[1]);
-}
 
 TEST(LidarDescriptor, RingKeyIsInvariantToWholeSectorRotations) {
   const LidarDescriptorConfig config;
@@ -236,7 +219,6 @@ TEST(LidarDescriptor, RingKeyIsInvariantToWholeSectorRotations) {
   const LidarDescriptor d0 = ComputeLidarDescriptor(scan, config);
   for (const int k : {1, 15, 37, 59}) {
     // Rotating the points by k sectors (in double, then rounded to float as a sensor driver would).
-    const Eigen::Matrix3f R = RotZ(k * kSectorRad).linear().cast<float>();
     std::vector<Eigen::Vector3f> rotated;
     for (const auto& p : scan) rotated.push_back((RotZ(k * kSectorRad) * p.cast<double>()).cast<float>());
     const LidarDescriptor dk = ComputeLidarDescriptor(rotated, config);
@@ -249,7 +231,6 @@ TEST(LidarDescriptor, RingKeyIsInvariantToWholeSectorRotations) {
     const DescriptorMatch m = DescriptorDistance(d0, dk);
     EXPECT_EQ(m.best_shift, k);
     EXPECT_NEAR(m.distance, 0.0, 1e-6);
-    (void)R;
   }
 }
 
@@ -283,6 +264,172 @@ TEST(LidarDescriptor, EmptyAndOutOfRangeCloudsGiveAnEmptyDescriptor) {
   EXPECT_EQ(invalid.cells.size(), 0);
   EXPECT_EQ(DescriptorDistance(invalid, single).distance, 1.0);
   EXPECT_TRUE(std::isinf(RingKeyDistance(invalid, single)));
+}
+
+/// Keyframes at `places` (random yaw) and their revisits 0.5 m away in a random direction with a random yaw, one
+/// descriptor set per config (the same scans).
+struct Revisits {
+  std::vector<std::vector<LidarDescriptor>> keyframes, queries;  ///< [config][place]
+  std::vector<double> yaw_query_to_keyframe_rad;                 ///< [place]: the yaw of T_keyframe_query
+};
+
+Revisits MakeRevisits(const Scene& scene, const std::vector<Eigen::Vector3d>& places,
+                      const std::vector<LidarDescriptorConfig>& configs, uint64_t seed) {
+  RandomStream rng(seed, "revisits");
+  Revisits r;
+  r.keyframes.resize(configs.size());
+  r.queries.resize(configs.size());
+  for (const Eigen::Vector3d& p : places) {
+    const double yaw_k = 2 * M_PI * rng.Uniform(), yaw_q = 2 * M_PI * rng.Uniform(), dir = 2 * M_PI * rng.Uniform();
+    const std::vector<Eigen::Vector3f> kf = Scan(scene, KeyframePose(p.x(), p.y(), p.z(), yaw_k), &rng);
+    const std::vector<Eigen::Vector3f> query =
+        Scan(scene, KeyframePose(p.x() + 0.5 * std::cos(dir), p.y() + 0.5 * std::sin(dir), p.z(), yaw_q), &rng);
+    for (size_t c = 0; c < configs.size(); ++c) {
+      r.keyframes[c].push_back(ComputeLidarDescriptor(kf, configs[c]));
+      r.queries[c].push_back(ComputeLidarDescriptor(query, configs[c]));
+    }
+    r.yaw_query_to_keyframe_rad.push_back(yaw_q - yaw_k);
+  }
+  return r;
+}
+
+/// Retrieval of every revisit from an index of the keyframes (keyframe i has id i and time i s).
+struct Recall {
+  int top1 = 0, yaw_within_sector = 0;
+  double worst_true_distance = 0.0, mean_query_ms = 0.0;
+};
+
+Recall Retrieve(const std::vector<LidarDescriptor>& keyframes, const std::vector<LidarDescriptor>& queries,
+                const std::vector<double>& yaw_query_to_keyframe_rad) {
+  LidarPlaceIndex index;
+  for (size_t i = 0; i < keyframes.size(); ++i) EXPECT_TRUE(index.Add(int64_t(i), double(i), keyframes[i]).ok);
+  Recall recall;
+  for (size_t i = 0; i < queries.size(); ++i) {
+    std::vector<PlaceCandidate> best;
+    recall.mean_query_ms += MillisecondsOf([&] { best = index.Query(queries[i], PlaceQuery{}); }, 10);
+    if (best.empty() || best[0].keyframe_id != int64_t(i)) continue;
+    ++recall.top1;
+    recall.yaw_within_sector +=
+        std::abs(WrapAngle(best[0].match.yaw_rad - yaw_query_to_keyframe_rad[i])) <= kSectorRad;
+    recall.worst_true_distance = std::max(recall.worst_true_distance, best[0].match.distance);
+  }
+  recall.mean_query_ms /= double(queries.size());
+  return recall;
+}
+
+/// The revisits of 50 street places 4 m apart, or of 54 hall places on a 4 m grid, for both cell values (built
+/// once: ray casting dominates the test time).
+Revisits BuildRevisits(bool street) {
+  std::vector<Eigen::Vector3d> places;
+  if (street) {
+    for (int i = 0; i < 50; ++i) places.emplace_back(10 + 4 * i, 0.5 * std::sin(i), 1.8);
+  } else {
+    for (double x = -16; x <= 18; x += 4)
+      for (double y = -9; y <= 11; y += 4) places.emplace_back(x, y, 1.5);
+  }
+  return MakeRevisits(street ? Street(7) : Hall(3), places,
+                      {ConfigWith(CellValue::kHeightBands), ConfigWith(CellValue::kMaxHeight)}, 31);
+}
+
+const Revisits& SceneRevisits(bool street) {
+  if (street) {
+    static const Revisits street_revisits = BuildRevisits(true);
+    return street_revisits;
+  }
+  static const Revisits hall_revisits = BuildRevisits(false);
+  return hall_revisits;
+}
+
+class PlaceIndexScenes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(PlaceIndexScenes, RevisitsReturnTheTrueKeyframeFirstWithItsYaw) {
+  // 50 places 4 m apart along the street, or 54 places on a 4 m grid in the hall; revisits 0.5 m away, any yaw.
+  const Revisits& r = SceneRevisits(std::string(GetParam()) == "street");
+  const size_t num_places = r.yaw_query_to_keyframe_rad.size();
+  const Recall bands = Retrieve(r.keyframes[0], r.queries[0], r.yaw_query_to_keyframe_rad);
+  const Recall max_height = Retrieve(r.keyframes[1], r.queries[1], r.yaw_query_to_keyframe_rad);
+  for (const auto& [name, recall] : {std::pair{"height-bands", bands}, std::pair{"max-height", max_height}})
+    std::printf("[%s] %s: top-1 %d / %zu, yaw within a sector %d, worst true distance %.3f, Query %.3f ms\n", name,
+                GetParam(), recall.top1, num_places, recall.yaw_within_sector, recall.worst_true_distance,
+                recall.mean_query_ms);
+  // The default cell value retrieves every revisit with its yaw. (Measured with the paper's max height: the street
+  // also 50 / 50, the hall 52 / 54 and 4 of those 52 with the yaw off by more than a sector: under the ceiling it
+  // sees the hall's point-symmetric footprint rather than the shelves.)
+  EXPECT_EQ(bands.top1, int(num_places));
+  EXPECT_EQ(bands.yaw_within_sector, int(num_places));
+  // True revisits measured up to 0.28: PlaceQuery's default max_distance (0.35) keeps them.
+  EXPECT_LT(bands.worst_true_distance, PlaceQuery{}.max_distance);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, PlaceIndexScenes, ::testing::Values("street", "hall"));
+
+TEST(LidarPlaceIndex, ExcludesRecentAndListedKeyframes) {
+  const Revisits& r = SceneRevisits(true);  // 50 street places, keyframe i at t = i s
+  LidarPlaceIndex index;
+  for (size_t i = 0; i < r.keyframes[0].size(); ++i)
+    ASSERT_TRUE(index.Add(int64_t(i), double(i), r.keyframes[0][i]).ok);
+  PlaceQuery q;
+  q.num_results = 5;
+  q.max_distance = 1.0;
+  ASSERT_FALSE(index.Query(r.queries[0][45], q).empty());
+  EXPECT_EQ(index.Query(r.queries[0][45], q)[0].keyframe_id, 45);
+  // Query at t = 49.5 s ignoring the last 10 s: keyframes 40..49 (t > 39.5 s) are never returned.
+  q.t_s = 49.5;
+  q.exclude_recent_s = 10.0;
+  const std::vector<PlaceCandidate> old_only = index.Query(r.queries[0][45], q);
+  EXPECT_FALSE(old_only.empty());
+  for (const PlaceCandidate& c : old_only) EXPECT_LE(c.t_s, 39.5);
+  // Excluded by id.
+  q = PlaceQuery{};
+  q.num_results = 5;
+  q.max_distance = 1.0;
+  q.exclude_ids = {44, 45, 46};
+  for (const PlaceCandidate& c : index.Query(r.queries[0][45], q))
+    EXPECT_TRUE(c.keyframe_id < 44 || c.keyframe_id > 46) << c.keyframe_id;
+  // Everything excluded: empty.
+  q.t_s = -1.0;
+  EXPECT_TRUE(index.Query(r.queries[0][45], q).empty());
+}
+
+TEST(LidarPlaceIndex, AddReportsDuplicatesSizeMismatchAndAFullIndex) {
+  LidarPlaceIndexConfig config;
+  config.max_keyframes = 2;
+  LidarPlaceIndex index(config);
+  const std::vector<Eigen::Vector3f> cloud = {{3, 4, 0}, {-5, 1, 1}};
+  const LidarDescriptor d = ComputeLidarDescriptor(cloud, LidarDescriptorConfig{});
+  LidarDescriptorConfig small;
+  small.num_sectors = 30;
+  EXPECT_TRUE(index.Add(7, 0.0, d).ok);
+  const Status duplicate = index.Add(7, 1.0, d);
+  EXPECT_FALSE(duplicate.ok);
+  EXPECT_NE(duplicate.message.find("keyframe 7"), std::string::npos);
+  EXPECT_FALSE(index.Add(8, 1.0, ComputeLidarDescriptor(cloud, small)).ok);
+  EXPECT_FALSE(index.Add(9, 1.0, LidarDescriptor{}).ok);
+  EXPECT_TRUE(index.Add(8, 1.0, d).ok);
+  const Status full = index.Add(10, 2.0, d);
+  EXPECT_FALSE(full.ok);
+  EXPECT_NE(full.message.find("max_keyframes"), std::string::npos);
+  EXPECT_EQ(index.size(), 2u);
+  ASSERT_NE(index.Find(8), nullptr);
+  EXPECT_EQ(index.Find(8)->cells, d.cells);
+  EXPECT_EQ(index.Find(10), nullptr);
+  // A query of another size finds nothing.
+  EXPECT_TRUE(index.Query(ComputeLidarDescriptor(cloud, small), PlaceQuery{}).empty());
+}
+
+TEST(LidarPlaceIndex, QueryCostWithThousandsOfKeyframes) {
+  // 5000 keyframes (the 50 street places repeated under new ids): brute-force ring keys + 10 full distances.
+  const Revisits& r = SceneRevisits(true);
+  LidarPlaceIndex index;
+  for (int copy = 0; copy < 100; ++copy)
+    for (size_t i = 0; i < 50; ++i)
+      ASSERT_TRUE(index.Add(int64_t(copy * 50 + i), double(copy * 50 + i), r.keyframes[0][i]).ok);
+  std::vector<PlaceCandidate> best;
+  const double ms = MillisecondsOf([&] { best = index.Query(r.queries[0][20], PlaceQuery{}); }, 20);
+  std::printf("Query over %zu keyframes: %.3f ms; %zu bytes per keyframe\n", index.size(), ms,
+              LidarPlaceIndex::BytesPerKeyframe(20, 60));
+  ASSERT_EQ(best.size(), 1u);
+  EXPECT_EQ(best[0].keyframe_id % 50, 20);  // one of the copies of place 20
 }
 
 }  // namespace

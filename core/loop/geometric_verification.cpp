@@ -42,10 +42,15 @@ Cloud::Ptr DownsampleFinite(const Cloud& in, double voxel_m) {
 }
 
 /// Coarse stage: GICP with the wide gate and 10x looser epsilons (it only has to pull the guess in). Returns its
-/// transform (PCL's: the guess when it failed outright); the fine stage and the gates judge the result.
+/// transform (the guess when it failed outright or a coarse cloud is too small); the fine stage and the gates judge
+/// the result.
 Pose3 CoarseAlign(const Cloud::Ptr& source, const Cloud::Ptr& target, const Pose3& guess,
                   const LoopVerificationConfig& config, int* iterations) {
   Gicp gicp;
+  // PCL's GICP needs k_correspondences (20) neighbours per point and indexes missing covariances otherwise.
+  if (source->size() < size_t(gicp.getCorrespondenceRandomness()) ||
+      target->size() < size_t(gicp.getCorrespondenceRandomness()))
+    return guess;
   gicp.setInputSource(source);
   gicp.setInputTarget(target);
   gicp.setMaximumIterations(config.max_iterations);
@@ -180,13 +185,33 @@ std::string Format(const char* format, double a, double b) {
   return buffer;
 }
 
+/// The first failed gate, or "" when all pass: overlap and fitness first, as they say most about a wrong place.
+std::string RejectionReason(const LoopVerification& out, size_t num_structure, const LoopVerificationConfig& config) {
+  if (num_structure < config.min_points)
+    return Format("too little vertical structure to verify: %.0f points (min_points %.0f)", double(num_structure),
+                  double(config.min_points));
+  if (out.overlap < config.min_overlap)
+    return Format("overlap %.3f below min_overlap %.3f", out.overlap, config.min_overlap);
+  if (out.fitness_rmse_m > config.max_fitness_rmse_m)
+    return Format("fitness rmse %.3f m above max_fitness_rmse_m %.3f m", out.fitness_rmse_m,
+                  config.max_fitness_rmse_m);
+  if (out.normal_share < config.min_normal_share)
+    return Format("degenerate geometry: the weakest direction holds %.4f of the normals (min_normal_share %.4f)",
+                  out.normal_share, config.min_normal_share);
+  if (!out.converged) return "point-to-plane refinement did not converge within max_iterations";
+  if (!out.covariance_valid) return "degenerate geometry: the point-to-plane Hessian is singular";
+  return "";
+}
+
 }  // namespace
 
 bool LoopVerificationConfig::Validate(std::string* error) const {
-  if (!(voxel_m >= 0.0) || !std::isfinite(voxel_m)) return FailValidation(error, "loop_verification.voxel_m must be >= 0");
+  if (!(voxel_m >= 0.0) || !std::isfinite(voxel_m))
+    return FailValidation(error, "loop_verification.voxel_m must be >= 0");
   if (!(coarse_voxel_m >= 0.0) || !std::isfinite(coarse_voxel_m))
     return FailValidation(error, "loop_verification.coarse_voxel_m must be >= 0");
-  if (!(fine_correspondence_m > 0.0)) return FailValidation(error, "loop_verification.fine_correspondence_m must be > 0");
+  if (!(fine_correspondence_m > 0.0))
+    return FailValidation(error, "loop_verification.fine_correspondence_m must be > 0");
   if (!(max_correspondence_m >= fine_correspondence_m) || !std::isfinite(max_correspondence_m))
     return FailValidation(error, "loop_verification.max_correspondence_m must be >= fine_correspondence_m");
   if (max_iterations < 1) return FailValidation(error, "loop_verification.max_iterations must be >= 1");
@@ -198,9 +223,9 @@ bool LoopVerificationConfig::Validate(std::string* error) const {
     return FailValidation(error, "loop_verification.min_normal_share must be in [0, 1/3]");
   if (!(structure_max_normal_z >= 0.0 && structure_max_normal_z <= 1.0))
     return FailValidation(error, "loop_verification.structure_max_normal_z must be in [0, 1]");
-  // GICP estimates each point's covariance from its 20 nearest neighbours.
   if (min_points < 20) return FailValidation(error, "loop_verification.min_points must be >= 20");
-  if (!(min_overlap >= 0.0 && min_overlap <= 1.0)) return FailValidation(error, "loop_verification.min_overlap must be in [0, 1]");
+  if (!(min_overlap >= 0.0 && min_overlap <= 1.0))
+    return FailValidation(error, "loop_verification.min_overlap must be in [0, 1]");
   if (!(max_fitness_rmse_m > 0.0)) return FailValidation(error, "loop_verification.max_fitness_rmse_m must be > 0");
   return true;
 }
@@ -231,22 +256,7 @@ LoopVerification VerifyLoop(const Cloud& source, const Cloud& target, const Pose
   const PlaneSystem final_system = BuildSystem(fine_src, fine_tgt, out.T_target_source,
                                                  config.fine_correspondence_m, config.huber_m);
   const size_t num_structure = Evaluate(fine_src, final_system, config, &out);
-  // The first failed gate names the reason: overlap and fitness first, as they say most about a wrong place.
-  if (num_structure < config.min_points)
-    out.reason = Format("too little vertical structure to verify: %.0f points (min_points %.0f)",
-                        double(num_structure), double(config.min_points));
-  else if (out.overlap < config.min_overlap)
-    out.reason = Format("overlap %.3f below min_overlap %.3f", out.overlap, config.min_overlap);
-  else if (out.fitness_rmse_m > config.max_fitness_rmse_m)
-    out.reason = Format("fitness rmse %.3f m above max_fitness_rmse_m %.3f m", out.fitness_rmse_m,
-                        config.max_fitness_rmse_m);
-  else if (out.normal_share < config.min_normal_share)
-    out.reason = Format("degenerate geometry: the weakest direction holds %.4f of the normals (min_normal_share %.4f)",
-                        out.normal_share, config.min_normal_share);
-  else if (!out.converged)
-    out.reason = "point-to-plane refinement did not converge within max_iterations";
-  else if (!out.covariance_valid)
-    out.reason = "degenerate geometry: the point-to-plane Hessian is singular";
+  out.reason = RejectionReason(out, num_structure, config);
   out.accepted = out.reason.empty();
   return out;
 }

@@ -16,8 +16,9 @@
 // sides). Floors and ceilings are excluded because indoors they are most of the points and two unrelated rooms of
 // the same storey share them: counted, they make any pair of rooms "overlap" (the test measures 0.79 overlap and
 // 0.11 m fitness for two different halls with all points, which pass both gates; 0.33 with structure only). They
-// carry no information on x, y and yaw, which is what a loop closure must fix. Precondition: the target submap's frame is gravity-aligned (z up), as the
-// keyframe frames of the place descriptor and the estimator's world frame are.
+// carry no information on x, y and yaw, which is what a loop closure must fix. Precondition: the target submap's
+// frame is gravity-aligned (z up), as the keyframe frames of the place descriptor and the estimator's world frame
+// are.
 //
 // Degeneracy: a corridor or a flat field leaves a translation unconstrained; the covariance would say so only
 // weakly (noisy normals: the test's featureless corridor got sigma 5 mm along its axis), so such loops are

@@ -3,10 +3,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <pcl/features/normal_3d.h>
 #include <pcl/filters/voxel_grid.h>
-#include <pcl/search/kdtree.h>
 #include <pcl/registration/gicp.h>
+#include <pcl/search/kdtree.h>
 
 #include "core/util/validation.hpp"
 
@@ -14,25 +16,15 @@ namespace rotolidar::loop {
 namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+using KdTree = pcl::search::KdTree<pcl::PointXYZ>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-/// PCL's GICP keeps its iteration count and its per-point covariances protected; this exposes them. After align()
-/// each covariance is U diag(1, 1, eps) U^T of the point's 20 nearest neighbours: U's last column is the normal.
+/// PCL's GICP keeps its iteration count protected; this exposes it.
 class Gicp : public pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> {
  public:
   int iterations() const { return nr_iterations_; }
-  const MatricesVector* source_covariances() const { return input_covariances_.get(); }
-  const MatricesVector* target_covariances() const { return target_covariances_.get(); }
-  MatricesVectorPtr source_covariances_ptr() const { return input_covariances_; }
-  MatricesVectorPtr target_covariances_ptr() const { return target_covariances_; }
 };
-
-/// The unit normal of a GICP point covariance: the eigenvector of its smallest eigenvalue.
-Eigen::Vector3d NormalOf(const Eigen::Matrix3d& covariance) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(covariance);
-  return eig.eigenvectors().col(0);
-}
 
 /// The finite points of `in`, voxel-downsampled when voxel_m > 0.
 Cloud::Ptr DownsampleFinite(const Cloud& in, double voxel_m) {
@@ -49,120 +41,142 @@ Cloud::Ptr DownsampleFinite(const Cloud& in, double voxel_m) {
   return out;
 }
 
-Pose3 ToPose(const Eigen::Matrix4f& M) {
-  const Eigen::Matrix4d D = M.cast<double>();
-  return MakePose(D.block<3, 1>(0, 3), Eigen::Quaterniond(Eigen::Matrix3d(D.block<3, 3>(0, 0))));
-}
-
-/// One GICP run from `T` (updated); adds to out->iterations and ANDs the stage's convergence into out->converged.
-void Align(Gicp& gicp, double gate_m, double epsilon_scale, const LoopVerificationConfig& config,
-           Eigen::Matrix4f* T, LoopVerification* out) {
+/// Coarse stage: GICP with the wide gate and 10x looser epsilons (it only has to pull the guess in). Returns its
+/// transform (the guess when it failed outright or a coarse cloud is too small); the fine stage and the gates judge
+/// the result.
+Pose3 CoarseAlign(const Cloud::Ptr& source, const Cloud::Ptr& target, const Pose3& guess,
+                  const LoopVerificationConfig& config, int* iterations) {
+  Gicp gicp;
+  // PCL's GICP needs k_correspondences (20) neighbours per point and indexes missing covariances otherwise.
+  if (source->size() < size_t(gicp.getCorrespondenceRandomness()) ||
+      target->size() < size_t(gicp.getCorrespondenceRandomness()))
+    return guess;
+  gicp.setInputSource(source);
+  gicp.setInputTarget(target);
   gicp.setMaximumIterations(config.max_iterations);
-  gicp.setMaxCorrespondenceDistance(gate_m);
-  gicp.setTransformationEpsilon(epsilon_scale * config.transformation_epsilon_m);
-  gicp.setRotationEpsilon(epsilon_scale * config.rotation_epsilon_rad);
+  gicp.setMaxCorrespondenceDistance(config.max_correspondence_m);
+  gicp.setTransformationEpsilon(10.0 * config.transformation_epsilon_m);
+  gicp.setRotationEpsilon(10.0 * config.rotation_epsilon_rad);
   Cloud aligned;
-  gicp.align(aligned, *T);
-  out->iterations += gicp.iterations();
-  // PCL also reports "converged" when it stops at max_iterations; that is not convergence here.
-  out->converged = out->converged && gicp.hasConverged() && gicp.iterations() < config.max_iterations;
-  *T = gicp.getFinalTransformation();
+  gicp.align(aligned, guess.matrix().cast<float>());
+  *iterations += gicp.iterations();
+  const Eigen::Matrix4d M = gicp.getFinalTransformation().cast<double>();
+  if (!M.allFinite()) return guess;
+  return MakePose(M.block<3, 1>(0, 3), Eigen::Quaterniond(Eigen::Matrix3d(M.block<3, 3>(0, 0))));
 }
 
-/// The coarse-to-fine schedule: the coarse stage on the coarse clouds with the wide gate and 10x looser epsilons
-/// (it only has to pull the guess in), the fine stage on the fine clouds. Fills converged, iterations and
-/// T_target_source; `fine` keeps the fine clouds' covariances for Evaluate.
-void Register(const Cloud::Ptr& coarse_source, const Cloud::Ptr& coarse_target, const Cloud::Ptr& source,
-              const Cloud::Ptr& target, const Pose3& guess, const LoopVerificationConfig& config, Gicp& fine,
-              LoopVerification* out) {
-  Eigen::Matrix4f T = guess.matrix().cast<float>();
-  out->converged = true;
-  Gicp coarse;
-  coarse.setInputSource(coarse_source);
-  coarse.setInputTarget(coarse_target);
-  Align(coarse, config.max_correspondence_m, 10.0, config, &T, out);
-  fine.setInputSource(source);
-  fine.setInputTarget(target);
-  if (coarse_source == source && coarse_target == target) {  // same clouds: reuse the point covariances
-    fine.setSourceCovariances(coarse.source_covariances_ptr());
-    fine.setTargetCovariances(coarse.target_covariances_ptr());
-  }
-  Align(fine, config.fine_correspondence_m, 1.0, config, &T, out);
-  out->T_target_source = ToPose(T);
-}
-
-/// The nearest target point of each transformed source point within the fine gate (-1: none).
-struct Correspondences {
-  std::vector<int> target_index;
-  std::vector<float> dist_sq_m2;
+/// A fine cloud with its kd-tree and unit normals (zero where PCA found none).
+struct FineCloud {
+  Cloud::Ptr points;
+  KdTree::Ptr tree;
+  std::vector<Eigen::Vector3d> normals;
 };
 
-Correspondences FindCorrespondences(const Cloud& source, const Gicp& gicp, const Pose3& T, double gate_m) {
-  Correspondences c;
-  c.target_index.assign(source.size(), -1);
-  c.dist_sq_m2.assign(source.size(), 0.0f);
-  const auto tree = gicp.getSearchMethodTarget();
-  pcl::Indices index(1);
-  std::vector<float> dist_sq(1);
-  for (size_t i = 0; i < source.size(); ++i) {
-    const Eigen::Vector3f q = (T * source[i].getVector3fMap().cast<double>()).cast<float>();
-    if (tree->nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, index, dist_sq) < 1) continue;
-    if (dist_sq[0] > gate_m * gate_m) continue;
-    c.target_index[i] = index[0];
-    c.dist_sq_m2[i] = dist_sq[0];
+FineCloud MakeFineCloud(const Cloud::Ptr& points, int normal_neighbours) {
+  FineCloud f{points, KdTree::Ptr(new KdTree), {}};
+  f.tree->setInputCloud(points);
+  pcl::PointCloud<pcl::Normal> normals;
+  pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> estimation;
+  estimation.setInputCloud(points);
+  estimation.setSearchMethod(f.tree);
+  estimation.setKSearch(normal_neighbours);
+  estimation.compute(normals);
+  f.normals.reserve(normals.size());
+  for (const auto& n : normals) {
+    const Eigen::Vector3d v(n.normal_x, n.normal_y, n.normal_z);
+    f.normals.push_back(v.allFinite() && v.norm() > 0.5 ? v.normalized() : Eigen::Vector3d::Zero());
   }
-  return c;
+  return f;
 }
 
-/// Overlap and fitness over the source's vertical structure (normal |z| in the target frame below the limit).
-/// Returns the number of structure points.
-size_t GateStatistics(const Cloud& source, const Gicp& gicp, const Correspondences& c,
-                      const LoopVerificationConfig& config, LoopVerification* out) {
+/// Huber-weighted point-to-plane normal equations at T over the source points whose nearest target point lies
+/// within the gate.
+struct PlaneSystem {
+  Matrix6d H = Matrix6d::Zero();  ///< J^T J
+  Vector6d g = Vector6d::Zero();  ///< J^T r
+  double sum_r_sq = 0.0;           ///< sum of w r^2
+  size_t num_residuals = 0;
+  std::vector<int> target_index;   ///< per source point: its target neighbour within the gate, or -1
+  std::vector<float> dist_sq_m2;   ///< per source point: squared distance to that neighbour
+};
+
+PlaneSystem BuildSystem(const FineCloud& source, const FineCloud& target, const Pose3& T, double gate_m,
+                        double huber_m) {
+  PlaneSystem s;
+  s.target_index.assign(source.points->size(), -1);
+  s.dist_sq_m2.assign(source.points->size(), 0.0f);
+  pcl::Indices index(1);
+  std::vector<float> dist_sq(1);
+  for (size_t i = 0; i < source.points->size(); ++i) {
+    const Eigen::Vector3d p = (*source.points)[i].getVector3fMap().cast<double>();
+    const Eigen::Vector3f q = (T * p).cast<float>();
+    if (target.tree->nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, index, dist_sq) < 1) continue;
+    if (dist_sq[0] > gate_m * gate_m) continue;
+    s.target_index[i] = index[0];
+    s.dist_sq_m2[i] = dist_sq[0];
+    const Eigen::Vector3d& n = target.normals[size_t(index[0])];
+    if (n.isZero()) continue;
+    Vector6d J;
+    const double r = detail::PointToPlaneResidual(
+        T, p, (*target.points)[size_t(index[0])].getVector3fMap().cast<double>(), n, &J);
+    // Huber IRLS weight: voxel centroids at edges and corners sit off the surfaces and, unweighted, biased the
+    // solution by ~5 mm in the tests.
+    const double w = std::abs(r) <= huber_m ? 1.0 : huber_m / std::abs(r);
+    s.H.noalias() += w * J * J.transpose();
+    s.g += w * J * r;
+    s.sum_r_sq += w * r * r;
+    ++s.num_residuals;
+  }
+  return s;
+}
+
+/// Fine stage: Gauss-Newton on the point-to-plane residuals, T (+) xi = (t + dt, Exp(dtheta) R). True when a step
+/// fell below the epsilons within max_iterations.
+bool RefinePointToPlane(const FineCloud& source, const FineCloud& target, const LoopVerificationConfig& config,
+                        Pose3* T, int* iterations) {
+  for (int it = 0; it < config.max_iterations; ++it) {
+    const PlaneSystem s = BuildSystem(source, target, *T, config.fine_correspondence_m, config.huber_m);
+    if (s.num_residuals < 6) return false;
+    const Eigen::LDLT<Matrix6d> ldlt(s.H);
+    const Vector6d xi = -ldlt.solve(s.g);
+    if (ldlt.info() != Eigen::Success || !xi.allFinite()) return false;
+    T->translation() += xi.head<3>();
+    T->linear() = ExpSO3(xi.tail<3>()) * T->linear();
+    ++*iterations;
+    if (xi.head<3>().norm() < config.transformation_epsilon_m && xi.tail<3>().norm() < config.rotation_epsilon_rad)
+      return true;
+  }
+  return false;
+}
+
+/// Gates and covariance at out->T_target_source from the final system. Returns the number of structure points.
+size_t Evaluate(const FineCloud& source, const PlaneSystem& s, const LoopVerificationConfig& config,
+                LoopVerification* out) {
   const Eigen::Matrix3d R = out->T_target_source.linear();
   size_t num_structure = 0, num_inliers = 0;
   double sum_dist_sq = 0.0;
-  for (size_t i = 0; i < source.size(); ++i) {
-    const Eigen::Vector3d n = R * NormalOf((*gicp.source_covariances())[i]);
-    if (std::abs(n.z()) > config.structure_max_normal_z) continue;
+  for (size_t i = 0; i < source.points->size(); ++i) {
+    const Eigen::Vector3d& n = source.normals[i];
+    if (n.isZero() || std::abs((R * n).z()) > config.structure_max_normal_z) continue;
     ++num_structure;
-    if (c.target_index[i] < 0) continue;
+    if (s.target_index[i] < 0) continue;
     ++num_inliers;
-    sum_dist_sq += c.dist_sq_m2[i];
+    sum_dist_sq += s.dist_sq_m2[i];
   }
   out->overlap = num_structure ? double(num_inliers) / double(num_structure) : 0.0;
   out->fitness_rmse_m = num_inliers ? std::sqrt(sum_dist_sq / double(num_inliers)) : 0.0;
-  return num_structure;
-}
-
-/// sigma^2 (J^T J)^-1 of the point-to-plane residuals of all correspondences (floors and ceilings included: they
-/// carry z, roll and pitch). False when it cannot be estimated (singular Hessian: degenerate geometry).
-bool PointToPlaneCovariance(const Cloud& source, const Cloud& target, const Gicp& gicp, const Correspondences& c,
-                            LoopVerification* out) {
-  const Eigen::Matrix3d R = out->T_target_source.linear();
-  const Eigen::Vector3d t = out->T_target_source.translation();
-  Matrix6d H = Matrix6d::Zero();
-  double sum_r_sq = 0.0;
-  size_t n = 0;
-  for (size_t i = 0; i < source.size(); ++i) {
-    if (c.target_index[i] < 0) continue;
-    const size_t j = size_t(c.target_index[i]);
-    const Eigen::Vector3d normal = NormalOf((*gicp.target_covariances())[j]);
-    const Eigen::Vector3d Rp = R * source[i].getVector3fMap().cast<double>();
-    const double r = normal.dot(Rp + t - target[j].getVector3fMap().cast<double>());
-    Eigen::Matrix<double, 6, 1> J;
-    J << normal, Rp.cross(normal);  // d r / d[dt; dtheta] with T (+) xi = (t + dt, Exp(dtheta) R)
-    H.noalias() += J * J.transpose();
-    sum_r_sq += r * r;
-    ++n;
-  }
-  if (n <= 6) return false;
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
-  if (eig.info() != Eigen::Success || !(eig.eigenvalues()(0) > 1e-9 * eig.eigenvalues()(5))) return false;
-  const double sigma_sq = sum_r_sq / double(n - 6);
+  if (s.num_residuals <= 6) return num_structure;
+  // The weakest translation direction's share of the normals: the smallest eigenvalue of mean(n n^T).
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> shares(s.H.topLeftCorner<3, 3>() / double(s.num_residuals));
+  out->normal_share = shares.eigenvalues()(0);
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(s.H);
+  if (eig.info() != Eigen::Success || !(eig.eigenvalues()(0) > 1e-12 * eig.eigenvalues()(5))) return num_structure;
+  const double sigma_sq = s.sum_r_sq / double(s.num_residuals - 6);
   const Matrix6d cov =
       sigma_sq * eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   out->covariance = 0.5 * (cov + cov.transpose());
-  return true;
+  out->covariance_valid = true;
+  return num_structure;
 }
 
 std::string Format(const char* format, double a, double b) {
@@ -171,23 +185,47 @@ std::string Format(const char* format, double a, double b) {
   return buffer;
 }
 
+/// The first failed gate, or "" when all pass: overlap and fitness first, as they say most about a wrong place.
+std::string RejectionReason(const LoopVerification& out, size_t num_structure, const LoopVerificationConfig& config) {
+  if (num_structure < config.min_points)
+    return Format("too little vertical structure to verify: %.0f points (min_points %.0f)", double(num_structure),
+                  double(config.min_points));
+  if (out.overlap < config.min_overlap)
+    return Format("overlap %.3f below min_overlap %.3f", out.overlap, config.min_overlap);
+  if (out.fitness_rmse_m > config.max_fitness_rmse_m)
+    return Format("fitness rmse %.3f m above max_fitness_rmse_m %.3f m", out.fitness_rmse_m,
+                  config.max_fitness_rmse_m);
+  if (out.normal_share < config.min_normal_share)
+    return Format("degenerate geometry: the weakest direction holds %.4f of the normals (min_normal_share %.4f)",
+                  out.normal_share, config.min_normal_share);
+  if (!out.converged) return "point-to-plane refinement did not converge within max_iterations";
+  if (!out.covariance_valid) return "degenerate geometry: the point-to-plane Hessian is singular";
+  return "";
+}
+
 }  // namespace
 
 bool LoopVerificationConfig::Validate(std::string* error) const {
-  if (!(voxel_m >= 0.0) || !std::isfinite(voxel_m)) return FailValidation(error, "loop_verification.voxel_m must be >= 0");
+  if (!(voxel_m >= 0.0) || !std::isfinite(voxel_m))
+    return FailValidation(error, "loop_verification.voxel_m must be >= 0");
   if (!(coarse_voxel_m >= 0.0) || !std::isfinite(coarse_voxel_m))
     return FailValidation(error, "loop_verification.coarse_voxel_m must be >= 0");
-  if (!(fine_correspondence_m > 0.0)) return FailValidation(error, "loop_verification.fine_correspondence_m must be > 0");
+  if (!(fine_correspondence_m > 0.0))
+    return FailValidation(error, "loop_verification.fine_correspondence_m must be > 0");
   if (!(max_correspondence_m >= fine_correspondence_m) || !std::isfinite(max_correspondence_m))
     return FailValidation(error, "loop_verification.max_correspondence_m must be >= fine_correspondence_m");
   if (max_iterations < 1) return FailValidation(error, "loop_verification.max_iterations must be >= 1");
   if (!(transformation_epsilon_m > 0.0) || !(rotation_epsilon_rad > 0.0))
     return FailValidation(error, "loop_verification.transformation_epsilon_m and rotation_epsilon_rad must be > 0");
+  if (!(huber_m > 0.0)) return FailValidation(error, "loop_verification.huber_m must be > 0");
+  if (normal_neighbours < 3) return FailValidation(error, "loop_verification.normal_neighbours must be >= 3");
+  if (!(min_normal_share >= 0.0 && min_normal_share <= 1.0 / 3.0))
+    return FailValidation(error, "loop_verification.min_normal_share must be in [0, 1/3]");
   if (!(structure_max_normal_z >= 0.0 && structure_max_normal_z <= 1.0))
     return FailValidation(error, "loop_verification.structure_max_normal_z must be in [0, 1]");
-  // GICP estimates each point's covariance from its 20 nearest neighbours.
   if (min_points < 20) return FailValidation(error, "loop_verification.min_points must be >= 20");
-  if (!(min_overlap >= 0.0 && min_overlap <= 1.0)) return FailValidation(error, "loop_verification.min_overlap must be in [0, 1]");
+  if (!(min_overlap >= 0.0 && min_overlap <= 1.0))
+    return FailValidation(error, "loop_verification.min_overlap must be in [0, 1]");
   if (!(max_fitness_rmse_m > 0.0)) return FailValidation(error, "loop_verification.max_fitness_rmse_m must be > 0");
   return true;
 }
@@ -208,29 +246,17 @@ LoopVerification VerifyLoop(const Cloud& source, const Cloud& target, const Pose
                                double(tgt->size())),
            out;
   const bool coarser = config.coarse_voxel_m > config.voxel_m;
-  const Cloud::Ptr coarse_src = coarser ? DownsampleFinite(*src, config.coarse_voxel_m) : src;
-  const Cloud::Ptr coarse_tgt = coarser ? DownsampleFinite(*tgt, config.coarse_voxel_m) : tgt;
-  Gicp gicp;
-  Register(coarse_src, coarse_tgt, src, tgt, T_target_source_guess, config, gicp, &out);
-  const auto* source_cov = gicp.source_covariances();
-  const auto* target_cov = gicp.target_covariances();
-  if (!source_cov || !target_cov || source_cov->size() != src->size() || target_cov->size() != tgt->size())
-    return out.reason = "registration failed (no point covariances)", out;
-  const Correspondences c = FindCorrespondences(*src, gicp, out.T_target_source, config.fine_correspondence_m);
-  const size_t num_structure = GateStatistics(*src, gicp, c, config, &out);
-  const bool covariance_ok = PointToPlaneCovariance(*src, *tgt, gicp, c, &out);
-  if (!out.converged)
-    out.reason = "registration did not converge within max_iterations";
-  else if (num_structure < config.min_points)
-    out.reason = Format("too little vertical structure to verify: %.0f points (min_points %.0f)",
-                        double(num_structure), double(config.min_points));
-  else if (out.overlap < config.min_overlap)
-    out.reason = Format("overlap %.3f below min_overlap %.3f", out.overlap, config.min_overlap);
-  else if (out.fitness_rmse_m > config.max_fitness_rmse_m)
-    out.reason = Format("fitness rmse %.3f m above max_fitness_rmse_m %.3f m", out.fitness_rmse_m,
-                        config.max_fitness_rmse_m);
-  else if (!covariance_ok)
-    out.reason = "degenerate geometry: the point-to-plane Hessian is singular";
+  const Pose3 coarse = CoarseAlign(coarser ? DownsampleFinite(*src, config.coarse_voxel_m) : src,
+                                   coarser ? DownsampleFinite(*tgt, config.coarse_voxel_m) : tgt,
+                                   T_target_source_guess, config, &out.iterations);
+  const FineCloud fine_src = MakeFineCloud(src, config.normal_neighbours);
+  const FineCloud fine_tgt = MakeFineCloud(tgt, config.normal_neighbours);
+  out.T_target_source = coarse;
+  out.converged = RefinePointToPlane(fine_src, fine_tgt, config, &out.T_target_source, &out.iterations);
+  const PlaneSystem final_system = BuildSystem(fine_src, fine_tgt, out.T_target_source,
+                                                 config.fine_correspondence_m, config.huber_m);
+  const size_t num_structure = Evaluate(fine_src, final_system, config, &out);
+  out.reason = RejectionReason(out, num_structure, config);
   out.accepted = out.reason.empty();
   return out;
 }
@@ -245,4 +271,15 @@ LoopVerification VerifyLoop(const std::vector<Eigen::Vector3d>& source, const st
   return VerifyLoop(src, tgt, T_target_source_guess, config);
 }
 
+namespace detail {
+
+double PointToPlaneResidual(const Pose3& T_target_source, const Eigen::Vector3d& p_source,
+                            const Eigen::Vector3d& q_target, const Eigen::Vector3d& n_target,
+                            Eigen::Matrix<double, 6, 1>* jacobian) {
+  const Eigen::Vector3d Rp = T_target_source.linear() * p_source;
+  if (jacobian) *jacobian << n_target, Rp.cross(n_target);  // d/d(dt) = n; d/d(dtheta): n . (dtheta x Rp)
+  return n_target.dot(Rp + T_target_source.translation() - q_target);
+}
+
+}  // namespace detail
 }  // namespace rotolidar::loop

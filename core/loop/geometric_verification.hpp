@@ -3,31 +3,40 @@
 // 2025): the two keyframes' submaps are registered from the candidate's initial guess and the loop is accepted only
 // when the registration converged and the aligned submaps agree (enough overlap, small residual).
 //
-// Method: both submaps are voxel-downsampled (pcl::VoxelGrid, one centroid per voxel), then aligned by PCL's
-// Generalized-ICP (Segal, Haehnel, Thrun, "Generalized-ICP", RSS 2009) in a coarse-to-fine schedule: a coarse stage
-// on coarser voxels with correspondences up to max_correspondence_m pulls in a guess that is off by up to ~1 m /
-// ~10 deg, a fine stage with fine_correspondence_m refines on true neighbours only.
+// Method: both submaps are voxel-downsampled (pcl::VoxelGrid, one centroid per voxel). A coarse stage runs PCL's
+// Generalized-ICP (Segal, Haehnel, Thrun, "Generalized-ICP", RSS 2009) on coarser voxels with correspondences up to
+// max_correspondence_m: it pulls in a guess that is off by up to ~1 m / ~10 deg. A fine stage then runs point-to-plane
+// ICP (Chen & Medioni 1992) by Gauss-Newton with Huber weights on the fine voxels with fine_correspondence_m: it
+// reaches the same optimum from every guess the tests tried (PCL's GICP stops on small BFGS steps and left up to
+// 2 cm of error from some of them), and its Hessian at the solution gives the covariance below. Normals: PCA of the
+// normal_neighbours nearest points (pcl::NormalEstimation).
 //
 // Gates: overlap and fitness are evaluated at fine_correspondence_m over the source's vertical structure only
-// (points whose GICP normal has |z| <= structure_max_normal_z in the target frame: walls, pillars, furniture
+// (points whose PCA normal has |z| <= structure_max_normal_z in the target frame: walls, pillars, furniture
 // sides). Floors and ceilings are excluded because indoors they are most of the points and two unrelated rooms of
-// the same storey share them: counted, they make any pair of rooms "overlap" (the test measures 0.83 overlap for
-// two different halls with all points, 0.32 with structure only). They carry no information on x, y and yaw, which
-// is what a loop closure must fix. Precondition: both submap frames are gravity-aligned (z up), as the keyframe
-// frames of the place descriptor and the estimator's world frame are.
+// the same storey share them: counted, they make any pair of rooms "overlap" (the test measures 0.79 overlap and
+// 0.11 m fitness for two different halls with all points, which pass both gates; 0.33 with structure only). They
+// carry no information on x, y and yaw, which is what a loop closure must fix. Precondition: the target submap's
+// frame is gravity-aligned (z up), as the keyframe frames of the place descriptor and the estimator's world frame
+// are.
 //
-// Covariance: point-to-plane Gauss-Newton at the solution, sigma^2 (J^T J)^-1, with r_i = n_i . (T p_i - q_i) for
-// every source point whose nearest target point q_i (normal n_i: the smallest-eigenvalue direction of GICP's
-// neighbourhood covariance of q_i) lies within fine_correspondence_m, and sigma^2 = sum r_i^2 / (N - 6). Tangent
-// convention of the project (core/backend/pose_factors.hpp):
+// Degeneracy: a corridor or a flat field leaves a translation unconstrained; the covariance would say so only
+// weakly (noisy normals: the test's featureless corridor got sigma 5 mm along its axis), so such loops are
+// rejected: every translation direction must hold at least min_normal_share of the normals (the smallest
+// eigenvalue of mean(n n^T) over the correspondences; measured 0.06 in a hall, < 0.001 in the corridor).
+//
+// Covariance: sigma^2 (J^T W J)^-1 of the point-to-plane residuals r_i = n_i . (T p_i - q_i) at the solution, over
+// every source point whose nearest target point q_i (normal n_i) lies within fine_correspondence_m, with the Huber
+// weights W and sigma^2 = sum w_i r_i^2 / (N - 6). Tangent convention of the project
+// (core/backend/pose_factors.hpp):
 //   xi = [dt (m, target frame); dtheta (rad, target frame)],  T_target_source (+) xi = (t + dt, Exp(dtheta) R),
-// i.e. dr/d(dt) = n^T, dr/d(dtheta) = ((R p) x n)^T. It treats the points as independent although neighbouring
-// voxels' errors are correlated (sampling, calibration), so it is optimistic: the test measures sigmas of
-// ~0.5 mm / 0.002 deg against errors of a few mm. The pose graph should scale it or floor it before use.
+// i.e. dr/d(dt) = n^T, dr/d(dtheta) = ((R p) x n)^T (detail::PointToPlaneResidual). It treats the points as
+// independent although neighbouring voxels' errors are correlated (sampling, calibration), so it is optimistic:
+// the tests print sigmas against the actual errors. The pose graph should scale it or floor it before use.
 //
 // Thread safety: VerifyLoop has no shared state and may run concurrently. Failure is reported in the result
-// (accepted = false, reason), never thrown. Cost: dominated by GICP, about linear in the downsampled points
-// (the tests print timings: ~1 s for two 50 k-point submaps on one loaded core).
+// (accepted = false, reason), never thrown. Cost: about linear in the downsampled points (kd-trees, normals, the
+// coarse GICP); the tests print timings.
 #include <string>
 #include <vector>
 
@@ -47,12 +56,19 @@ struct LoopVerificationConfig {
   /// Correspondence gate of the fine stage and of the overlap / fitness / covariance neighbours [m]: two voxels,
   /// so every true neighbour of a 0.2 m voxel sampling is inside, while a 1 m gate would pair unrelated walls.
   double fine_correspondence_m = 0.4;
-  int max_iterations = 50;  ///< GICP iterations per stage; stopping there counts as not converged
-  /// Fine-stage convergence: the change between iterations of every translation element [m] and rotation-matrix
-  /// element [rad]; the coarse stage uses 10x these. GICP takes small steps, so a loose epsilon stops it early:
-  /// 1e-4 left 13 mm of error in the test, 1e-6 leaves ~2 mm.
-  double transformation_epsilon_m = 1e-6;
-  double rotation_epsilon_rad = 1e-6;
+  int max_iterations = 30;  ///< per stage (GICP iterations, Gauss-Newton steps); the fine stage must converge
+  /// Fine-stage convergence: a Gauss-Newton step below both [m], [rad]. The coarse GICP stops on 10x these
+  /// (changes of the transform's translation / rotation-matrix elements between iterations).
+  double transformation_epsilon_m = 1e-5;
+  double rotation_epsilon_rad = 1e-5;
+  int normal_neighbours = 20;  ///< nearest points of each normal's PCA (fine clouds)
+  /// Huber threshold of the fine stage's point-to-plane residuals [m]: ~3x the residual noise of 0.2 m voxel
+  /// centroids of a VLP-16 (+-3 cm raw, averaged over a voxel), so only off-surface centroids (edges, corners,
+  /// clutter) are down-weighted. Measured on the known-transform test's hall: 0.9 mm error with it, 3.9 mm without.
+  double huber_m = 0.03;
+  /// Degeneracy gate: every translation direction must hold at least this share of the correspondences' normals
+  /// (smallest eigenvalue of mean(n n^T), at most 1/3). 0.01 lies between a hall (0.06) and a corridor (0.001).
+  double min_normal_share = 0.01;
   /// A downsampled submap, and the source's vertical structure, need at least this many points.
   size_t min_points = 100;
   /// Source points whose normal has |z| (target frame) at most this count as vertical structure for the gates:
@@ -72,29 +88,41 @@ struct LoopVerificationConfig {
 
 /// Outcome of VerifyLoop. Every field is filled as far as the run got, also when rejected.
 struct LoopVerification {
-  /// converged && enough structure && overlap >= min_overlap && fitness_rmse_m <= max_fitness_rmse_m && the
-  /// covariance could be estimated (a singular point-to-plane Hessian means degenerate geometry).
+  /// converged && enough structure && overlap >= min_overlap && fitness_rmse_m <= max_fitness_rmse_m &&
+  /// normal_share >= min_normal_share && covariance_valid.
   bool accepted = false;
-  bool converged = false;  ///< both GICP stages stopped on the epsilons (not on max_iterations or an error)
+  bool converged = false;  ///< the fine stage's step fell below the epsilons within max_iterations
   Pose3 T_target_source = Pose3::Identity();  ///< the refined transform (the guess when registration did not run)
   double fitness_rmse_m = 0.0;  ///< RMS nearest-neighbour distance of the overlapping structure points [m]
   double overlap = 0.0;  ///< share of the source's structure points with a target point within the fine gate
-  int iterations = 0;           ///< GICP iterations, both stages
+  int iterations = 0;           ///< coarse GICP iterations + fine Gauss-Newton steps
+  double normal_share = 0.0;    ///< the weakest translation direction's share of the normals, in [0, 1/3]
   size_t num_source_points = 0; ///< after downsampling
   size_t num_target_points = 0; ///< after downsampling
   /// Covariance of T_target_source in the tangent above: [dt (m); dtheta (rad)], units m^2, rad^2, m rad.
-  /// Symmetric positive definite when accepted; Identity when it could not be estimated.
+  /// Symmetric positive definite when covariance_valid (always when accepted); Identity otherwise.
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  bool covariance_valid = false;
   std::string reason;  ///< why it was rejected (empty when accepted)
 };
 
 /// Registers `source` onto `target` from `T_target_source_guess` and gates the result. Points are in each submap's
-/// own gravity-aligned frame [m] (e.g. each keyframe's; then RotZ(DescriptorMatch::yaw_rad) of the query (source)
-/// against the candidate (target) is a guess). An invalid config, a non-finite guess or too few points are reported
-/// as rejected with a reason; non-finite points are dropped.
+/// own frame [m], the target's gravity-aligned (e.g. each keyframe's gravity-aligned frame; then
+/// RotZ(DescriptorMatch::yaw_rad) of the query (source) against the candidate (target) is a guess). An invalid
+/// config, a non-finite guess or too few points are reported as rejected with a reason; non-finite points are
+/// dropped.
 LoopVerification VerifyLoop(const pcl::PointCloud<pcl::PointXYZ>& source, const pcl::PointCloud<pcl::PointXYZ>& target,
                             const Pose3& T_target_source_guess, const LoopVerificationConfig& config);
 LoopVerification VerifyLoop(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                             const Pose3& T_target_source_guess, const LoopVerificationConfig& config);
+
+namespace detail {
+/// The point-to-plane residual r = n . (R p + t - q) [m] of source point p against target point q with unit normal
+/// n (target frame) under T_target_source = (R, t), and (when not null) its Jacobian with respect to
+/// xi = [dt; dtheta] of T (+) xi = (t + dt, Exp(dtheta) R): [n; (R p) x n]. Exposed for the tests.
+double PointToPlaneResidual(const Pose3& T_target_source, const Eigen::Vector3d& p_source,
+                            const Eigen::Vector3d& q_target, const Eigen::Vector3d& n_target,
+                            Eigen::Matrix<double, 6, 1>* jacobian);
+}  // namespace detail
 
 }  // namespace rotolidar::loop

@@ -152,7 +152,7 @@ DescriptorMatch DescriptorDistance(const LidarDescriptor& a, const LidarDescript
   for (int s = first; s <= last; ++s) {
     const int shift = ((s % n) + n) % n;
     const double d = ShiftedDistance(a, b, norm_a, norm_b, shift);
-    if (d < match.distance || (s == first)) {
+    if (s == first || d < match.distance) {
       match.distance = d;
       match.best_shift = shift;
     }

@@ -18,12 +18,15 @@
 // Cell value, and why the default differs from the paper: the paper stores the maximum point height per bin. A
 // rotary rig sees the full sphere, so indoors (the default 40 m radius is chosen for halls and corridors rather
 // than KITTI's 80 m streets) every bin inside a room contains the ceiling and the max height is the ceiling height
-// everywhere: the descriptor degenerates to the room's footprint and loses pillars, shelves and furniture. The
+// almost everywhere: the descriptor reduces to the room's footprint and loses pillars, shelves and furniture. The
 // default cell value is therefore the share of occupied height bands (num_height_bands equal bands between
 // min_z_m and max_z_m), a 3D occupancy column squeezed into one number: floor + ceiling = 2 bands, a pillar or wall
 // = all bands, a table = floor + table top. It stays a scalar matrix, so the paper's column cosine distance, ring
-// key and shift search apply unchanged, at the same cost. The paper's max height is kept as an option
-// (CellValue::kMaxHeight).
+// key and shift search apply unchanged, at the same cost. Measured on ray-cast synthetic scenes (tests): on a
+// street both retrieve 50 / 50 revisits with their yaw; in a hall whose walls and pillars are point-symmetric the
+// bands retrieve 54 / 54 with their yaw, the max height 52 / 54 with 4 yaws wrong. The price: a band is 1 m, so a
+// sensor height change between visits that moves a surface across a band boundary changes cells (the max height
+// varies smoothly). The paper's max height is kept as an option (CellValue::kMaxHeight).
 //
 // Cost: ComputeLidarDescriptor is one pass over the points (an atan2 and a few compares per point); a full-shift
 // DescriptorDistance is num_sectors^2 * num_rings multiply-adds (72 k for 20 x 60); the tests print timings.
@@ -82,8 +85,9 @@ LidarDescriptor ComputeLidarDescriptor(const pcl::PointCloud<pcl::PointXYZ>& poi
 /// Result of comparing two descriptors a (query) and b (candidate).
 struct DescriptorMatch {
   /// Scan Context distance at the best shift: the mean over columns of (1 - cosine similarity), in [0, 1]. Columns
-  /// empty in both are skipped; a column empty in only one counts 1 (the paper skips those too; counting them keeps a
-  /// sparse scan from matching anything). 1 when nothing is comparable (empty descriptors, different sizes).
+  /// empty in both are skipped; a column empty in only one counts 1 (the paper's code skips those as well; counting
+  /// them keeps a sparse scan from matching anything). 1 when nothing is comparable (empty descriptors, sizes
+  /// that differ).
   double distance = 1.0;
   /// Column j of a matches column (j + best_shift) mod num_sectors of b; in [0, num_sectors).
   int best_shift = 0;
@@ -116,7 +120,7 @@ struct LidarPlaceIndexConfig {
   bool Validate(std::string* error) const;
 };
 
-/// What to look for; the defaults exclude nothing and return the single best candidate.
+/// What to look for; the defaults exclude nothing and return the single best candidate within max_distance.
 struct PlaceQuery {
   double t_s = std::numeric_limits<double>::infinity();  ///< the query keyframe's time [s]
   double exclude_recent_s = 0.0;  ///< keyframes with t_s > query t_s - exclude_recent_s are skipped (own trail)

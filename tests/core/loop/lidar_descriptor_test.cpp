@@ -210,7 +210,8 @@ TEST_P(DescriptorPlaces, RevisitWithYawAndOffsetMatchesAndAFarPlaceDoesNot) {
   EXPECT_LT(RingKeyDistance(a, b), RingKeyDistance(a, c));
 }
 
-INSTANTIATE_TEST_SUITE_P(CellValues, DescriptorPlaces, ::testing::Values(CellValue::kHeightBands, CellValue::kMaxHeight));
+INSTANTIATE_TEST_SUITE_P(CellValues, DescriptorPlaces,
+                         ::testing::Values(CellValue::kHeightBands, CellValue::kMaxHeight));
 
 TEST(LidarDescriptor, RingKeyIsInvariantToWholeSectorRotations) {
   const LidarDescriptorConfig config;

@@ -91,8 +91,10 @@ std::vector<BowCandidate> BowDatabase::Query(const BowVector& bow, size_t max_re
   }
   std::vector<BowCandidate> candidates;
   candidates.reserve(touched.size());
-  for (uint32_t e : touched)
-    candidates.push_back({entries_[e].id, entries_[e].t_s, std::clamp(-0.5 * change[e], 0.0, 1.0), 0.0});
+  for (uint32_t e : touched) {
+    const double score = -0.5 * change[e];
+    candidates.push_back({entries_[e].id, entries_[e].t_s, score > 0.0 ? std::min(score, 1.0) : 0.0, 0.0});
+  }
   SortBest(&candidates, [](const BowCandidate& c) { return c.score; });
   if (candidates.size() > max_results) candidates.resize(max_results);
   return candidates;

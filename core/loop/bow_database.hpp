@@ -32,16 +32,20 @@ struct BowCandidate {
 
 /// The acceptance rule of DetectLoop.
 struct LoopQueryConfig {
-  /// Keyframes newer than t_query - exclude_recent_s [s] are not candidates (they are the current place, not a
-  /// loop). 20 s is a few keyframe spacings of a slowly moving rig.
+  /// Keyframes newer than t_query - exclude_recent_s [s] are not candidates: they show the current place, not a
+  /// loop. 20 s keeps the twin's box_room loop (20 s period) detectable; a forward-looking camera walked straight
+  /// at 1.2 m/s (park, tunnel, clean_street) still matches its view of 20-25 s before (the same street ahead), so
+  /// set it from the rig's speed and view, and let stage 2 (geometry) reject what is not a loop.
   double exclude_recent_s = 20.0;
-  /// eta threshold: the seed's 0.35 (DLoopDetector's default alpha is 0.3).
+  /// eta threshold: the seed's 0.35.
   double min_normalised_score = 0.35;
-  /// Raw-score floor: a candidate with s below it is rejected whatever its eta, so a weak previous-keyframe
-  /// score cannot inflate chance overlaps. Scores of unrelated images are ~0.01-0.03 with a 10^4-word vocabulary.
-  double min_raw_score = 0.05;
+  /// Raw-score floor: a candidate with s below it is rejected whatever its eta, so that a small s(v_t, v_{t-1})
+  /// cannot inflate a chance overlap into a large eta. Set it above the chance score of the vocabulary: with the
+  /// shipped one (scenes/vocabulary/) images of different twin scenes score 0.000 median, 0.014 at the 90th
+  /// percentile; views of one place after a small motion ~0.15-0.3.
+  double min_raw_score = 0.03;
   /// When s(v_t, v_{t-1}) is below this the query is skipped (outcome kLowPreviousScore): eta would divide by a
-  /// near-zero score, e.g. after a camera blackout or a sudden view change. DLoopDetector's min_nss_factor.
+  /// near-zero score, e.g. after a camera blackout or a sudden view change. DLoopDetector's min_nss_factor (0.005).
   double min_previous_score = 0.005;
   /// How many raw-score top candidates are considered before the eta filter.
   int max_results = 10;

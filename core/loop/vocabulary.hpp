@@ -93,7 +93,7 @@ class Vocabulary {
   int NodeLevel(NodeId node) const { return node < nodes_.size() ? nodes_[node].level : -1; }
 
   /// The word of one descriptor (kOrbDescriptorBytes bytes), found by descending to the nearest child (Hamming
-  /// distance; ties go to the lower node id) at each level. The vocabulary must not be empty.
+  /// distance; ties go to the lower node id) at each level. The vocabulary must not be empty (ROTOLIDAR_CHECK).
   WordId FindWord(const uint8_t* descriptor) const;
 
   /// The BoW vector of an image: each descriptor adds its word's IDF weight, then the vector is L1-normalised, so

@@ -20,11 +20,11 @@ double SecondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 
 int UniformInt(RandomStream* rng, int lo, int hi) { return lo + int(rng->NextU64() % uint64_t(hi - lo + 1)); }
 
-// A 640x480 "place": grey rectangles, circles, lines and blocky noise patches at positions drawn from a stream
-// named after the place, so every place has its own arrangement of corners for ORB.
+// A 640x480 "place": a smooth multi-scale noise background under grey rectangles, circles and lines, all drawn
+// from a stream named after the place, so every place has its own arrangement of corners and blobs for ORB.
 cv::Mat MakePlace(const std::string& name) {
   RandomStream rng(2024, name);
-  // Background: random grey cells at three scales (80x60, 32x24, 16x12 px), cubic-upsampled and summed.
+  // Background: random grey cells of 80, 32 and 16 px, cubic-upsampled and summed.
   cv::Mat image(480, 640, CV_32F, cv::Scalar(0));
   for (int cell : {80, 32, 16}) {
     cv::Mat grid(480 / cell + 1, 640 / cell + 1, CV_32F);
@@ -72,7 +72,8 @@ class BowImages : public ::testing::Test {
   static void SetUpTestSuite() {
     std::vector<cv::Mat> training;
     const auto t0 = Clock::now();
-    for (int i = 0; i < kTrainingImages; ++i) training.push_back(Features(MakePlace("train-" + std::to_string(i))).descriptors);
+    for (int i = 0; i < kTrainingImages; ++i)
+      training.push_back(Features(MakePlace("train-" + std::to_string(i))).descriptors);
     const double extract_s = SecondsSince(t0);
     VocabularyConfig config;
     config.branching = 10;
@@ -81,8 +82,8 @@ class BowImages : public ::testing::Test {
     VocabularyTrainStats stats;
     const auto t1 = Clock::now();
     ASSERT_TRUE(vocabulary_->Train(training, config, &stats).ok);
-    std::printf("ORB: %.1f ms per image; train: %zu descriptors -> %zu words in %.2f s\n", 1e3 * extract_s / kTrainingImages,
-                stats.num_descriptors, stats.num_words, SecondsSince(t1));
+    std::printf("ORB: %.1f ms per image; train: %zu descriptors -> %zu words in %.2f s\n",
+                1e3 * extract_s / kTrainingImages, stats.num_descriptors, stats.num_words, SecondsSince(t1));
   }
   static void TearDownTestSuite() {
     delete vocabulary_;
@@ -129,7 +130,7 @@ TEST_F(BowImages, ChangedViewRetrievesItsPlaceAndUnseenPlacesDoNotPass) {
   BowDatabase database;
   for (int i = 0; i < kPlaces; ++i)
     ASSERT_TRUE(database.Add(i, 10.0 * i, Bow(MakePlace("place-" + std::to_string(i)))).ok);
-  LoopQueryConfig config;  // the defaults (eta >= 0.35, raw >= 0.05) but for the recent window
+  LoopQueryConfig config;  // the defaults (eta >= 0.35, raw >= 0.03) but for the recent window
   config.exclude_recent_s = 5.0;
   double min_true_eta = 1e9, min_true_raw = 1.0, max_unseen_eta = 0.0, max_unseen_raw = 0.0;
   double query_s = 0.0, transform_s = 0.0;

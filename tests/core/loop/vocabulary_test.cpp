@@ -117,7 +117,8 @@ TEST(Vocabulary, NoisyCopiesOfAPrototypeShareItsWord) {
   for (const Descriptor& p : set.prototypes) {
     const WordId word = vocabulary.FindWord(p.data());
     prototype_words.insert(word);
-    for (int c = 0; c < 10; ++c, ++total) same += vocabulary.FindWord(NoisyCopy(p, SyntheticSet::kFlip, &rng).data()) == word;
+    for (int c = 0; c < 10; ++c, ++total)
+      same += vocabulary.FindWord(NoisyCopy(p, SyntheticSet::kFlip, &rng).data()) == word;
   }
   const double share = double(same) / total;
   std::printf("copies in their prototype's word: %.4f (%d / %d); prototypes use %zu words\n", share, same, total,

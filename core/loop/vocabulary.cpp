@@ -37,8 +37,6 @@ int Hamming(const uint8_t* a, const uint8_t* b) {
   return PopCount(x[0] ^ y[0]) + PopCount(x[1] ^ y[1]) + PopCount(x[2] ^ y[2]) + PopCount(x[3] ^ y[3]);
 }
 
-double Square(int d) { return double(d) * double(d); }
-
 uint64_t Fnv1a64(const uint8_t* data, size_t size) {
   uint64_t h = 0xcbf29ce484222325ULL;
   for (size_t i = 0; i < size; ++i) h = (h ^ data[i]) * 0x100000001b3ULL;
@@ -119,10 +117,14 @@ struct Vocabulary::Builder {
   // k-means++ seeding with D^2 sampling; stops early when every member coincides with a centre.
   void Seed(const std::vector<uint32_t>& members, std::vector<uint8_t>* centres) {
     const size_t n = members.size();
+    const auto squared = [&](size_t i, const uint8_t* centre) {
+      const double d = Hamming(rows[members[i]], centre);
+      return d * d;  // exact: integer sums stay below 2^53, so the sampling is the same on every platform
+    };
     const uint8_t* first = rows[members[rng.NextU64() % n]];
     centres->assign(first, first + kBytes);
     std::vector<double> d2(n);
-    for (size_t i = 0; i < n; ++i) d2[i] = Square(Hamming(rows[members[i]], first));
+    for (size_t i = 0; i < n; ++i) d2[i] = squared(i, first);
     while (centres->size() < size_t(config.branching) * kBytes) {
       double sum = 0.0;
       for (double d : d2) sum += d;
@@ -133,7 +135,7 @@ struct Vocabulary::Builder {
       while (d2[pick] <= 0.0) --pick;  // rounding at the end of the walk: step back to a real candidate
       const uint8_t* centre = rows[members[pick]];
       centres->insert(centres->end(), centre, centre + kBytes);
-      for (size_t i = 0; i < n; ++i) d2[i] = std::min(d2[i], Square(Hamming(rows[members[i]], centre)));
+      for (size_t i = 0; i < n; ++i) d2[i] = std::min(d2[i], squared(i, centre));
     }
   }
 
@@ -160,15 +162,12 @@ struct Vocabulary::Builder {
     }
     std::vector<std::vector<uint32_t>> groups(k);
     for (size_t i = 0; i < n; ++i) groups[assign[i]].push_back(members[i]);
-    std::vector<std::vector<uint32_t>> kept;
-    std::vector<uint8_t> kept_centres;
-    for (size_t c = 0; c < k; ++c) {
-      if (groups[c].empty()) continue;
-      kept.push_back(std::move(groups[c]));
-      kept_centres.insert(kept_centres.end(), centres->begin() + c * kBytes, centres->begin() + (c + 1) * kBytes);
+    for (size_t c = k; c-- > 0;) {  // backwards, so erasing keeps the lower indices valid
+      if (!groups[c].empty()) continue;
+      groups.erase(groups.begin() + long(c));
+      centres->erase(centres->begin() + long(c * kBytes), centres->begin() + long((c + 1) * kBytes));
     }
-    *centres = std::move(kept_centres);
-    return kept;
+    return groups;
   }
 
   // Each bit of a centre is the majority of its members' bits (a tie sets it, as in DBoW2); an empty cluster
@@ -335,23 +334,14 @@ Status Vocabulary::Save(const std::string& path) const {
   if (empty()) return Status::Error(path + ": cannot save an empty vocabulary");
   const std::vector<uint8_t> bytes = Serialise();
   const std::string temporary = path + ".partial";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      return Status::Error(path + ": cannot write the vocabulary (via " + temporary + ")");
-    }
-  }
+  std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  out.close();
   std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    return Status::Error(path + ": cannot move the written vocabulary into place");
-  }
-  return Status::Ok();
+  if (out) std::filesystem::rename(temporary, path, ec);
+  if (out && !ec) return Status::Ok();
+  std::filesystem::remove(temporary, ec);
+  return Status::Error(path + ": cannot write the vocabulary (via " + temporary + ")");
 }
 
 // Parses a Serialise()d buffer; every error names the file and the byte offset.

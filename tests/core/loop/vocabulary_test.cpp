@@ -265,6 +265,27 @@ TEST(Vocabulary, TransformIsNormalisedAndTheFeatureVectorListsEachFeatureOnce) {
   }
 }
 
+// The vocabulary shipped in scenes/vocabulary/ (its README: how it was trained) loads and has the stated shape.
+TEST(Vocabulary, ShippedVocabularyLoads) {
+  Vocabulary vocabulary;
+  const Status s = vocabulary.Load(std::string(ROTOLIDAR_SOURCE_DIR) + "/scenes/vocabulary/twin_orb_k8_l5.bin");
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(vocabulary.branching(), 8);
+  EXPECT_EQ(vocabulary.depth(), 5);
+  EXPECT_EQ(vocabulary.num_words(), 31945u);
+  EXPECT_EQ(vocabulary.num_training_images(), 957u);
+  // Random descriptors spread over the tree: 500 of them land in nearly as many words (measured 492), each with a
+  // positive IDF weight (log(957 / n_i) is 0 only for a word in every training image). A vocabulary whose words
+  // had collapsed or whose weights were lost would give few or none.
+  RandomStream rng(9, "test.shipped");
+  std::vector<Descriptor> rows;
+  for (int i = 0; i < 500; ++i) rows.push_back(RandomDescriptor(&rng));
+  BowVector bow;
+  ASSERT_TRUE(vocabulary.Transform(ToMat(rows), &bow).ok);
+  std::printf("500 random descriptors -> %zu words\n", bow.size());
+  EXPECT_GT(bow.size(), 400u);
+}
+
 TEST(Vocabulary, RejectsBadInput) {
   Vocabulary vocabulary;
   BowVector bow;

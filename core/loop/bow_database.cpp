@@ -58,7 +58,7 @@ Status BowDatabase::Add(KeyframeId id, double t_s, const BowVector& bow) {
   const uint32_t index = uint32_t(entries_.size());
   for (const auto& [word, weight] : bow) {
     if (weight <= 0.0) continue;
-    entry.bow.emplace_hint(entry.bow.end(), word, weight / sum);
+    entry.words.emplace_back(word, weight / sum);
     inverted_[word].push_back({index, weight / sum});
   }
   entries_.push_back(std::move(entry));
@@ -113,7 +113,7 @@ LoopQueryResult BowDatabase::DetectLoop(const BowVector& bow, double t_query_s, 
   }
   const Entry& prev = *(previous - 1);
   result.previous_id = prev.id;
-  result.previous_score = Vocabulary::Score(bow, prev.bow);
+  result.previous_score = ScoreEntry(bow, prev.words);
   if (result.previous_score < config.min_previous_score) {
     result.outcome = LoopQueryResult::Outcome::kLowPreviousScore;
     return result;
@@ -130,9 +130,34 @@ LoopQueryResult BowDatabase::DetectLoop(const BowVector& bow, double t_query_s, 
   return result;
 }
 
-const BowVector* BowDatabase::Find(KeyframeId id) const {
+bool BowDatabase::Find(KeyframeId id, BowVector* bow) const {
+  bow->clear();
   const auto it = by_id_.find(id);
-  return it == by_id_.end() ? nullptr : &entries_[it->second].bow;
+  if (it == by_id_.end()) return false;
+  bow->insert(entries_[it->second].words.begin(), entries_[it->second].words.end());
+  return true;
+}
+
+double BowDatabase::ScoreEntry(const BowVector& query, const SparseWords& entry) {
+  double norm = 0.0;
+  for (const auto& [word, weight] : query) norm += std::abs(weight);
+  if (!(norm > 0.0) || entry.empty()) return 0.0;
+  double change = 0.0;  // as in Vocabulary::Score; the entry is already L1-normalised
+  auto iq = query.begin();
+  auto ie = entry.begin();
+  while (iq != query.end() && ie != entry.end()) {
+    if (iq->first < ie->first) {
+      ++iq;
+    } else if (ie->first < iq->first) {
+      ++ie;
+    } else {
+      const double x = iq->second / norm;
+      change += std::abs(x - ie->second) - std::abs(x) - ie->second;
+      ++iq, ++ie;
+    }
+  }
+  const double score = -0.5 * change;
+  return score > 0.0 ? std::min(score, 1.0) : 0.0;
 }
 
 void BowDatabase::Clear() {

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/loop/vocabulary.hpp"
@@ -76,11 +77,12 @@ class BowDatabase {
  public:
   /// Adds a keyframe. Times must strictly increase from one Add to the next and ids must be unique (both errors
   /// name the id and time); a non-finite time or a negative weight is an error. The vector is stored
-  /// L1-normalised (an empty one is kept and never matches).
+  /// L1-normalised (an empty one is kept and never matches). Memory: ~32 bytes per word of each keyframe (its
+  /// vector and the inverted index), e.g. ~10 kB for a twin image's ~320 words.
   Status Add(KeyframeId id, double t_s, const BowVector& bow);
 
   /// Raw-score retrieval through the inverted index: the at most max_results keyframes with t_s <= max_t_s
-  /// sharing a word with `bow`, by score descending (ties: older first). normalised_score is left 0.
+  /// sharing a word with `bow` (weights >= 0), by score descending (ties: older first). normalised_score is 0.
   std::vector<BowCandidate> Query(const BowVector& bow, size_t max_results, double max_t_s) const;
 
   /// The loop test for a keyframe at t_query_s: candidates are keyframes with t_s <= t_query_s -
@@ -90,16 +92,19 @@ class BowDatabase {
 
   size_t size() const { return entries_.size(); }
   bool empty() const { return entries_.empty(); }
-  /// The stored (L1-normalised) vector of a keyframe, or nullptr.
-  const BowVector* Find(KeyframeId id) const;
+  /// Copies the stored (L1-normalised) vector of a keyframe into *bow; false when the id is unknown.
+  bool Find(KeyframeId id, BowVector* bow) const;
   void Clear();
 
  private:
+  using SparseWords = std::vector<std::pair<WordId, double>>;  ///< by word; 16 bytes a word (a map node is ~48)
   struct Entry {
     KeyframeId id;
     double t_s;
-    BowVector bow;
+    SparseWords words;  ///< L1-normalised
   };
+  /// s(query, entry) as Vocabulary::Score, for a stored entry.
+  static double ScoreEntry(const BowVector& query, const SparseWords& entry);
   struct Posting {
     uint32_t entry;  ///< index into entries_
     double weight;   ///< the word's weight in that entry

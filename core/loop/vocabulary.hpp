@@ -14,7 +14,8 @@
 // no training image reaches is weighted as if one did (log N).
 //
 // Thread-safety: Train and Load modify the vocabulary; every const method may run concurrently with other const
-// methods. Failures come back as Status (never exceptions); a failed Train or Load leaves the vocabulary as it was.
+// methods. Failures come back as Status; a failed Train or Load leaves the vocabulary as it was. Only a programmer
+// error throws (ROTOLIDAR_CHECK: FindWord on an empty vocabulary).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -71,7 +72,8 @@ class Vocabulary {
   Status Train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularyConfig& config,
                VocabularyTrainStats* stats = nullptr, const std::function<void(double)>& progress = {});
 
-  /// Writes the vocabulary (little-endian binary: magic, version, k, L, counts, nodes, FNV-1a checksum) to `path`
+  /// Writes the vocabulary in this module's own format (not DBoW2's or ORB-SLAM's text files; little-endian:
+  /// magic "RLBOWVOC", version, k, L, counts, per node its parent, centre and weight, FNV-1a checksum) to `path`
   /// through a temporary file renamed into place, so a failure leaves no partial file. Fails, naming the file,
   /// when the vocabulary is empty or the file cannot be written.
   Status Save(const std::string& path) const;

@@ -20,6 +20,7 @@ int CmdSlamKitti(int argc, char** argv);  ///< `slam --kitti DIR` (CmdSlam dispa
 int CmdKittiTwin(int argc, char** argv);  ///< bench/cli/kitti_twin_commands.cpp
 int CmdMapEval(int argc, char** argv);
 int CmdStudy(int argc, char** argv);
+int CmdVocab(int argc, char** argv);      ///< bench/cli/vocab_commands.cpp: ORB bag-of-words vocabularies
 
 /// One "warning:" line per registration-problem stretch (at most 10, then a count) and a summary line, on
 /// stdout; nothing when every registration converged undegenerate (bench/run/scan_health.hpp).

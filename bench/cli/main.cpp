@@ -26,6 +26,7 @@ const Command kCommands[] = {
     {"kitti-twin", rotolidar::bench::CmdKittiTwin, "simulate KITTI's HDL-64E car on a KITTI path; write a KITTI sequence"},
     {"mapeval", rotolidar::bench::CmdMapEval, "map metrics vs the scene: coverage, density, distance, elements"},
     {"study", rotolidar::bench::CmdStudy, "trade studies: sweep sim parameters, run each point, table + plots"},
+    {"vocab", rotolidar::bench::CmdVocab, "ORB bag-of-words vocabularies for loop closure: train, info"},
 };
 
 void PrintUsage(std::ostream& os) {

@@ -134,7 +134,9 @@ Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, co
     }
   }
   r->wall_time_s = estimator_s;
-  r->trajectory_velo = estimator.trajectory();
+  estimator.FinishLoopClosure();
+  r->trajectory_velo = estimator.loop_closer() ? estimator.loop_closer()->Correct(estimator.trajectory())
+                                               : estimator.trajectory();
   if (r->trajectory_velo.size() != r->scans.size())
     return Status::Error("estimator returned " + std::to_string(r->trajectory_velo.size()) + " poses for " +
                          std::to_string(r->scans.size()) + " frames");

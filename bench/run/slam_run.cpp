@@ -94,9 +94,25 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
   return csv.Close();
 }
 
+// One row per accepted stage-2 loop: the two keyframes, GICP's relative pose and scores, the graph's verdict.
+Status WriteLoopTable(const std::string& path, const graph::LoopClosureState& state) {
+  CsvWriter csv;
+  if (Status s = csv.Open(path, {"t_query_s", "t_match_s", "query_id", "match_id", "x_m", "y_m", "z_m", "qx", "qy",
+                                 "qz", "qw", "descriptor_distance", "fitness_rmse_m", "overlap", "rejected"});
+      !s)
+    return s;
+  for (const graph::LoopRecord& l : state.loops) {
+    const Eigen::Quaterniond q(l.T_match_query.linear());
+    const Eigen::Vector3d t = l.T_match_query.translation();
+    csv.Row({l.t_query_s, l.t_match_s, double(l.query_id), double(l.match_id), t.x(), t.y(), t.z(), q.x(), q.y(),
+             q.z(), q.w(), l.descriptor_distance, l.fitness_rmse_m, l.overlap, double(l.rejected)});
+  }
+  return csv.Close();
+}
+
 Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
                     const SlamRunResult& result) {
-  const Trajectory& traj = estimator.trajectory();
+  const Trajectory& traj = result.trajectory;
   if (Status s = WriteTrajectory(out_dir + "/trajectory.tum", TrajectoryFormat::kTum, traj); !s) return s;
   if (Status s = WriteTrajectory(out_dir + "/trajectory.kitti", TrajectoryFormat::kKitti, traj); !s) return s;
   if (Status s = WriteKittiTimes(out_dir + "/trajectory_times.txt", traj); !s) return s;
@@ -104,6 +120,14 @@ Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
   if (Status s = SavePointCloud(out_dir + "/map.ply", map); !s) return s;
   if (Status s = SavePointCloud(out_dir + "/map.pcd", map); !s) return s;
   if (Status s = WriteScanTable(out_dir + "/scans.csv", result.scans); !s) return s;
+  if (const graph::LoopCloser* loops = estimator.loop_closer()) {
+    const Trajectory& odom = result.odometry_trajectory;
+    if (Status s = WriteTrajectory(out_dir + "/trajectory_odometry.tum", TrajectoryFormat::kTum, odom); !s) return s;
+    if (Status s = WriteLoopTable(out_dir + "/loops.csv", result.loops); !s) return s;
+    const std::vector<Eigen::Vector3d> corrected =
+        loops->CorrectedMap(estimator.config().output_map_voxel_m, estimator.config().output_map_points_per_voxel);
+    if (Status s = SavePointCloud(out_dir + "/map_corrected.ply", corrected); !s) return s;
+  }
   YAML::Emitter out;
   EmitEstimatorConfig(out, estimator.config());  // resolved against calib.yaml
   std::ofstream file(out_dir + "/slam_config.yaml");
@@ -150,7 +174,12 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   const auto t0 = std::chrono::steady_clock::now();
   Playback(rec, &estimator, result, progress);
   result->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result->odometry_trajectory = estimator.trajectory();
   result->trajectory = estimator.trajectory();
+  if (const graph::LoopCloser* loops = estimator.loop_closer()) {  // Finish waited for it
+    result->trajectory = loops->Correct(estimator.trajectory());
+    result->loops = loops->State();
+  }
   result->map_points = estimator.map().NumPoints();
   result->bad_packets = estimator.bad_packets();
   if (!result->scans.empty()) result->data_duration_s = result->scans.back().t_end_s - result->scans.front().t_start_s;

@@ -21,7 +21,9 @@
 namespace rotolidar::bench {
 
 struct SlamRunResult {
-  Trajectory trajectory;            ///< T_world_base
+  Trajectory trajectory;            ///< T_world_base (loop-closed when loop closure is on)
+  Trajectory odometry_trajectory;   ///< T_world_base as the odometry gave it (before loop closure)
+  graph::LoopClosureState loops;    ///< empty without loop closure
   std::vector<ScanReport> scans;
   size_t map_points = 0;
   size_t bad_packets = 0;

@@ -44,6 +44,11 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
   if (config_.free_space.enabled)
     free_space_ = std::make_unique<FreeSpaceFilter>(config_.free_space, SensorOrigin(calib_));
+  if (config_.loop_closure.enabled) loop_closer_ = std::make_unique<graph::LoopCloser>(config_.loop_closure);
+}
+
+void Estimator::FinishLoopClosure() {
+  if (loop_closer_) loop_closer_->Finish();
 }
 
 Estimator::~Estimator() = default;
@@ -91,6 +96,7 @@ std::vector<ScanReport> Estimator::Finish() {
   }
   const FreeSpaceCounts flushed = FlushMap();  // the last delay_s of points, in the last scan's report
   if (!reports.empty()) reports.back().map_free_space += flushed;
+  FinishLoopClosure();
   return reports;
 }
 

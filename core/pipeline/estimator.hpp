@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/deskew/deskew.hpp"
+#include "core/graph/loop_closer.hpp"
 #include "core/wire/scan_splitter.hpp"
 #include "core/wire/vlp16.hpp"
 #include "core/pipeline/estimator_config.hpp"
@@ -137,6 +138,12 @@ class Estimator {
   /// Hands the points still waiting for the free-space test to the dense map (Finish does this; callers of
   /// ProcessDeskewedScan / ProcessTimedScan call it after their last scan). Returns what the test did.
   FreeSpaceCounts FlushMap();
+  /// The loop closer (config.loop_closure.enabled), or null. It runs beside the odometry: trajectory() and map()
+  /// stay the odometry's; its Correct() / CorrectedMap() give the loop-closed ones (final after Finish()).
+  const graph::LoopCloser* loop_closer() const { return loop_closer_.get(); }
+  /// Waits for the loop closer to process every keyframe handed to it (Finish does this; callers of
+  /// ProcessDeskewedScan / ProcessTimedScan call it after their last scan). No-op without loop closure.
+  void FinishLoopClosure();
   size_t bad_packets() const { return bad_packets_; }
   bool imu_initialized() const;
 
@@ -158,6 +165,7 @@ class Estimator {
   Pose3 Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix6d& information_base,
              const Prediction& prediction, ScanReport* report);
   void UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& T_world_base, ScanReport* report);
+  void HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base);
   /// The scan's points (or, with the free-space test, those of the scan delay_s ago) into the dense map.
   FreeSpaceCounts AddToDenseMap(Seconds t_s, const Pose3& T_world_base, bool flush);
 
@@ -182,6 +190,7 @@ class Estimator {
   LocalMap local_map_;
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
+  std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false
   std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;
   std::deque<StampedPose> measured_poses_;  ///< the last two scans' mid-scan poses (constant-twist prediction)

@@ -7,6 +7,7 @@
 #include "core/backend/imu_init.hpp"
 #include "core/backend/sliding_window.hpp"
 #include "core/features/curvature_features.hpp"
+#include "core/graph/loop_closer.hpp"
 #include "core/pipeline/free_space.hpp"
 #include "core/preprocess/filters.hpp"
 #include "core/registration/local_map.hpp"
@@ -76,6 +77,8 @@ struct EstimatorConfig {
   /// Moving objects out of the maps: keyframe features and dense-map points that other scans saw through
   /// (core/pipeline/free_space.hpp). The dense map then lags delay_s behind the latest scan.
   FreeSpaceConfig free_space;
+  /// Two-stage loop closure and pose graph beside the odometry (core/graph/loop_closer.hpp); off by default.
+  graph::LoopClosureConfig loop_closure;
 
   /// Keep each scan's decoded points and their deskewed positions in the ScanReport (deskew evaluation; memory
   /// grows with the run: ~30 k points x 44 B per scan).

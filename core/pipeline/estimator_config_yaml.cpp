@@ -78,6 +78,33 @@ void Visit(V& v, FreeSpaceConfig& c) {
   v("min_looked_bins", &c.min_looked_bins);
 }
 
+}  // namespace rotolidar
+
+namespace rotolidar::graph {  // beside the type, for argument-dependent lookup
+
+template <class V>
+void Visit(V& v, LoopClosureConfig& c) {
+  v("enabled", &c.enabled), v("threaded", &c.threaded);
+  v("keyframe_spacing_m", &c.keyframe_spacing_m), v("keyframe_spacing_rad", &c.keyframe_spacing_rad);
+  v("cloud_voxel_m", &c.cloud_voxel_m), v("map_voxel_m", &c.map_voxel_m), v("max_range_m", &c.max_range_m);
+  v("exclude_recent_s", &c.exclude_recent_s), v("min_travel_m", &c.min_travel_m);
+  v("num_candidates", &c.num_candidates), v("max_descriptor_distance", &c.max_descriptor_distance);
+  v("submap_neighbours", &c.submap_neighbours), v("after_loop_travel_m", &c.after_loop_travel_m);
+  v("max_guess_offset_m", &c.max_guess_offset_m), v("max_guess_offset_per_m", &c.max_guess_offset_per_m);
+  v("max_guess_offset_rad", &c.max_guess_offset_rad), v("max_revisit_distance_m", &c.max_revisit_distance_m);
+  v("odometry_sigma_m", &c.odometry_sigma_m), v("odometry_sigma_per_m", &c.odometry_sigma_per_m);
+  v("odometry_sigma_rad", &c.odometry_sigma_rad), v("odometry_sigma_per_rad", &c.odometry_sigma_per_rad);
+  v("max_keyframes", &c.max_keyframes);
+  v("descriptor_max_radius_m", &c.descriptor.max_radius_m);
+  v("verify_min_overlap", &c.verification.min_overlap);
+  v("verify_max_fitness_rmse_m", &c.verification.max_fitness_rmse_m);
+  v("graph_loop_rejection_chi2", &c.graph.loop_rejection_chi2);
+}
+
+}  // namespace rotolidar::graph
+
+namespace rotolidar {
+
 template <class V>
 void Visit(V& v, SlidingWindowConfig& c) {
   v("window_size", &c.window_size), v("marginalization", &c.marginalization);
@@ -118,6 +145,7 @@ void Visit(V& v, EstimatorConfig& c) {
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
   v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);
   v("output_map_max_range_m", &c.output_map_max_range_m), v("free_space", &c.free_space);
+  v("loop_closure", &c.loop_closure);
   v("keep_deskewed", &c.keep_deskewed);
   v("preprocess", &c.preprocess), v("features", &c.features), v("registration", &c.registration);
   v("local_map", &c.local_map), v("window", &c.window), v("imu_init", &c.imu_init);

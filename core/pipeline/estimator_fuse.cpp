@@ -267,9 +267,22 @@ void Estimator::UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& 
     }
     scans_since_keyframe_ = 0;
     report->keyframe = true;
+    if (loop_closer_) HandKeyframeToLoopCloser(t_s, T_world_base);
   }
   report->map_free_space = AddToDenseMap(t_s, T_world_base, false);
   report->timings.map_ms = watch.ms();
+}
+
+// A copy of the keyframe's preprocessed points for the loop closer (its own thread does the rest), with the
+// window's gravity (world) for its levelled descriptor; before IMU initialisation world -z.
+void Estimator::HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base) {
+  graph::KeyframeInput keyframe;
+  keyframe.t_s = t_s;
+  keyframe.T_world_base = T_world_base;
+  if (window_ && window_->initialized()) keyframe.gravity_world = window_->gravity_world_mps2();
+  keyframe.points_base.reserve(preprocessed_.size());
+  for (const ScanPoint& p : preprocessed_) keyframe.points_base.push_back(p.p_base);
+  loop_closer_->AddKeyframe(std::move(keyframe));
 }
 
 FreeSpaceCounts Estimator::FlushMap() {

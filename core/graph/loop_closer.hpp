@@ -1,0 +1,169 @@
+#pragma once
+// Loop closure beside the odometry: the seed's two-stage place recognition and a pose graph (LV-SLAM, Sensors
+// 2025, Sec. 3.4, Fig. 5). The odometry hands each of its keyframes over (AddKeyframe: a copy into a queue, it
+// never waits); a worker thread, in keyframe order:
+//   1. stores the keyframe (pose, thinned deskewed points, LiDAR descriptor) in a bounded database and adds it to
+//      the pose graph with an odometry edge from the previous keyframe;
+//   2. stage 1, place recognition: the LiDAR place index (Scan Context, yaw-invariant ring key) proposes earlier
+//      keyframes that the rig has left and come back to;
+//   3. stage 2, geometric verification: the candidate's descriptor distance must pass, then GICP between the
+//      keyframe's points and the candidate's submap, started from the graph's current relative pose, must converge
+//      with enough overlap and a small residual, and land within the drift the odometry can have accumulated;
+//   4. an accepted loop becomes a loop edge (its GICP covariance as information) and the graph is re-optimised;
+//      its robust loss and chi2 test drop a wrong loop (core/graph/pose_graph.hpp).
+// The corrected keyframe poses then correct the whole trajectory (CorrectTrajectory) and rebuild the map from the
+// keyframes' points (the seed's removal of "ghost" copies, Fig. 5c/d).
+//
+// Frames: T_world_base is the odometry's (world = the estimator's world frame). The descriptor is taken in a
+// gravity-aligned frame centred on the base origin (gravity from the caller, world frame).
+// Determinism: keyframes are processed strictly in order and each sees only earlier ones, so after Finish() the
+// outcome does not depend on thread timing; only State() before Finish() does.
+// Thread safety: AddKeyframe and Finish from one (the odometry's) thread; State and the output calls from any.
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/graph/pose_graph.hpp"
+#include "core/loop/geometric_verification.hpp"
+#include "core/loop/lidar_descriptor.hpp"
+#include "core/types/trajectory.hpp"
+
+namespace rotolidar::graph {
+
+struct LoopClosureConfig {
+  bool enabled = false;
+  bool threaded = true;  ///< false: AddKeyframe does the work itself (tests; timing studies)
+  /// Loop keyframes are a subset of the odometry's: a new one once the rig moved this far [m] or turned this
+  /// much [rad] since the last (the odometry's keyframes come every few scans; closer ones add nothing).
+  double keyframe_spacing_m = 1.0;
+  double keyframe_spacing_rad = 0.5;
+  double cloud_voxel_m = 0.2;     ///< the stored points (descriptor, verification), VoxelGrid leaf [m]
+  double map_voxel_m = 0.1;       ///< the stored points for the rebuilt map [m]; 0: keep no map points
+  double max_range_m = 40.0;      ///< stored points farther from the sensor are dropped [m]
+  /// A candidate must be this much older [s] and the rig must have travelled this far [m] since it: a loop is a
+  /// return after leaving, not the trail just behind.
+  double exclude_recent_s = 20.0;
+  double min_travel_m = 10.0;
+  int num_candidates = 2;               ///< stage-1 candidates verified per keyframe, best first
+  /// After an accepted loop, no search until the rig has travelled this far [m]: the next keyframes of the same
+  /// revisit would add near-copies of the loop at a GICP each (~0.5 s).
+  double after_loop_travel_m = 10.0;
+  /// Stage 2's descriptor gate (Scan Context distance in [0, 1]; synthetic true revisits measured <= 0.28).
+  double max_descriptor_distance = 0.35;
+  int submap_neighbours = 2;            ///< the candidate's submap: it and this many keyframes either side
+  /// The verified relative pose may differ from the graph's current one by at most base + per_m * (path length
+  /// between the two keyframes) in translation [m] (the odometry's drift bound; rejects a look-alike place).
+  double max_guess_offset_m = 1.0;
+  double max_guess_offset_per_m = 0.05;
+  double max_guess_offset_rad = 0.35;  ///< the same for rotation (plus per_m times the path, in rad)
+  /// Stage 1's candidates farther apart than this [m] (plus the drift bound above) on the current graph go no
+  /// further: two scans of one place overlap within a few metres, and GICP costs ~0.5 s.
+  double max_revisit_distance_m = 8.0;
+  /// Odometry edges' standard deviations: a floor plus a share of the edge's length / turn.
+  double odometry_sigma_m = 0.01, odometry_sigma_per_m = 0.01;
+  double odometry_sigma_rad = 0.002, odometry_sigma_per_rad = 0.01;
+  size_t max_keyframes = 20000;  ///< database bound; beyond it keyframes are not stored (counted)
+  loop::LidarDescriptorConfig descriptor;
+  loop::LoopVerificationConfig verification;
+  InformationFloor loop_information_floor;
+  PoseGraphConfig graph;
+  bool Validate(std::string* error) const;
+};
+
+/// One keyframe as the odometry hands it over (a copy; the caller keeps nothing alive).
+struct KeyframeInput {
+  Seconds t_s = 0.0;
+  Pose3 T_world_base = Pose3::Identity();  ///< the odometry's pose at t_s
+  Eigen::Vector3d gravity_world = -Eigen::Vector3d::UnitZ();  ///< direction of gravity in world (any length > 0)
+  std::vector<Eigen::Vector3f> points_base;  ///< deskewed points, base frame at t_s [m]
+};
+
+/// A loop that passed stage 2 (and what the graph made of it).
+struct LoopRecord {
+  int query_id = 0, match_id = 0;  ///< keyframe ids (query: the newer)
+  Seconds t_query_s = 0.0, t_match_s = 0.0;
+  Pose3 T_match_query = Pose3::Identity();  ///< GICP's relative pose
+  double descriptor_distance = 1.0, fitness_rmse_m = 0.0, overlap = 0.0;
+  bool rejected = false;  ///< the pose graph's chi2 test dropped it (an outlier)
+};
+
+struct KeyframePose {
+  int id = 0;
+  Seconds t_s = 0.0;
+  Pose3 T_world_odom = Pose3::Identity();       ///< as the odometry gave it
+  Pose3 T_world_corrected = Pose3::Identity();  ///< after the latest graph solve
+};
+
+/// A snapshot of the loop closer's outcome.
+struct LoopClosureState {
+  std::vector<KeyframePose> keyframes;  ///< in time order
+  std::vector<LoopRecord> loops;        ///< in the order they were found
+  size_t keyframes_offered = 0;         ///< AddKeyframe calls
+  size_t keyframes_dropped = 0;         ///< over max_keyframes
+  size_t candidates_proposed = 0;       ///< stage-1 candidates (descriptor gate passed, far enough on the path)
+  size_t candidates_checked = 0;        ///< candidates that reached GICP (near enough on the graph)
+  double verify_time_s = 0.0;           ///< total GICP time [s]
+  size_t graph_solves = 0;
+  double last_solve_time_s = 0.0, max_solve_time_s = 0.0;
+  bool last_solve_converged = true;
+  std::string last_message;  ///< the last failure (graph or database), empty when none
+};
+
+class LoopCloser {
+ public:
+  explicit LoopCloser(const LoopClosureConfig& config);  ///< config must Validate (ROTOLIDAR_CHECK)
+  ~LoopCloser();                                          ///< stops the worker (drops unprocessed keyframes)
+  LoopCloser(const LoopCloser&) = delete;
+  LoopCloser& operator=(const LoopCloser&) = delete;
+
+  /// Offers an odometry keyframe; takes it when it is spaced enough from the last one taken. Keyframes must come
+  /// in time order. Threaded: a queue push (no solve, no search on the caller's thread).
+  void AddKeyframe(KeyframeInput keyframe);
+  /// Waits until every offered keyframe has been processed (the outcome is then final and deterministic).
+  void Finish();
+
+  LoopClosureState State() const;
+  /// The odometry trajectory mapped onto the corrected keyframes (continuous interpolation of the corrections);
+  /// unchanged when no keyframe exists. Call after Finish for the final answer.
+  Trajectory Correct(const Trajectory& odometry) const;
+  /// The map rebuilt from the keyframes' stored points at their corrected poses [world], at most
+  /// `points_per_voxel` per `voxel_m` voxel.
+  std::vector<Eigen::Vector3d> CorrectedMap(double voxel_m, int points_per_voxel) const;
+
+ private:
+  struct Keyframe;
+  void WorkerLoop();
+  void Process(KeyframeInput input);
+  void StoreKeyframe(KeyframeInput input, int id);
+  void SearchLoops(int id);
+  bool TryCandidate(int id, int match_id, const loop::DescriptorMatch& match);
+  void Solve();
+  std::vector<Eigen::Vector3d> Submap(int center_id) const;  ///< around center_id, in its frame
+  double PathLengthBetween(int older_id, int newer_id) const;
+
+  LoopClosureConfig config_;
+  // Odometry side: the spacing test.
+  bool has_last_offered_ = false;
+  Pose3 last_taken_T_world_base_ = Pose3::Identity();
+  size_t offered_ = 0;
+  // Worker side (guarded by mutex_ where State() or the outputs read it).
+  mutable std::mutex mutex_;
+  std::condition_variable queue_cv_, idle_cv_;
+  std::deque<KeyframeInput> queue_;
+  bool busy_ = false, stop_ = false;
+  std::vector<std::unique_ptr<Keyframe>> keyframes_;  // id = index
+  std::vector<double> path_length_m_;                 // odometry path length at each keyframe
+  double last_loop_path_m_ = -1e300;                  // path length at the last accepted loop
+  loop::LidarPlaceIndex index_;
+  PoseGraph graph_;
+  LoopClosureState state_;
+  std::thread worker_;
+};
+
+}  // namespace rotolidar::graph

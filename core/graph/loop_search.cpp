@@ -1,0 +1,163 @@
+// The loop closer's search (stage 1 -> stage 2 -> graph) and its outputs (loop_closer.hpp).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/graph/loop_closer.hpp"
+#include "core/graph/loop_closer_internal.hpp"
+#include "core/pipeline/voxel_map.hpp"
+
+namespace rotolidar::graph {
+
+double LoopCloser::PathLengthBetween(int older_id, int newer_id) const {
+  return path_length_m_[newer_id] - path_length_m_[older_id];
+}
+
+// Stage 1: the place index's best earlier keyframes that the rig left and came back to; each goes to stage 2
+// until one is accepted.
+void LoopCloser::SearchLoops(int id) {
+  const loop::LidarDescriptor* descriptor = index_.Find(id);
+  if (descriptor == nullptr || path_length_m_[id] - last_loop_path_m_ < config_.after_loop_travel_m) return;
+  loop::PlaceQuery query;
+  query.t_s = keyframes_[id]->t_s;
+  query.exclude_recent_s = config_.exclude_recent_s;
+  query.num_results = config_.num_candidates;
+  query.max_distance = config_.max_descriptor_distance;  // stage 2's descriptor gate
+  for (const loop::PlaceCandidate& c : index_.Query(*descriptor, query)) {
+    const int match_id = int(c.keyframe_id);
+    if (PathLengthBetween(match_id, id) < config_.min_travel_m) continue;
+    if (TryCandidate(id, match_id, c.match)) {
+      last_loop_path_m_ = path_length_m_[id];
+      return;
+    }
+  }
+}
+
+// Stage 2: GICP of the keyframe's points against the candidate's submap, started from the graph's current relative
+// pose and, failing that, from the descriptor's yaw at zero offset (the odometry may have drifted beyond GICP's
+// reach); accepted when GICP passes and the result is within the odometry's drift bound of the graph's pose.
+bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch& match) {
+  const Pose3 T_match_query_guess = graph_.Pose(match_id).inverse() * graph_.Pose(id);
+  const double path_m = PathLengthBetween(match_id, id);
+  const double drift_bound_m = config_.max_guess_offset_m + config_.max_guess_offset_per_m * path_m;
+  const bool near = T_match_query_guess.translation().norm() <= config_.max_revisit_distance_m + drift_bound_m;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++state_.candidates_proposed;
+    if (near) ++state_.candidates_checked;
+  }
+  if (!near) return false;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<Eigen::Vector3d> submap = Submap(match_id);
+  loop::LoopVerification v =
+      loop::VerifyLoop(keyframes_[id]->cloud_base, submap, T_match_query_guess, config_.verification);
+  if (!v.accepted) {
+    Pose3 T_match_query_yaw = Pose3::Identity();  // T_m_q = R_Lm_m^T RotZ(yaw) R_Lq_q: both frames at the base origin
+    T_match_query_yaw.linear() = keyframes_[match_id]->R_level_base.transpose() * RotZ(match.yaw_rad).linear() *
+                                 keyframes_[id]->R_level_base;
+    v = loop::VerifyLoop(keyframes_[id]->cloud_base, submap, T_match_query_yaw, config_.verification);
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.verify_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  if (!v.accepted) return false;
+  const Pose3 offset = T_match_query_guess.inverse() * v.T_target_source;
+  if (offset.translation().norm() > drift_bound_m) return false;
+  const double max_angle_rad = config_.max_guess_offset_rad + config_.max_guess_offset_per_m * path_m;
+  if (Eigen::AngleAxisd(offset.linear()).angle() > max_angle_rad) return false;
+
+  PoseGraphEdge edge;
+  edge.from_id = match_id, edge.to_id = id, edge.T_from_to = v.T_target_source, edge.kind = EdgeKind::kLoop;
+  Matrix6d information_target;
+  if (Status s = InformationFromCovariance(v.covariance, config_.loop_information_floor, &information_target); !s) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.last_message = s.message;
+    return false;
+  }
+  edge.information = InformationInToFrame(information_target, v.T_target_source);
+  if (Status s = graph_.AddEdge(edge); !s) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.last_message = s.message;
+    return false;
+  }
+  LoopRecord record;
+  record.query_id = id, record.match_id = match_id;
+  record.t_query_s = keyframes_[id]->t_s, record.t_match_s = keyframes_[match_id]->t_s;
+  record.T_match_query = v.T_target_source;
+  record.descriptor_distance = match.distance;
+  record.fitness_rmse_m = v.fitness_rmse_m, record.overlap = v.overlap;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.loops.push_back(record);
+  }
+  Solve();
+  return true;
+}
+
+// Re-optimises the graph and publishes the corrected poses and the loops' verdicts.
+void LoopCloser::Solve() {
+  const PoseGraphResult result = graph_.Optimize();
+  std::vector<bool> rejected(graph_.num_edges(), false);
+  for (size_t e : result.rejected_loop_edges) rejected[e] = true;
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++state_.graph_solves;
+  state_.last_solve_time_s = result.solve_time_s;
+  state_.max_solve_time_s = std::max(state_.max_solve_time_s, result.solve_time_s);
+  state_.last_solve_converged = result.converged;
+  if (!result.message.empty()) state_.last_message = result.message;
+  for (KeyframePose& k : state_.keyframes) k.T_world_corrected = graph_.Pose(k.id);
+  size_t loop_index = 0;
+  for (size_t e = 0; e < graph_.num_edges(); ++e) {
+    if (graph_.edges()[e].kind != EdgeKind::kLoop) continue;
+    if (loop_index < state_.loops.size()) state_.loops[loop_index].rejected = rejected[e];
+    ++loop_index;
+  }
+}
+
+// The candidate and its neighbours' points in the candidate's frame (graph poses: the submap is consistent with
+// any correction so far).
+std::vector<Eigen::Vector3d> LoopCloser::Submap(int center_id) const {
+  const int first = std::max(0, center_id - config_.submap_neighbours);
+  const int last = std::min(int(keyframes_.size()) - 1, center_id + config_.submap_neighbours);
+  const Pose3 T_center_world = graph_.Pose(center_id).inverse();
+  std::vector<Eigen::Vector3d> out;
+  for (int k = first; k <= last; ++k) {
+    const Pose3 T_center_k = T_center_world * graph_.Pose(k);
+    for (const Eigen::Vector3d& p : keyframes_[k]->cloud_base) out.push_back(T_center_k * p);
+  }
+  return out;
+}
+
+LoopClosureState LoopCloser::State() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  LoopClosureState s = state_;
+  s.keyframes_offered = offered_;
+  return s;
+}
+
+Trajectory LoopCloser::Correct(const Trajectory& odometry) const {
+  std::vector<KeyframeCorrection> corrections;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const KeyframePose& k : state_.keyframes) corrections.push_back({k.t_s, k.T_world_odom, k.T_world_corrected});
+  }
+  Trajectory out = odometry;
+  if (corrections.empty()) return out;
+  if (!CorrectTrajectory(corrections, CorrectionMode::kInterpolate, &out)) return odometry;
+  return out;
+}
+
+std::vector<Eigen::Vector3d> LoopCloser::CorrectedMap(double voxel_m, int points_per_voxel) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  VoxelMap map(voxel_m, points_per_voxel);
+  std::vector<Eigen::Vector3d> world;
+  for (const KeyframePose& k : state_.keyframes) {
+    world.clear();
+    for (const Eigen::Vector3f& p : keyframes_[k.id]->map_base) world.push_back(k.T_world_corrected * p.cast<double>());
+    map.Add(world);
+  }
+  return map.Points();
+}
+
+}  // namespace rotolidar::graph

@@ -111,6 +111,16 @@ void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
 
 }  // namespace
 
+void PrintLoopClosure(const graph::LoopClosureState& s) {
+  size_t rejected = 0;
+  for (const graph::LoopRecord& l : s.loops) rejected += l.rejected ? 1 : 0;
+  std::printf("loop closure: %zu keyframes, %zu loops (%zu rejected by the graph); %zu candidates, %zu verified by "
+              "GICP in %.1f s; %zu graph solves, the longest %.3f s%s%s\n",
+              s.keyframes.size(), s.loops.size(), rejected, s.candidates_proposed, s.candidates_checked,
+              s.verify_time_s, s.graph_solves, s.max_solve_time_s, s.last_message.empty() ? "" : "; last problem: ",
+              s.last_message.c_str());
+}
+
 void PrintScanHealth(const std::vector<ScanReport>& scans) {
   const ScanHealth h = AssessScanHealth(scans);
   if (h.stretches.empty()) return;
@@ -208,6 +218,7 @@ int CmdSlam(int argc, char** argv) {
   if (score.map_metrics) std::fprintf(stderr, "scoring the map against the scene (--score)\n");
   RunEvaluation ev;
   if (Status s = WriteSlamRunReport(p.Get("RECORDING"), p.Get("out"), r, score, &ev); !s) return Fail(s);
+  if (config.loop_closure.enabled) PrintLoopClosure(r.loops);
   if (ev.has_truth)
     std::printf("ATE vs truth (SE(3)): RMSE %.4f m over %zu poses\n", ev.ape.stats.rmse, ev.ape.num_associated);
   if (ev.has_map_metrics)

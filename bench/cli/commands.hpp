@@ -26,4 +26,7 @@ int CmdVocab(int argc, char** argv);      ///< bench/cli/vocab_commands.cpp: ORB
 /// stdout; nothing when every registration converged undegenerate (bench/run/scan_health.hpp).
 void PrintScanHealth(const std::vector<ScanReport>& scans);
 
+/// One "loop closure:" summary line on stdout (keyframes, loops, candidates, GICP and graph time).
+void PrintLoopClosure(const graph::LoopClosureState& state);
+
 }  // namespace rotolidar::bench

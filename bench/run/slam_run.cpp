@@ -110,6 +110,18 @@ Status WriteLoopTable(const std::string& path, const graph::LoopClosureState& st
   return csv.Close();
 }
 
+// One row per stage-1 candidate: the pair, the descriptor and graph distances, how far it got (outcome words:
+// graph::ToString), GICP's scores.
+Status WriteCandidateTable(const std::string& path, const graph::LoopClosureState& state) {
+  std::ofstream out(path);
+  out << "query_id,match_id,t_query_s,t_match_s,descriptor_distance,graph_distance_m,outcome,fitness_rmse_m,overlap\n";
+  for (const graph::CandidateRecord& c : state.candidates)
+    out << c.query_id << ',' << c.match_id << ',' << state.keyframes[c.query_id].t_s << ','
+        << state.keyframes[c.match_id].t_s << ',' << c.descriptor_distance << ',' << c.graph_distance_m << ','
+        << graph::ToString(c.outcome) << ',' << c.fitness_rmse_m << ',' << c.overlap << '\n';
+  return out ? Status::Ok() : Status::Error(path + ": write failed");
+}
+
 Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
                     const SlamRunResult& result) {
   const Trajectory& traj = result.trajectory;
@@ -124,6 +136,7 @@ Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
     const Trajectory& odom = result.odometry_trajectory;
     if (Status s = WriteTrajectory(out_dir + "/trajectory_odometry.tum", TrajectoryFormat::kTum, odom); !s) return s;
     if (Status s = WriteLoopTable(out_dir + "/loops.csv", result.loops); !s) return s;
+    if (Status s = WriteCandidateTable(out_dir + "/loop_candidates.csv", result.loops); !s) return s;
     const std::vector<Eigen::Vector3d> corrected =
         loops->CorrectedMap(estimator.config().output_map_voxel_m, estimator.config().output_map_points_per_voxel);
     if (Status s = SavePointCloud(out_dir + "/map_corrected.ply", corrected); !s) return s;

@@ -93,6 +93,18 @@ struct LoopRecord {
   bool rejected = false;  ///< the pose graph's chi2 test dropped it (an outlier)
 };
 
+/// One stage-1 candidate and how far it got (the raw data of precision/recall studies).
+struct CandidateRecord {
+  enum class Outcome { kTooFar, kGicpFailed, kBeyondDrift, kGraphError, kAccepted };
+  int query_id = 0, match_id = 0;
+  double descriptor_distance = 1.0;
+  double graph_distance_m = 0.0;  ///< |translation| between the two on the graph when proposed
+  Outcome outcome = Outcome::kTooFar;
+  double fitness_rmse_m = 0.0, overlap = 0.0;  ///< GICP's (0 when it did not run)
+  std::string reason;                         ///< GICP's rejection reason, when it rejected
+};
+const char* ToString(CandidateRecord::Outcome outcome);
+
 struct KeyframePose {
   int id = 0;
   Seconds t_s = 0.0;
@@ -104,6 +116,7 @@ struct KeyframePose {
 struct LoopClosureState {
   std::vector<KeyframePose> keyframes;  ///< in time order
   std::vector<LoopRecord> loops;        ///< in the order they were found
+  std::vector<CandidateRecord> candidates;  ///< every stage-1 candidate, in the order proposed
   size_t keyframes_offered = 0;         ///< AddKeyframe calls
   size_t keyframes_dropped = 0;         ///< over max_keyframes
   size_t candidates_proposed = 0;       ///< stage-1 candidates (descriptor gate passed, far enough on the path)
@@ -143,6 +156,8 @@ class LoopCloser {
   void StoreKeyframe(KeyframeInput input, int id);
   void SearchLoops(int id);
   bool TryCandidate(int id, int match_id, const loop::DescriptorMatch& match);
+  bool VerifyCandidate(const loop::DescriptorMatch& match, CandidateRecord* record);
+  bool AddLoopEdge(int id, int match_id, const loop::LoopVerification& v, double descriptor_distance);
   void Solve();
   std::vector<Eigen::Vector3d> Submap(int center_id) const;  ///< around center_id, in its frame
   double PathLengthBetween(int older_id, int newer_id) const;

@@ -9,6 +9,17 @@
 
 namespace rotolidar::graph {
 
+const char* ToString(CandidateRecord::Outcome outcome) {
+  switch (outcome) {
+    case CandidateRecord::Outcome::kTooFar: return "too_far";
+    case CandidateRecord::Outcome::kGicpFailed: return "gicp_failed";
+    case CandidateRecord::Outcome::kBeyondDrift: return "beyond_drift";
+    case CandidateRecord::Outcome::kGraphError: return "graph_error";
+    case CandidateRecord::Outcome::kAccepted: return "accepted";
+  }
+  return "?";
+}
+
 double LoopCloser::PathLengthBetween(int older_id, int newer_id) const {
   return path_length_m_[newer_id] - path_length_m_[older_id];
 }
@@ -37,16 +48,24 @@ void LoopCloser::SearchLoops(int id) {
 // pose and, failing that, from the descriptor's yaw at zero offset (the odometry may have drifted beyond GICP's
 // reach); accepted when GICP passes and the result is within the odometry's drift bound of the graph's pose.
 bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch& match) {
+  CandidateRecord record;
+  record.query_id = id, record.match_id = match_id, record.descriptor_distance = match.distance;
+  const bool accepted = VerifyCandidate(match, &record);
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++state_.candidates_proposed;
+  if (record.outcome != CandidateRecord::Outcome::kTooFar) ++state_.candidates_checked;
+  state_.candidates.push_back(record);
+  return accepted;
+}
+
+// Stage 2 for one candidate; fills record (outcome, scores). True when the loop edge went into the graph.
+bool LoopCloser::VerifyCandidate(const loop::DescriptorMatch& match, CandidateRecord* record) {
+  const int id = record->query_id, match_id = record->match_id;
   const Pose3 T_match_query_guess = graph_.Pose(match_id).inverse() * graph_.Pose(id);
   const double path_m = PathLengthBetween(match_id, id);
   const double drift_bound_m = config_.max_guess_offset_m + config_.max_guess_offset_per_m * path_m;
-  const bool near = T_match_query_guess.translation().norm() <= config_.max_revisit_distance_m + drift_bound_m;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++state_.candidates_proposed;
-    if (near) ++state_.candidates_checked;
-  }
-  if (!near) return false;
+  record->graph_distance_m = T_match_query_guess.translation().norm();
+  if (record->graph_distance_m > config_.max_revisit_distance_m + drift_bound_m) return false;  // kTooFar
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<Eigen::Vector3d> submap = Submap(match_id);
   loop::LoopVerification v =
@@ -61,22 +80,31 @@ bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch&
     std::lock_guard<std::mutex> lock(mutex_);
     state_.verify_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  record->fitness_rmse_m = v.fitness_rmse_m, record->overlap = v.overlap, record->reason = v.reason;
+  record->outcome = CandidateRecord::Outcome::kGicpFailed;
   if (!v.accepted) return false;
+  record->outcome = CandidateRecord::Outcome::kBeyondDrift;
   const Pose3 offset = T_match_query_guess.inverse() * v.T_target_source;
   if (offset.translation().norm() > drift_bound_m) return false;
   const double max_angle_rad = config_.max_guess_offset_rad + config_.max_guess_offset_per_m * path_m;
   if (Eigen::AngleAxisd(offset.linear()).angle() > max_angle_rad) return false;
+  record->outcome = CandidateRecord::Outcome::kGraphError;
+  if (!AddLoopEdge(id, match_id, v, match.distance)) return false;
+  record->outcome = CandidateRecord::Outcome::kAccepted;
+  return true;
+}
 
+// The verified loop into the graph (GICP's covariance as its information), then a re-solve.
+bool LoopCloser::AddLoopEdge(int id, int match_id, const loop::LoopVerification& v, double descriptor_distance) {
   PoseGraphEdge edge;
   edge.from_id = match_id, edge.to_id = id, edge.T_from_to = v.T_target_source, edge.kind = EdgeKind::kLoop;
   Matrix6d information_target;
-  if (Status s = InformationFromCovariance(v.covariance, config_.loop_information_floor, &information_target); !s) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    state_.last_message = s.message;
-    return false;
+  Status s = InformationFromCovariance(v.covariance, config_.loop_information_floor, &information_target);
+  if (s) {
+    edge.information = InformationInToFrame(information_target, v.T_target_source);
+    s = graph_.AddEdge(edge);
   }
-  edge.information = InformationInToFrame(information_target, v.T_target_source);
-  if (Status s = graph_.AddEdge(edge); !s) {
+  if (!s) {
     std::lock_guard<std::mutex> lock(mutex_);
     state_.last_message = s.message;
     return false;
@@ -85,7 +113,7 @@ bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch&
   record.query_id = id, record.match_id = match_id;
   record.t_query_s = keyframes_[id]->t_s, record.t_match_s = keyframes_[match_id]->t_s;
   record.T_match_query = v.T_target_source;
-  record.descriptor_distance = match.distance;
+  record.descriptor_distance = descriptor_distance;
   record.fitness_rmse_m = v.fitness_rmse_m, record.overlap = v.overlap;
   {
     std::lock_guard<std::mutex> lock(mutex_);

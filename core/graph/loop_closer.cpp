@@ -29,6 +29,7 @@ std::vector<Out> Thin(const std::vector<Eigen::Vector3f>& points, double voxel_m
 
 // Rotation taking the world frame to a frame whose -z is gravity (yaw kept as the world's).
 Eigen::Matrix3d LevelRotation(const Eigen::Vector3d& gravity_world) {
+  if (!(gravity_world.norm() > 1e-9) || !gravity_world.allFinite()) return Eigen::Matrix3d::Identity();
   const Eigen::Vector3d down = gravity_world.normalized();
   return Eigen::Quaterniond::FromTwoVectors(down, -Eigen::Vector3d::UnitZ()).toRotationMatrix();
 }
@@ -138,7 +139,8 @@ void LoopCloser::WorkerLoop() {
 }
 
 void LoopCloser::Process(KeyframeInput input) {
-  if (keyframes_.size() >= config_.max_keyframes) {
+  // A full database, or a pose the graph cannot take (non-finite odometry): the keyframe is counted, not kept.
+  if (keyframes_.size() >= config_.max_keyframes || !input.T_world_base.matrix().allFinite()) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++state_.keyframes_dropped;
     return;

@@ -89,7 +89,8 @@ struct LoopClosureConfig {
 struct KeyframeInput {
   Seconds t_s = 0.0;
   Pose3 T_world_base = Pose3::Identity();  ///< the odometry's pose at t_s
-  Eigen::Vector3d gravity_world = -Eigen::Vector3d::UnitZ();  ///< direction of gravity in world (any length > 0)
+  /// Direction of gravity in world (any length > 0; zero or non-finite: world -z is taken as down).
+  Eigen::Vector3d gravity_world = -Eigen::Vector3d::UnitZ();
   std::vector<Eigen::Vector3f> points_base;  ///< deskewed points, base frame at t_s [m]
 };
 
@@ -127,7 +128,7 @@ struct LoopClosureState {
   std::vector<LoopRecord> loops;        ///< in the order they were found
   std::vector<CandidateRecord> candidates;  ///< every stage-1 candidate, in the order proposed
   size_t keyframes_offered = 0;         ///< AddKeyframe calls
-  size_t keyframes_dropped = 0;         ///< over max_keyframes
+  size_t keyframes_dropped = 0;         ///< over max_keyframes, or a non-finite pose
   size_t candidates_proposed = 0;       ///< stage-1 candidates (descriptor gate passed, far enough on the path)
   size_t candidates_checked = 0;        ///< candidates that reached GICP (near enough on the graph)
   double verify_time_s = 0.0;           ///< total GICP time [s]

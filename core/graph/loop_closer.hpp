@@ -77,7 +77,7 @@ struct LoopClosureConfig {
   size_t max_keyframes = 20000;  ///< database bound; beyond it keyframes are not stored (counted)
   loop::LidarDescriptorConfig descriptor;
   /// GICP gates. The fitness gate is wider than VerifyLoop's default: on the parking lot's second lap (typical
-  /// realism, 0.2 m voxels, moving cars) true revisits measured fitness 0.14-0.19 m at overlap >= 0.77, while
+  /// realism, 0.2 m voxels, moving cars) true revisits measured fitness 0.14-0.21 m at overlap >= 0.77, while
   /// look-alike candidates measured >= 0.24 m at overlap <= 0.35.
   loop::LoopVerificationConfig verification = LoopVerificationDefaults();
   InformationFloor loop_information_floor;

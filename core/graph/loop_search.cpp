@@ -44,9 +44,7 @@ void LoopCloser::SearchLoops(int id) {
   }
 }
 
-// Stage 2: GICP of the keyframe's points against the candidate's submap, started from the graph's current relative
-// pose and, failing that, from the descriptor's yaw at zero offset (the odometry may have drifted beyond GICP's
-// reach); accepted when GICP passes and the result is within the odometry's drift bound of the graph's pose.
+// One stage-1 candidate through stage 2, recorded (State().candidates) whatever its outcome.
 bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch& match) {
   CandidateRecord record;
   record.query_id = id, record.match_id = match_id, record.descriptor_distance = match.distance;
@@ -58,7 +56,10 @@ bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch&
   return accepted;
 }
 
-// Stage 2 for one candidate; fills record (outcome, scores). True when the loop edge went into the graph.
+// Stage 2: GICP of the keyframe's points against the candidate's submap, started from the graph's current relative
+// pose and, failing that, from the descriptor's yaw at zero offset (the odometry may have drifted beyond GICP's
+// reach); accepted when GICP passes and the result is within the odometry's drift bound of the graph's pose.
+// Fills record (outcome, scores); true when the loop edge went into the graph.
 bool LoopCloser::VerifyCandidate(const loop::DescriptorMatch& match, CandidateRecord* record) {
   const int id = record->query_id, match_id = record->match_id;
   const Pose3 T_match_query_guess = graph_.Pose(match_id).inverse() * graph_.Pose(id);

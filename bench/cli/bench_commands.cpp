@@ -1,4 +1,4 @@
-// `rotolidar bench <name>`: speed benchmarks (ratios to real time) and the IMU Allan check.
+// `rotolidar bench <name>`: speed benchmarks (ratios to real time), the IMU Allan check, loop detection rates.
 #include <algorithm>
 #include <cstring>
 #include <iostream>
@@ -22,6 +22,7 @@ const Benchmark kBenchmarks[] = {
     {"decode", BenchDecode, "VLP-16 packet decoding (target >= 100x real time)"},
     {"slam", BenchSlam, "SLAM core per-scan time per stage, ATE, deskew error (target median <= 10 ms/scan, 1 core)"},
     {"plane-residuals", BenchPlaneResiduals, "range noise: residuals to RANSAC planes, real capture vs twin"},
+    {"loops", BenchLoops, "loop detection precision/recall of stage 1, stage 2 and both against truth revisits"},
     {"camera", BenchCamera, "camera twin frames/s per renderer and image size (target 640x480 >= 30 fps, 2 cores)"},
 };
 

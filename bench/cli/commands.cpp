@@ -19,14 +19,7 @@
 #include "sim/sim_runner.hpp"
 
 namespace rotolidar::bench {
-namespace {
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
-/// A slam config file: a YAML mapping of EstimatorConfig keys (see slam_config.yaml of any run).
 Status LoadSlamConfig(const std::string& path, EstimatorConfig* config) {
   if (path.empty()) return Status::Ok();
   try {
@@ -34,6 +27,13 @@ Status LoadSlamConfig(const std::string& path, EstimatorConfig* config) {
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
   }
+}
+
+namespace {
+
+int Fail(const Status& s) {
+  std::cerr << "error: " << s.message << "\n";
+  return 1;
 }
 
 /// --carrier: scene (the scene's default), handheld, wheeled, car or scripted_loop.
@@ -203,12 +203,18 @@ int CmdSlam(int argc, char** argv) {
   p.Add("kitti", "", "-", "a KITTI sequence folder instead of RECORDING (`slam --kitti DIR --help`)");
   p.AddFlag("score", "also score the map against the sim's scene (coverage, completeness, map-to-truth, "
                      "elements; minutes on long runs, as `rotolidar mapeval`)");
+  p.AddFlag("save-keyframes", "with loop closure on: write the keyframe database (poses, thinned points) into "
+                              "OUT/keyframes/ (~100 kB per keyframe)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EstimatorConfig config;
   if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);
   SlamRunResult r;
-  if (Status s = RunSlam(p.Get("RECORDING"), config, p.Get("out"), &r, MakeProgressPrinter("slam")); !s)
-    return Fail(s);
+  SlamRunOptions run;
+  run.progress = MakeProgressPrinter("slam");
+  run.save_keyframes = p.Flag("save-keyframes");
+  if (run.save_keyframes && !config.loop_closure.enabled)
+    return Fail(Status::Error("--save-keyframes: loop closure is off (loop_closure: {enabled: true} in --config)"));
+  if (Status s = RunSlam(p.Get("RECORDING"), config, p.Get("out"), &r, run); !s) return Fail(s);
   std::printf("%zu scans, median %.1f ms per scan, %.1fx real time; outputs in %s\n", r.scans.size(),
               r.median_scan_ms, r.wall_time_s > 0 ? r.data_duration_s / r.wall_time_s : 0.0, p.Get("out").c_str());
   PrintScanHealth(r.scans);

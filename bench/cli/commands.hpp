@@ -26,6 +26,10 @@ int CmdVocab(int argc, char** argv);      ///< bench/cli/vocab_commands.cpp: ORB
 /// stdout; nothing when every registration converged undegenerate (bench/run/scan_health.hpp).
 void PrintScanHealth(const std::vector<ScanReport>& scans);
 
+/// A slam config file: a YAML mapping of EstimatorConfig keys (see slam_config.yaml of any run) over *config;
+/// an empty path changes nothing. Errors name the file, line and key.
+Status LoadSlamConfig(const std::string& path, EstimatorConfig* config);
+
 /// One "loop closure:" summary line on stdout (keyframes, loops, candidates, GICP and graph time).
 void PrintLoopClosure(const graph::LoopClosureState& state);
 

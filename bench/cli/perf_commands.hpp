@@ -11,5 +11,6 @@ int BenchDecode(int argc, char** argv);
 int BenchSlam(int argc, char** argv);
 int BenchCamera(int argc, char** argv);
 int BenchPlaneResiduals(int argc, char** argv);  ///< bench/cli/residual_commands.cpp
+int BenchLoops(int argc, char** argv);           ///< bench/cli/loop_commands.cpp
 
 }  // namespace rotolidar::bench

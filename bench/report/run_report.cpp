@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/eval/trajectory_lookup.hpp"
+#include "bench/loops/loop_report.hpp"
 #include "bench/report/html_report.hpp"
 #include "bench/report/run_report_sections.hpp"
 #include "bench/run/scan_health.hpp"
@@ -82,6 +84,38 @@ void AddConfigSection(const RunReportInput& in, HtmlReport* html) {
   }
 }
 
+// Loop closure: the loop edges on a top view, each judged by the truth positions of its two keyframes (within
+// kTrueRevisitM: a revisit; `rotolidar bench loops` judges by view overlap as well).
+void AddLoopSection(const RunReportInput& in, HtmlReport* html) {
+  const graph::LoopClosureState& state = in.slam->loops;
+  if (state.keyframes.empty()) return;
+  constexpr double kTrueRevisitM = 10.0;
+  html->BeginSection("loops", "Loop closure");
+  LoopVerdicts verdicts;
+  int false_loops = 0, rejected = 0;
+  for (const graph::LoopRecord& l : state.loops) {
+    Pose3 a, b;
+    int verdict = -1;
+    if (in.evaluation->has_truth && PoseAt(in.evaluation->truth, state.keyframes[l.query_id].t_s, &a) &&
+        PoseAt(in.evaluation->truth, state.keyframes[l.match_id].t_s, &b))
+      verdict = (a.translation() - b.translation()).norm() <= kTrueRevisitM;
+    verdicts.push_back(verdict);
+    false_loops += verdict == 0, rejected += l.rejected;
+  }
+  html->KeyValueTable({{"loop keyframes", std::to_string(state.keyframes.size())},
+                       {"stage-1 candidates / verified by GICP",
+                        std::to_string(state.candidates_proposed) + " / " + std::to_string(state.candidates_checked)},
+                       {"loops accepted / rejected by the graph",
+                        std::to_string(state.loops.size()) + " / " + std::to_string(rejected)},
+                       {"false loops (truth positions > 10 m apart)",
+                        in.evaluation->has_truth ? std::to_string(false_loops) : "no truth"},
+                       {"GICP time, total", Fmt("%.1f s", state.verify_time_s)},
+                       {"longest graph solve", Fmt("%.3f s", state.max_solve_time_s)}});
+  html->Figure(LoopTopViewSvg(state, verdicts),
+               "Keyframes before (odometry) and after the pose graph, in the SLAM world; each loop joins its two "
+               "keyframes' corrected positions (loops.csv; every candidate in loop_candidates.csv).");
+}
+
 }  // namespace
 
 std::string RenderRunReport(const RunReportInput& in) {
@@ -105,6 +139,7 @@ std::string RenderRunReport(const RunReportInput& in) {
   report::AddMapSection(in, &html);
   report::AddCoverageSection(in, &html);
   report::AddElementsSection(in, &html);
+  AddLoopSection(in, &html);
   AddConfigSection(in, &html);
   return html.Render();
 }

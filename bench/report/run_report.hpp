@@ -12,6 +12,7 @@
 //   map          top view of the map coloured by map-to-truth distance (truth) or by height (no truth)
 //   coverage     covered vs missed surface samples (top view), coverage per surface class (map metrics only)
 //   elements     measured vs true door / window / column sizes                (map metrics only)
+//   loops        loop closure: counts and the loop edges on a top view        (loop closure on)
 //   config       the resolved configs of the run (collapsed)
 // Sections whose data is missing are left out; a note at the top says which and why. Nothing is faked.
 #include <string>

@@ -8,6 +8,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "bench/run/keyframe_db.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/point_cloud_io.hpp"
@@ -171,6 +172,13 @@ void ReleaseDeskewData(SlamRunResult* result) {
 
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
                SlamRunResult* result, const std::function<void(double)>& progress) {
+  SlamRunOptions options;
+  options.progress = progress;
+  return RunSlam(recording_dir, config, out_dir, result, options);
+}
+
+Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
+               SlamRunResult* result, const SlamRunOptions& options) {
   std::string why;
   if (!config.Validate(&why)) return Status::Error("slam config: " + why);
   Recording rec;
@@ -185,13 +193,17 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
         DeskewScanStride(rec.lidar_packets.back().t_capture_s - rec.lidar_packets.front().t_capture_s);
   Estimator estimator(rec.calib, config);
   const auto t0 = std::chrono::steady_clock::now();
-  Playback(rec, &estimator, result, progress);
+  Playback(rec, &estimator, result, options.progress);
   result->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   result->odometry_trajectory = estimator.trajectory();
   result->trajectory = estimator.trajectory();
   if (const graph::LoopCloser* loops = estimator.loop_closer()) {  // Finish waited for it
     result->trajectory = loops->Correct(estimator.trajectory());
     result->loops = loops->State();
+    if (options.keep_keyframes || options.save_keyframes) result->loop_keyframes = loops->KeyframeClouds();
+    if (options.save_keyframes)
+      if (Status s = WriteKeyframeDatabase(out_dir + "/keyframes", result->loop_keyframes); !s) return s;
+    if (!options.keep_keyframes) result->loop_keyframes = {};
   }
   result->map_points = estimator.map().NumPoints();
   result->bad_packets = estimator.bad_packets();

@@ -4,6 +4,8 @@
 //   map.ply, map.pcd                                            the dense map [world, m]
 //   scans.csv          per scan: stage timings [ms], feature counts, registration, degeneracy (eigenvalues, axes)
 //   slam_config.yaml                                            the resolved estimator config
+// With loop closure on, also trajectory_odometry.tum, loops.csv, loop_candidates.csv, map_corrected.ply and, when
+// asked (SlamRunOptions::save_keyframes), the keyframe database in keyframes/ (bench/run/keyframe_db.hpp).
 //
 // With EstimatorConfig::keep_deskewed the reports also keep each scan's decoded points and their deskewed
 // positions (the deskew error's input, bench/metrics/deskew_error.hpp): ~30 k points x 44 B per scan, so a 20 s
@@ -24,6 +26,8 @@ struct SlamRunResult {
   Trajectory trajectory;            ///< T_world_base (loop-closed when loop closure is on)
   Trajectory odometry_trajectory;   ///< T_world_base as the odometry gave it (before loop closure)
   graph::LoopClosureState loops;    ///< empty without loop closure
+  /// The loop closer's keyframe database (SlamRunOptions::keep_keyframes; ~24 B per stored point), else empty.
+  std::vector<graph::KeyframeCloud> loop_keyframes;
   std::vector<ScanReport> scans;
   size_t map_points = 0;
   size_t bad_packets = 0;
@@ -45,7 +49,15 @@ size_t DeskewScanStride(double data_span_s);
 /// Frees every scan's deskew data (once it has been evaluated) and sets deskew_scan_stride to 0.
 void ReleaseDeskewData(SlamRunResult* result);
 
-/// `progress(fraction)` is called about every 10 % of the data.
+struct SlamRunOptions {
+  std::function<void(double)> progress;  ///< called with the fraction done, about every 10 % of the data
+  bool save_keyframes = false;  ///< loop closure on: write the keyframe database into <out_dir>/keyframes/
+  bool keep_keyframes = false;  ///< loop closure on: fill SlamRunResult::loop_keyframes
+};
+
+Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
+               SlamRunResult* result, const SlamRunOptions& options);
+/// RunSlam with `progress` only.
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
                SlamRunResult* result, const std::function<void(double)>& progress = nullptr);
 

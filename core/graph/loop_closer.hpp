@@ -122,6 +122,16 @@ struct KeyframePose {
   Pose3 T_world_corrected = Pose3::Identity();  ///< after the latest graph solve
 };
 
+/// A stored keyframe as the database holds it (a copy: saving it with the run, offline precision/recall studies).
+struct KeyframeCloud {
+  int id = 0;
+  Seconds t_s = 0.0;
+  Pose3 T_world_odom = Pose3::Identity();
+  Pose3 T_world_corrected = Pose3::Identity();
+  Eigen::Matrix3d R_level_base = Eigen::Matrix3d::Identity();  ///< base -> the descriptor's gravity-aligned frame
+  std::vector<Eigen::Vector3d> cloud_base;  ///< cloud_voxel_m-thinned points within max_range_m, base frame [m]
+};
+
 /// A snapshot of the loop closer's outcome.
 struct LoopClosureState {
   std::vector<KeyframePose> keyframes;  ///< in time order
@@ -158,6 +168,8 @@ class LoopCloser {
   /// The map rebuilt from the keyframes' stored points at their corrected poses [world], at most
   /// `points_per_voxel` per `voxel_m` voxel.
   std::vector<Eigen::Vector3d> CorrectedMap(double voxel_m, int points_per_voxel) const;
+  /// Copies of the stored keyframes in id order (after Finish: all of them), ~24 B per stored point.
+  std::vector<KeyframeCloud> KeyframeClouds() const;
 
  private:
   struct Keyframe;

@@ -5,6 +5,7 @@
 
 #include "core/graph/loop_closer.hpp"
 #include "core/graph/loop_closer_internal.hpp"
+#include "core/graph/loop_gate.hpp"
 #include "core/pipeline/voxel_map.hpp"
 
 namespace rotolidar::graph {
@@ -56,39 +57,26 @@ bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch&
   return accepted;
 }
 
-// Stage 2: GICP of the keyframe's points against the candidate's submap, started from the graph's current relative
-// pose and, failing that, from the descriptor's yaw at zero offset (the odometry may have drifted beyond GICP's
-// reach); accepted when GICP passes and the result is within the odometry's drift bound of the graph's pose.
-// Fills record (outcome, scores); true when the loop edge went into the graph.
+// Stage 2 (CheckRevisit) on the graph's current poses; an accepted candidate becomes a loop edge. Fills record
+// (outcome, scores); true when the loop edge went into the graph.
 bool LoopCloser::VerifyCandidate(const loop::DescriptorMatch& match, CandidateRecord* record) {
   const int id = record->query_id, match_id = record->match_id;
   const Pose3 T_match_query_guess = graph_.Pose(match_id).inverse() * graph_.Pose(id);
-  const double path_m = PathLengthBetween(match_id, id);
-  const double drift_bound_m = config_.max_guess_offset_m + config_.max_guess_offset_per_m * path_m;
-  record->graph_distance_m = T_match_query_guess.translation().norm();
-  if (record->graph_distance_m > config_.max_revisit_distance_m + drift_bound_m) return false;  // kTooFar
   const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<Eigen::Vector3d> submap = Submap(match_id);
-  loop::LoopVerification v =
-      loop::VerifyLoop(keyframes_[id]->cloud_base, submap, T_match_query_guess, config_.verification);
-  if (!v.accepted) {
-    Pose3 T_match_query_yaw = Pose3::Identity();  // T_m_q = R_Lm_m^T RotZ(yaw) R_Lq_q: both frames at the base origin
-    T_match_query_yaw.linear() = keyframes_[match_id]->R_level_base.transpose() * RotZ(match.yaw_rad).linear() *
-                                 keyframes_[id]->R_level_base;
-    v = loop::VerifyLoop(keyframes_[id]->cloud_base, submap, T_match_query_yaw, config_.verification);
-  }
+  const RevisitCheck check = CheckRevisit(
+      keyframes_[id]->cloud_base, keyframes_[id]->R_level_base, [&] { return Submap(match_id); },
+      keyframes_[match_id]->R_level_base, T_match_query_guess, match.yaw_rad, PathLengthBetween(match_id, id),
+      config_, config_.verification);
+  record->graph_distance_m = check.guess_distance_m;
+  record->outcome = check.outcome;
+  if (check.outcome == CandidateRecord::Outcome::kTooFar) return false;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     state_.verify_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  const loop::LoopVerification& v = check.verification;
   record->fitness_rmse_m = v.fitness_rmse_m, record->overlap = v.overlap, record->reason = v.reason;
-  record->outcome = CandidateRecord::Outcome::kGicpFailed;
-  if (!v.accepted) return false;
-  record->outcome = CandidateRecord::Outcome::kBeyondDrift;
-  const Pose3 offset = T_match_query_guess.inverse() * v.T_target_source;
-  if (offset.translation().norm() > drift_bound_m) return false;
-  const double max_angle_rad = config_.max_guess_offset_rad + config_.max_guess_offset_per_m * path_m;
-  if (Eigen::AngleAxisd(offset.linear()).angle() > max_angle_rad) return false;
+  if (check.outcome != CandidateRecord::Outcome::kAccepted) return false;
   record->outcome = CandidateRecord::Outcome::kGraphError;
   if (!AddLoopEdge(id, match_id, v, match.distance)) return false;
   record->outcome = CandidateRecord::Outcome::kAccepted;
@@ -187,6 +175,17 @@ std::vector<Eigen::Vector3d> LoopCloser::CorrectedMap(double voxel_m, int points
     map.Add(world);
   }
   return map.Points();
+}
+
+std::vector<KeyframeCloud> LoopCloser::KeyframeClouds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<KeyframeCloud> out;
+  out.reserve(state_.keyframes.size());
+  for (const KeyframePose& k : state_.keyframes) {
+    const Keyframe& kf = *keyframes_[k.id];
+    out.push_back({k.id, k.t_s, k.T_world_odom, k.T_world_corrected, kf.R_level_base, kf.cloud_base});
+  }
+  return out;
 }
 
 }  // namespace rotolidar::graph

@@ -6,73 +6,15 @@
 #include <gtest/gtest.h>
 
 #include "core/graph/loop_closer.hpp"
-#include "core/util/rng.hpp"
+#include "tests/core/graph/synthetic_walk.hpp"
 
 namespace rotolidar::graph {
 namespace {
 
-// A yard of pillars and walls sampled as points (world frame); deterministic for a seed.
-std::vector<Eigen::Vector3d> MakeWorld(uint64_t seed) {
-  RandomStream rng(seed, "loop-closer-test-world");
-  std::vector<Eigen::Vector3d> world;
-  auto add_box = [&](Eigen::Vector3d c, Eigen::Vector3d half) {
-    const double step = 0.1;
-    for (double z = 0.0; z <= 2.0 * half.z(); z += step)
-      for (double a = -half.x(); a <= half.x(); a += step) {
-        world.emplace_back(c.x() + a, c.y() - half.y(), z);
-        world.emplace_back(c.x() + a, c.y() + half.y(), z);
-      }
-    for (double z = 0.0; z <= 2.0 * half.z(); z += step)
-      for (double b = -half.y(); b <= half.y(); b += step) {
-        world.emplace_back(c.x() - half.x(), c.y() + b, z);
-        world.emplace_back(c.x() + half.x(), c.y() + b, z);
-      }
-  };
-  for (int i = 0; i < 60; ++i) {
-    const Eigen::Vector3d c(-10.0 + 60.0 * rng.Uniform(), -10.0 + 60.0 * rng.Uniform(), 0.0);
-    add_box(c, Eigen::Vector3d(0.3 + 1.5 * rng.Uniform(), 0.3 + 1.5 * rng.Uniform(), 0.5 + 1.5 * rng.Uniform()));
-  }
-  for (double x = -15.0; x <= 55.0; x += 0.5)  // ground
-    for (double y = -15.0; y <= 55.0; y += 0.5) world.emplace_back(x, y, -1.0);
-  return world;
-}
-
-// The points a sensor at T_world_base sees (within 25 m; no occlusion), base frame.
-std::vector<Eigen::Vector3f> Observe(const std::vector<Eigen::Vector3d>& world, const Pose3& T_world_base) {
-  const Pose3 T_base_world = T_world_base.inverse();
-  std::vector<Eigen::Vector3f> out;
-  for (const Eigen::Vector3d& p : world) {
-    const Eigen::Vector3d q = T_base_world * p;
-    if (q.norm() < 25.0) out.push_back(q.cast<float>());
-  }
-  return out;
-}
-
-// Truth: two laps of a 40 m x 40 m square (0.5 m steps, heading along the path). Odometry: the truth with a yaw
-// drift of 0.003 deg and 2 mm per step composed on (about 1.3 m and 1 deg after one lap).
-struct Walk {
-  std::vector<Pose3> truth, odometry;
-};
-Walk MakeWalk() {
-  Walk w;
-  std::vector<Eigen::Vector2d> corners = {{0, 0}, {40, 0}, {40, 40}, {0, 40}};
-  for (int lap = 0; lap < 2; ++lap)
-    for (int side = 0; side < 4; ++side) {
-      const Eigen::Vector2d a = corners[side], b = corners[(side + 1) % 4];
-      const double yaw = std::atan2(b.y() - a.y(), b.x() - a.x());
-      for (int s = 0; s < 80; ++s) {
-        Pose3 T = RotZ(yaw);
-        T.translation() << a.x() + (b.x() - a.x()) * s / 80.0, a.y() + (b.y() - a.y()) * s / 80.0, 0.0;
-        w.truth.push_back(T);
-      }
-    }
-  w.odometry.push_back(w.truth.front());
-  Pose3 drift_step = RotZ(0.003 * M_PI / 180.0);
-  drift_step.translation() << 0.002, 0.0, 0.0;
-  for (size_t i = 1; i < w.truth.size(); ++i)
-    w.odometry.push_back(w.odometry.back() * drift_step * (w.truth[i - 1].inverse() * w.truth[i]));
-  return w;
-}
+using test_util::MakeWalk;
+using test_util::MakeWorld;
+using test_util::Observe;
+using test_util::Walk;
 
 double Rmse(const std::vector<Pose3>& a, const std::vector<Pose3>& b) {
   double sum = 0.0;
@@ -163,12 +105,23 @@ TEST(LoopCloser, KeyframeSpacingAndBadConfig) {
     KeyframeInput kf;
     kf.t_s = i;
     kf.T_world_base.translation().x() = 0.1 * i;
+    // Two points in one 0.2 m voxel, one beyond max_range_m (40 m), one non-finite: one point is stored.
+    kf.points_base = {{1.0f, 1.0f, 1.0f}, {1.05f, 1.05f, 1.05f}, {50.0f, 0.0f, 0.0f},
+                      {std::nanf(""), 0.0f, 0.0f}};
     closer.AddKeyframe(std::move(kf));
   }
   closer.Finish();
   const LoopClosureState s = closer.State();
   EXPECT_EQ(s.keyframes_offered, 10u);
   EXPECT_EQ(s.keyframes.size(), 1u);
+  // The database copy: the taken keyframe's pose and its thinned points.
+  const std::vector<KeyframeCloud> clouds = closer.KeyframeClouds();
+  ASSERT_EQ(clouds.size(), 1u);
+  EXPECT_EQ(clouds[0].id, 0);
+  EXPECT_EQ(clouds[0].t_s, 0.0);
+  EXPECT_TRUE(clouds[0].T_world_odom.isApprox(Pose3::Identity()));
+  ASSERT_EQ(clouds[0].cloud_base.size(), 1u);
+  EXPECT_LT((clouds[0].cloud_base[0] - Eigen::Vector3d(1.0, 1.0, 1.0)).norm(), 0.2);
 }
 
 }  // namespace

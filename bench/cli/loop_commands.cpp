@@ -1,0 +1,118 @@
+// `rotolidar bench loops`: loop detection precision/recall against the twin's truth (bench/loops/loop_pr.hpp).
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/cli/commands.hpp"
+#include "bench/cli/options.hpp"
+#include "bench/cli/perf_commands.hpp"
+#include "bench/eval/trajectory_lookup.hpp"
+#include "bench/loops/loop_report.hpp"
+#include "bench/run/progress.hpp"
+#include "bench/run/slam_run.hpp"
+#include "core/io/trajectory_io.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+int Fail(const Status& s, int code = 1) {
+  std::cerr << "error: " << s.message << "\n";
+  return code;
+}
+
+// The truth pose at every keyframe's time; an error names the keyframe the truth does not cover.
+Status TruthAtKeyframes(const std::string& recording, const std::vector<graph::KeyframeCloud>& keyframes,
+                        std::vector<Pose3>* T_truth_base) {
+  Trajectory truth;
+  const std::string path = recording + "/truth/base.tum";
+  if (Status s = ReadTrajectory(path, TrajectoryFormat::kTum, &truth); !s)
+    return Status::Error(s.message + " (bench loops needs the twin's truth)");
+  T_truth_base->clear();
+  for (const graph::KeyframeCloud& k : keyframes) {
+    Pose3 T;
+    if (!PoseAt(truth, k.t_s, &T))
+      return Status::Error(path + ": no truth at keyframe " + std::to_string(k.id) + " (t " + std::to_string(k.t_s) +
+                           " s)");
+    T_truth_base->push_back(T);
+  }
+  return Status::Ok();
+}
+
+Status WriteSummaryJson(const std::string& path, const LoopPrResult& r, const graph::LoopClosureState& state,
+                        const LoopVerdicts& verdicts, const LoopPrConfig& c) {
+  nlohmann::json j;
+  j["queries"] = r.queries.size();
+  j["positives"] = r.positives;
+  j["operating_point"] = {{"descriptor_distance", c.loop.max_descriptor_distance},
+                          {"fitness_rmse_m", c.loop.verification.max_fitness_rmse_m},
+                          {"precision", r.operating.precision},
+                          {"recall", r.operating.recall},
+                          {"true_detections", r.operating.tp},
+                          {"false_detections", r.operating.fp}};
+  int false_loops = 0, rejected = 0;
+  for (size_t i = 0; i < verdicts.size(); ++i) false_loops += verdicts[i] == 0, rejected += state.loops[i].rejected;
+  j["run"] = {{"loops_accepted", state.loops.size()}, {"false_loops", false_loops}, {"rejected_by_graph", rejected}};
+  j["truth"] = {{"revisit_max_distance_m", c.revisit_max_distance_m},
+                {"revisit_min_overlap", c.revisit_min_overlap},
+                {"overlap_radius_m", c.overlap_radius_m}};
+  j["verify_time_s"] = r.verify_time_s;
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  return out ? Status::Ok() : Status::Error(path + ": write failed");
+}
+
+}  // namespace
+
+int BenchLoops(int argc, char** argv) {
+  OptionParser p("bench loops", "Run the SLAM core with loop closure on a recording with truth, then rate loop "
+                                "detection against the truth revisits: precision/recall curves of stage 1 alone, "
+                                "stage 2 alone and both, the operating point, and the run's own loops (false ones "
+                                "counted). Writes OUT/loops.html, loop_pr.csv, loop_queries.csv, loop_pr.json and "
+                                "the slam run in OUT/slam.");
+  p.AddPositional("RECORDING", "recording folder with truth/ (rotolidar sim)");
+  p.Add("out", "runs/bench_loops", "-", "output folder");
+  p.Add("config", "", "-", "estimator config YAML (loop closure is switched on; its gates are the operating point)");
+  p.Add("revisit-distance", "10", "m", "truth: a true revisit's keyframes are at most this far apart");
+  p.Add("revisit-overlap", "0.5", "-", "truth: and this share of the query's points is seen again (truth poses)");
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
+  EstimatorConfig config;
+  if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);
+  config.loop_closure.enabled = true;
+  LoopPrConfig pr;
+  pr.loop = config.loop_closure;
+  if (Status s = p.GetDouble("revisit-distance", &pr.revisit_max_distance_m); !s) return Fail(s, 2);
+  if (Status s = p.GetDouble("revisit-overlap", &pr.revisit_min_overlap); !s) return Fail(s, 2);
+  if (std::string why; !pr.Validate(&why)) return Fail(Status::Error(why), 2);
+
+  const std::string out = p.Get("out");
+  SlamRunResult slam;
+  SlamRunOptions run;
+  run.progress = MakeProgressPrinter("slam");
+  run.keep_keyframes = true;
+  if (Status s = RunSlam(p.Get("RECORDING"), config, out + "/slam", &slam, run); !s) return Fail(s);
+  PrintLoopClosure(slam.loops);
+  std::vector<Pose3> T_truth_base;
+  if (Status s = TruthAtKeyframes(p.Get("RECORDING"), slam.loop_keyframes, &T_truth_base); !s) return Fail(s);
+  std::fprintf(stderr, "rating %zu keyframes against truth (two GICP runs per query)\n", slam.loop_keyframes.size());
+  LoopPrResult r;
+  if (Status s = EvaluateLoopPr(slam.loop_keyframes, T_truth_base, pr, &r, MakeProgressPrinter("loops")); !s)
+    return Fail(s);
+  const RevisitTruth truth(slam.loop_keyframes, T_truth_base, pr);
+  LoopVerdicts verdicts;
+  for (const graph::LoopRecord& l : slam.loops.loops) verdicts.push_back(truth.IsRevisit(l.query_id, l.match_id));
+  if (Status s = WriteLoopPrOutputs(out, p.Get("RECORDING"), r, slam.loops, verdicts); !s) return Fail(s);
+  if (Status s = WriteSummaryJson(out + "/loop_pr.json", r, slam.loops, verdicts, pr); !s) return Fail(s);
+  int false_loops = 0;
+  for (int v : verdicts) false_loops += v == 0;
+  std::printf("queries %zu, positives %d; operating point (descriptor <= %.2f, fitness <= %.2f m): precision %.3f, "
+              "recall %.3f (%d true, %d false)\n",
+              r.queries.size(), r.positives, pr.loop.max_descriptor_distance, pr.loop.verification.max_fitness_rmse_m,
+              r.operating.precision, r.operating.recall, r.operating.tp, r.operating.fp);
+  std::printf("run: %zu loops accepted, %d false by truth; report: %s/loops.html\n", slam.loops.loops.size(),
+              false_loops, out.c_str());
+  return 0;
+}
+
+}  // namespace rotolidar::bench

@@ -1,0 +1,277 @@
+#include "bench/loops/loop_pr.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include <pcl/kdtree/kdtree_flann.h>
+
+#include "core/graph/loop_gate.hpp"
+
+namespace rotolidar::bench {
+
+bool LoopPrConfig::Validate(std::string* error) const {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (!(revisit_max_distance_m > 0.0)) return fail("revisit_max_distance_m: must be > 0");
+  if (!(revisit_min_overlap > 0.0 && revisit_min_overlap <= 1.0)) return fail("revisit_min_overlap: must be in (0, 1]");
+  if (!(overlap_radius_m > 0.0)) return fail("overlap_radius_m: must be > 0");
+  return loop.Validate(error);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Truth labels.
+
+struct RevisitTruth::Impl {
+  LoopPrConfig config;
+  std::vector<Eigen::Vector3d> position;                         // truth position per keyframe [m]
+  std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> world;        // points at the truth pose
+  std::vector<pcl::KdTreeFLANN<pcl::PointXYZ>> tree;
+  mutable std::unordered_map<long long, double> overlap;         // memo: query * n + match
+};
+
+RevisitTruth::RevisitTruth(const std::vector<graph::KeyframeCloud>& keyframes, const std::vector<Pose3>& T_truth_base,
+                           const LoopPrConfig& config)
+    : impl_(new Impl) {
+  impl_->config = config;
+  impl_->tree.resize(keyframes.size());
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    impl_->position.push_back(T_truth_base[i].translation());
+    auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+    for (const Eigen::Vector3d& p : keyframes[i].cloud_base) {
+      const Eigen::Vector3f w = (T_truth_base[i] * p).cast<float>();
+      cloud->push_back(pcl::PointXYZ(w.x(), w.y(), w.z()));
+    }
+    if (!cloud->empty()) impl_->tree[i].setInputCloud(cloud);
+    impl_->world.push_back(cloud);
+  }
+}
+
+RevisitTruth::~RevisitTruth() { delete impl_; }
+
+double RevisitTruth::Overlap(int query_id, int match_id) const {
+  const long long key = (long long)query_id * (long long)impl_->world.size() + match_id;
+  if (auto it = impl_->overlap.find(key); it != impl_->overlap.end()) return it->second;
+  const auto& query = *impl_->world[query_id];
+  double share = 0.0;
+  if (!query.empty() && !impl_->world[match_id]->empty()) {
+    std::vector<int> index(1);
+    std::vector<float> d2(1);
+    const float r2 = float(impl_->config.overlap_radius_m * impl_->config.overlap_radius_m);
+    size_t seen = 0;
+    for (const pcl::PointXYZ& p : query)
+      if (impl_->tree[match_id].nearestKSearch(p, 1, index, d2) == 1 && d2[0] <= r2) ++seen;
+    share = double(seen) / double(query.size());
+  }
+  impl_->overlap[key] = share;
+  return share;
+}
+
+double RevisitTruth::Distance(int query_id, int match_id) const {
+  return (impl_->position[query_id] - impl_->position[match_id]).norm();
+}
+
+bool RevisitTruth::IsRevisit(int query_id, int match_id) const {
+  if (Distance(query_id, match_id) > impl_->config.revisit_max_distance_m) return false;
+  return Overlap(query_id, match_id) >= impl_->config.revisit_min_overlap;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// The detectors.
+
+namespace {
+
+struct Context {
+  const std::vector<graph::KeyframeCloud>& keyframes;
+  const LoopPrConfig& config;
+  loop::LoopVerificationConfig open_gate;  // every gate but fitness (fitness <= fine_correspondence_m anyway)
+  const graph::LoopClosureConfig& loop;
+  std::vector<double> path_m;              // odometry path length at each keyframe
+  double verify_time_s = 0.0;
+};
+
+bool Eligible(const Context& c, int query, int match) {
+  return match < query && c.keyframes[match].t_s <= c.keyframes[query].t_s - c.loop.exclude_recent_s &&
+         c.path_m[query] - c.path_m[match] >= c.loop.min_travel_m;
+}
+
+// The match's submap (it and submap_neighbours either side, odometry poses), in the match's base frame.
+std::vector<Eigen::Vector3d> Submap(const Context& c, int match) {
+  const int n = int(c.keyframes.size());
+  const Pose3 T_match_world = c.keyframes[match].T_world_odom.inverse();
+  std::vector<Eigen::Vector3d> out;
+  for (int k = std::max(0, match - c.loop.submap_neighbours); k <= std::min(n - 1, match + c.loop.submap_neighbours);
+       ++k) {
+    const Pose3 T_match_k = T_match_world * c.keyframes[k].T_world_odom;
+    for (const Eigen::Vector3d& p : c.keyframes[k].cloud_base) out.push_back(T_match_k * p);
+  }
+  return out;
+}
+
+// The loop closer's stage 2 on the odometry poses, with the fitness gate open (the sweep applies it).
+loop::LoopVerification Verify(Context* c, int query, int match, double yaw_rad, bool* passed) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const graph::KeyframeCloud& q = c->keyframes[query];
+  const graph::KeyframeCloud& m = c->keyframes[match];
+  const graph::RevisitCheck check = graph::CheckRevisit(
+      q.cloud_base, q.R_level_base, [&] { return Submap(*c, match); }, m.R_level_base,
+      m.T_world_odom.inverse() * q.T_world_odom, yaw_rad, c->path_m[query] - c->path_m[match], c->loop, c->open_gate);
+  c->verify_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  *passed = check.outcome == graph::CandidateRecord::Outcome::kAccepted;
+  return check.verification;
+}
+
+loop::LidarDescriptor Describe(const graph::KeyframeCloud& k, const loop::LidarDescriptorConfig& config) {
+  std::vector<Eigen::Vector3f> levelled;
+  levelled.reserve(k.cloud_base.size());
+  for (const Eigen::Vector3d& p : k.cloud_base) levelled.push_back((k.R_level_base * p).cast<float>());
+  return loop::ComputeLidarDescriptor(levelled, config);
+}
+
+// Stage 1's proposal: the place index's best eligible keyframe (ring-key retrieval, Scan Context re-ranking).
+bool Stage1(const Context& c, const loop::LidarPlaceIndex& index, const loop::LidarDescriptor& d, int query,
+            loop::PlaceCandidate* best) {
+  loop::PlaceQuery q;
+  q.t_s = c.keyframes[query].t_s;
+  q.exclude_recent_s = c.loop.exclude_recent_s;
+  q.num_results = 10;  // the first one that is also far enough back on the path
+  q.max_distance = 1.0;
+  for (const loop::PlaceCandidate& candidate : index.Query(d, q))
+    if (Eligible(c, query, int(candidate.keyframe_id))) {
+      *best = candidate;
+      return true;
+    }
+  return false;
+}
+
+// Stage 2's own proposal: the eligible keyframe nearest on the odometry poses.
+int NearestOnOdometry(const Context& c, int query, const std::vector<int>& eligible) {
+  int best = -1;
+  double best_d = 1e300;
+  for (int m : eligible) {
+    const double d = (c.keyframes[m].T_world_odom.translation() - c.keyframes[query].T_world_odom.translation()).norm();
+    if (d < best_d) best_d = d, best = m;
+  }
+  return best;
+}
+
+}  // namespace
+
+std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives) {
+  std::sort(detections.begin(), detections.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<PrPoint> curve;
+  PrPoint p;
+  for (size_t i = 0; i < detections.size(); ++i) {
+    (detections[i].second ? p.tp : p.fp) += 1;
+    if (i + 1 < detections.size() && detections[i + 1].first == detections[i].first) continue;
+    p.threshold = detections[i].first;
+    p.precision = double(p.tp) / double(p.tp + p.fp);
+    p.recall = positives > 0 ? double(p.tp) / double(positives) : 0.0;
+    curve.push_back(p);
+  }
+  return curve;
+}
+
+namespace {
+
+// One query through the three detectors.
+LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::LidarPlaceIndex& index,
+                          const loop::LidarDescriptor& d, int query, const std::vector<int>& eligible) {
+  LoopQueryOutcome o;
+  o.query_id = query;
+  o.t_query_s = c->keyframes[query].t_s;
+  for (int m : eligible)
+    if (truth.IsRevisit(query, m)) {
+      o.positive = true;
+      break;
+    }
+  loop::PlaceCandidate s1;
+  if (Stage1(*c, index, d, query, &s1)) {
+    o.stage1_match = int(s1.keyframe_id);
+    o.stage1_distance = s1.match.distance;
+    o.stage1_true = truth.IsRevisit(query, o.stage1_match);
+    o.stage1_truth_distance_m = truth.Distance(query, o.stage1_match);
+    o.stage1_truth_overlap = truth.Overlap(query, o.stage1_match);
+    if (o.stage1_distance <= c->loop.max_descriptor_distance)
+      o.both_fitness_m = Verify(c, query, o.stage1_match, s1.match.yaw_rad, &o.both_verified).fitness_rmse_m;
+    o.both_true = o.stage1_true;
+  }
+  // Stage 2's own proposal has no descriptor: its yaw guess is the odometry's (0 on top of the relative pose).
+  o.stage2_match = NearestOnOdometry(*c, query, eligible);
+  const graph::KeyframeCloud& q = c->keyframes[query];
+  const graph::KeyframeCloud& m = c->keyframes[o.stage2_match];
+  const Eigen::Matrix3d R = m.R_level_base * (m.T_world_odom.inverse() * q.T_world_odom).linear() *
+                            q.R_level_base.transpose();  // the levelled frames' relative rotation
+  const double yaw_rad = std::atan2(R(1, 0), R(0, 0));
+  o.stage2_fitness_m = Verify(c, query, o.stage2_match, yaw_rad, &o.stage2_verified).fitness_rmse_m;
+  o.stage2_true = truth.IsRevisit(query, o.stage2_match);
+  o.stage2_truth_distance_m = truth.Distance(query, o.stage2_match);
+  o.stage2_truth_overlap = truth.Overlap(query, o.stage2_match);
+  return o;
+}
+
+void Sweep(const LoopPrConfig& config, LoopPrResult* r) {
+  std::vector<std::pair<double, bool>> s1, s2, both;
+  const double gate_m = config.loop.verification.max_fitness_rmse_m;
+  r->operating = PrPoint{};
+  r->operating.threshold = gate_m;
+  for (const LoopQueryOutcome& o : r->queries) {
+    if (o.stage1_match >= 0) s1.push_back({o.stage1_distance, o.stage1_true});
+    if (o.stage2_verified) s2.push_back({o.stage2_fitness_m, o.stage2_true});
+    if (o.both_verified) {
+      both.push_back({o.both_fitness_m, o.both_true});
+      if (o.both_fitness_m <= gate_m) (o.both_true ? r->operating.tp : r->operating.fp) += 1;
+    }
+  }
+  const PrPoint& op = r->operating;
+  r->operating.precision = op.tp + op.fp > 0 ? double(op.tp) / double(op.tp + op.fp) : 1.0;
+  r->operating.recall = r->positives > 0 ? double(op.tp) / double(r->positives) : 0.0;
+  r->stage1 = SweepPr(s1, r->positives);
+  r->stage2 = SweepPr(s2, r->positives);
+  r->both = SweepPr(both, r->positives);
+}
+
+}  // namespace
+
+Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const std::vector<Pose3>& T_truth_base,
+                      const LoopPrConfig& config, LoopPrResult* result,
+                      const std::function<void(double)>& progress) {
+  std::string why;
+  if (!config.Validate(&why)) return Status::Error("loop precision/recall config: " + why);
+  if (keyframes.size() != T_truth_base.size())
+    return Status::Error("loop precision/recall: " + std::to_string(keyframes.size()) + " keyframes but " +
+                         std::to_string(T_truth_base.size()) + " truth poses");
+  *result = LoopPrResult{};
+  Context c{keyframes, config, config.loop.verification, config.loop, {}, 0.0};
+  c.open_gate.max_fitness_rmse_m = c.open_gate.fine_correspondence_m;
+  c.path_m.assign(keyframes.size(), 0.0);
+  for (size_t i = 1; i < keyframes.size(); ++i)
+    c.path_m[i] = c.path_m[i - 1] +
+                  (keyframes[i].T_world_odom.translation() - keyframes[i - 1].T_world_odom.translation()).norm();
+  const RevisitTruth truth(keyframes, T_truth_base, config);
+  loop::LidarPlaceIndexConfig index_config;
+  index_config.max_keyframes = std::max<size_t>(1, keyframes.size());
+  loop::LidarPlaceIndex index(index_config);
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    const int query = int(i);
+    const loop::LidarDescriptor d = Describe(keyframes[i], config.loop.descriptor);
+    std::vector<int> eligible;
+    for (int m = 0; m < query; ++m)
+      if (Eligible(c, query, m)) eligible.push_back(m);
+    if (!eligible.empty()) {
+      result->queries.push_back(RunQuery(&c, truth, index, d, query, eligible));
+      if (result->queries.back().positive) ++result->positives;
+    }
+    if (Status s = index.Add(query, keyframes[i].t_s, d); !s) return Status::Error("keyframe " + std::to_string(i) + ": " + s.message);
+    if (progress && (i + 1) % std::max<size_t>(1, keyframes.size() / 10) == 0) progress(double(i + 1) / keyframes.size());
+  }
+  Sweep(config, result);
+  result->verify_time_s = c.verify_time_s;
+  return Status::Ok();
+}
+
+}  // namespace rotolidar::bench

@@ -1,0 +1,100 @@
+#pragma once
+// Precision and recall of loop detection against the twin's truth (`rotolidar bench loops`).
+//
+// Truth: two keyframes are a true revisit when their truth positions are within revisit_max_distance_m and, placed
+// with their truth poses, at least revisit_min_overlap of the query's points have a point of the other keyframe
+// within overlap_radius_m (the same surfaces seen again, not just the same spot behind a wall).
+//
+// Queries: every keyframe that has an eligible earlier keyframe (older by exclude_recent_s and at least
+// min_travel_m of odometry path back, the loop closer's own rule). A query is a positive when one of its eligible
+// keyframes is a true revisit. Each detector proposes one keyframe per query; a detection at threshold tau is
+// a true positive when the proposed pair is a true revisit, a false positive otherwise:
+//   stage 1 alone   the nearest eligible keyframe by Scan Context distance; score: that distance
+//   stage 2 alone   the nearest eligible keyframe on the odometry poses through the loop closer's stage 2
+//                   (graph::CheckRevisit on the odometry poses: distance gate, GICP, drift bound) with every gate
+//                   but the fitness one; score: GICP fitness [m]
+//   both            stage 1's keyframe when its distance passes the operating descriptor gate, through the same
+//                   stage 2; score: GICP fitness [m]
+// precision = TP / (TP + FP) (1 when nothing is detected), recall = TP / positives (0 when there are none).
+// Odometry poses are used as they are (no graph correction between queries): the curves rate the detectors, not
+// the back end.
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/graph/loop_closer.hpp"
+#include "core/util/status.hpp"
+
+namespace rotolidar::bench {
+
+struct LoopPrConfig {
+  double revisit_max_distance_m = 10.0;  ///< truth distance bound of a true revisit [m]
+  double revisit_min_overlap = 0.5;      ///< share of the query's points seen again (truth poses)
+  double overlap_radius_m = 0.5;         ///< "seen again": a point of the other keyframe within this [m]
+  /// The loop closer's settings: eligibility (exclude_recent_s, min_travel_m), the descriptor, stage 2's gates
+  /// (CheckRevisit). The operating point is its max_descriptor_distance and verification.max_fitness_rmse_m.
+  graph::LoopClosureConfig loop;
+  bool Validate(std::string* error) const;
+};
+
+/// Builds the truth labels once per run (a k-d tree per keyframe at its truth pose).
+class RevisitTruth {
+ public:
+  /// keyframes and T_truth_base (truth pose at each keyframe's time) are index-aligned.
+  RevisitTruth(const std::vector<graph::KeyframeCloud>& keyframes, const std::vector<Pose3>& T_truth_base,
+               const LoopPrConfig& config);
+  ~RevisitTruth();
+  bool IsRevisit(int query_id, int match_id) const;  ///< the truth label of a pair (memoised)
+  double Overlap(int query_id, int match_id) const;  ///< share of query points seen in match (truth poses)
+  double Distance(int query_id, int match_id) const;  ///< between their truth positions [m]
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+/// One query keyframe and what each detector made of it (-1: no proposal).
+struct LoopQueryOutcome {
+  int query_id = 0;
+  Seconds t_query_s = 0.0;
+  bool positive = false;                 ///< an eligible true revisit exists
+  int stage1_match = -1;
+  double stage1_distance = 1.0;
+  bool stage1_true = false;
+  double stage1_truth_distance_m = 0.0, stage1_truth_overlap = 0.0;  ///< the proposed pair's truth
+  int stage2_match = -1;
+  bool stage2_verified = false;          ///< stage 2 passed every gate but fitness
+  double stage2_fitness_m = 0.0;
+  bool stage2_true = false;
+  double stage2_truth_distance_m = 0.0, stage2_truth_overlap = 0.0;
+  bool both_verified = false;            ///< stage 1 passed the operating gate, stage 2 every gate but fitness
+  double both_fitness_m = 0.0;
+  bool both_true = false;                ///< the pair is stage1_match's
+};
+
+struct PrPoint {
+  double threshold = 0.0;  ///< the swept score's gate (a detection: score <= threshold)
+  double precision = 1.0, recall = 0.0;
+  int tp = 0, fp = 0;
+};
+
+struct LoopPrResult {
+  std::vector<LoopQueryOutcome> queries;  ///< the eligible queries, in keyframe order
+  int positives = 0;
+  std::vector<PrPoint> stage1, stage2, both;  ///< by ascending threshold
+  PrPoint operating;                          ///< both at the loop config's fitness gate
+  double verify_time_s = 0.0;                 ///< GICP time, all queries [s]
+};
+
+/// Runs the three detectors over `keyframes` (odometry poses) and sweeps their thresholds. `progress(fraction)`
+/// may be null. Errors: an invalid config, sizes that differ.
+Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const std::vector<Pose3>& T_truth_base,
+                      const LoopPrConfig& config, LoopPrResult* result,
+                      const std::function<void(double)>& progress = nullptr);
+
+/// The PR curve of (score, is_true) detections: one point per distinct score (ascending), precision / recall
+/// as above. Exposed for the tests.
+std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives);
+
+}  // namespace rotolidar::bench

@@ -1,0 +1,33 @@
+#include "core/graph/loop_gate.hpp"
+
+namespace rotolidar::graph {
+
+RevisitCheck CheckRevisit(const std::vector<Eigen::Vector3d>& query_base, const Eigen::Matrix3d& R_level_query,
+                          const std::function<std::vector<Eigen::Vector3d>()>& submap,
+                          const Eigen::Matrix3d& R_level_match, const Pose3& T_match_query_guess, double yaw_rad,
+                          double path_m, const LoopClosureConfig& config,
+                          const loop::LoopVerificationConfig& verification) {
+  RevisitCheck check;
+  const double drift_bound_m = config.max_guess_offset_m + config.max_guess_offset_per_m * path_m;
+  check.guess_distance_m = T_match_query_guess.translation().norm();
+  if (check.guess_distance_m > config.max_revisit_distance_m + drift_bound_m) return check;  // kTooFar
+  const std::vector<Eigen::Vector3d> target = submap();
+  loop::LoopVerification& v = check.verification;
+  v = loop::VerifyLoop(query_base, target, T_match_query_guess, verification);
+  if (!v.accepted) {
+    Pose3 T_match_query_yaw = Pose3::Identity();  // T_m_q = R_Lm_m^T RotZ(yaw) R_Lq_q: both frames at the base origin
+    T_match_query_yaw.linear() = R_level_match.transpose() * RotZ(yaw_rad).linear() * R_level_query;
+    v = loop::VerifyLoop(query_base, target, T_match_query_yaw, verification);
+  }
+  check.outcome = CandidateRecord::Outcome::kGicpFailed;
+  if (!v.accepted) return check;
+  check.outcome = CandidateRecord::Outcome::kBeyondDrift;
+  const Pose3 offset = T_match_query_guess.inverse() * v.T_target_source;
+  if (offset.translation().norm() > drift_bound_m) return check;
+  const double max_angle_rad = config.max_guess_offset_rad + config.max_guess_offset_per_m * path_m;
+  if (Eigen::AngleAxisd(offset.linear()).angle() > max_angle_rad) return check;
+  check.outcome = CandidateRecord::Outcome::kAccepted;
+  return check;
+}
+
+}  // namespace rotolidar::graph

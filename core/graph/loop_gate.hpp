@@ -1,0 +1,34 @@
+#pragma once
+// Stage 2 of the loop closer on one candidate, as a function of its inputs: the loop closer runs it on its graph's
+// poses; `rotolidar bench loops` runs it on the odometry's to rate the detectors. Steps:
+//   1. too far: the candidate lies farther than max_revisit_distance_m plus the drift bound from the query on the
+//      given poses (two scans of one place overlap within a few metres; GICP is not run);
+//   2. GICP (VerifyLoop) of the query's points onto the candidate's submap from the given relative pose and,
+//      failing that, from the descriptor's yaw at zero offset (the poses may have drifted beyond GICP's reach);
+//   3. beyond drift: the verified relative pose differs from the given one by more than the drift bound
+//      (max_guess_offset_m + max_guess_offset_per_m * path_m; the same for rotation in rad): a look-alike place.
+// Frames: points in each keyframe's base frame [m]; R_level_* rotate base into the descriptor's gravity-aligned
+// frame; T_match_query_guess maps query base into match base.
+#include <functional>
+#include <vector>
+
+#include "core/graph/loop_closer.hpp"
+
+namespace rotolidar::graph {
+
+struct RevisitCheck {
+  /// kTooFar, kGicpFailed, kBeyondDrift, or kAccepted (stage 2 passed; the graph has not seen it yet).
+  CandidateRecord::Outcome outcome = CandidateRecord::Outcome::kTooFar;
+  double guess_distance_m = 0.0;     ///< |translation| of T_match_query_guess [m]
+  loop::LoopVerification verification;  ///< GICP's outcome (default when it did not run)
+};
+
+/// One candidate through stage 2. `submap` is called only when GICP runs (it may be costly); `yaw_rad` is the
+/// descriptor's yaw of T_match_query; `path_m` the odometry path between the two keyframes [m].
+RevisitCheck CheckRevisit(const std::vector<Eigen::Vector3d>& query_base, const Eigen::Matrix3d& R_level_query,
+                          const std::function<std::vector<Eigen::Vector3d>()>& submap,
+                          const Eigen::Matrix3d& R_level_match, const Pose3& T_match_query_guess, double yaw_rad,
+                          double path_m, const LoopClosureConfig& config,
+                          const loop::LoopVerificationConfig& verification);
+
+}  // namespace rotolidar::graph

@@ -19,6 +19,7 @@ bool LoopPrConfig::Validate(std::string* error) const {
   if (!(revisit_max_distance_m > 0.0)) return fail("revisit_max_distance_m: must be > 0");
   if (!(revisit_min_overlap > 0.0 && revisit_min_overlap <= 1.0)) return fail("revisit_min_overlap: must be in (0, 1]");
   if (!(overlap_radius_m > 0.0)) return fail("overlap_radius_m: must be > 0");
+  if (!(max_loop_error_m > 0.0) || !(max_loop_error_rad > 0.0)) return fail("max_loop_error_*: must be > 0");
   return loop.Validate(error);
 }
 
@@ -27,7 +28,7 @@ bool LoopPrConfig::Validate(std::string* error) const {
 
 struct RevisitTruth::Impl {
   LoopPrConfig config;
-  std::vector<Eigen::Vector3d> position;                         // truth position per keyframe [m]
+  std::vector<Pose3> T_truth_base;                               // truth pose per keyframe
   std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> world;        // points at the truth pose
   std::vector<pcl::KdTreeFLANN<pcl::PointXYZ>> tree;
   mutable std::unordered_map<long long, double> overlap;         // memo: query * n + match
@@ -39,7 +40,7 @@ RevisitTruth::RevisitTruth(const std::vector<graph::KeyframeCloud>& keyframes, c
   impl_->config = config;
   impl_->tree.resize(keyframes.size());
   for (size_t i = 0; i < keyframes.size(); ++i) {
-    impl_->position.push_back(T_truth_base[i].translation());
+    impl_->T_truth_base.push_back(T_truth_base[i]);
     auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
     for (const Eigen::Vector3d& p : keyframes[i].cloud_base) {
       const Eigen::Vector3f w = (T_truth_base[i] * p).cast<float>();
@@ -71,7 +72,22 @@ double RevisitTruth::Overlap(int query_id, int match_id) const {
 }
 
 double RevisitTruth::Distance(int query_id, int match_id) const {
-  return (impl_->position[query_id] - impl_->position[match_id]).norm();
+  return (impl_->T_truth_base[query_id].translation() - impl_->T_truth_base[match_id].translation()).norm();
+}
+
+Pose3 RevisitTruth::Relative(int query_id, int match_id) const {
+  return impl_->T_truth_base[match_id].inverse() * impl_->T_truth_base[query_id];
+}
+
+LoopTruthCheck CheckLoop(const RevisitTruth& truth, const graph::LoopRecord& loop, const LoopPrConfig& config) {
+  LoopTruthCheck c;
+  c.truth_distance_m = truth.Distance(loop.query_id, loop.match_id);
+  c.truth_overlap = truth.Overlap(loop.query_id, loop.match_id);
+  const Pose3 error = truth.Relative(loop.query_id, loop.match_id).inverse() * loop.T_match_query;
+  c.error_m = error.translation().norm();
+  c.error_rad = Eigen::AngleAxisd(error.linear()).angle();
+  c.correct = c.error_m <= config.max_loop_error_m && c.error_rad <= config.max_loop_error_rad;
+  return c;
 }
 
 bool RevisitTruth::IsRevisit(int query_id, int match_id) const {

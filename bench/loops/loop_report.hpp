@@ -20,8 +20,9 @@ std::string LoopTopViewSvg(const graph::LoopClosureState& state, const LoopVerdi
 std::string LoopPrSvg(const LoopPrResult& result);
 
 /// Writes into out_dir: loop_pr.csv (curve, threshold, precision, recall, tp, fp), loop_queries.csv (one row per
-/// query: each detector's proposal, score and truth) and loops.html (the curves, the top view, the tables).
+/// query: each detector's proposal, score and truth), loops_truth.csv (each accepted loop against the truth; `checks`
+/// in state.loops order) and loops.html (the curves, the top view, the tables).
 Status WriteLoopPrOutputs(const std::string& out_dir, const std::string& title, const LoopPrResult& result,
-                          const graph::LoopClosureState& state, const LoopVerdicts& verdicts);
+                          const graph::LoopClosureState& state, const std::vector<LoopTruthCheck>& checks);
 
 }  // namespace rotolidar::bench

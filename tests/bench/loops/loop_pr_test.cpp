@@ -53,7 +53,17 @@ TEST(LoopPr, TruthNeedsNearnessAndOverlap) {
   EXPECT_GT(t.Overlap(1, 0), 0.8);
   EXPECT_FALSE(t.IsRevisit(2, 0));  // 57 m apart
   EXPECT_FALSE(t.IsRevisit(3, 0));  // 0 m apart, but little overlap
-  EXPECT_LT(t.Overlap(3, 0), 0.5);
+  EXPECT_LT(t.Overlap(3, 0), 0.3);
+  // An accepted loop is judged by its relative pose against the truth's.
+  graph::LoopRecord loop;
+  loop.query_id = 1, loop.match_id = 0;
+  loop.T_match_query = A.inverse() * B;
+  EXPECT_TRUE(CheckLoop(t, loop, LoopPrConfig{}).correct);
+  loop.T_match_query.translation().x() += 0.5;  // 0.5 m off: a wrong constraint
+  const LoopTruthCheck off = CheckLoop(t, loop, LoopPrConfig{});
+  EXPECT_FALSE(off.correct);
+  EXPECT_NEAR(off.error_m, 0.5, 1e-9);
+  EXPECT_NEAR(off.truth_distance_m, 2.0, 1e-9);
 }
 
 TEST(LoopPr, DetectorsOnTheTwoLapYard) {

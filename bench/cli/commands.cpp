@@ -114,9 +114,10 @@ void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
 void PrintLoopClosure(const graph::LoopClosureState& s) {
   size_t rejected = 0;
   for (const graph::LoopRecord& l : s.loops) rejected += l.rejected ? 1 : 0;
-  std::printf("loop closure: %zu keyframes, %zu loops (%zu rejected by the graph); %zu candidates, %zu verified by "
-              "GICP in %.1f s; %zu graph solves, the longest %.3f s%s%s\n",
-              s.keyframes.size(), s.loops.size(), rejected, s.candidates_proposed, s.candidates_checked,
+  std::printf("loop closure: %zu keyframes (%zu with an image), %zu loops (%zu rejected by the graph); %zu "
+              "candidates, %zu verified by GICP in %.1f s; %zu graph solves, the longest %.3f s%s%s\n",
+              s.keyframes.size(), s.visual_keyframes, s.loops.size(), rejected, s.candidates_proposed,
+              s.candidates_checked,
               s.verify_time_s, s.graph_solves, s.max_solve_time_s, s.last_message.empty() ? "" : "; last problem: ",
               s.last_message.c_str());
 }

@@ -30,10 +30,22 @@ void Keep(ScanReport report, SlamRunResult* result) {
   result->scans.push_back(std::move(report));
 }
 
+/// A camera frame for the estimator, decoded only when it will keep it (the loop closer's images); an unreadable
+/// image is reported and skipped.
+void FeedCamera(const CameraFrameRef& ref, Estimator* estimator) {
+  if (!estimator->WantsCameraFrame(ref.t_s)) return;
+  CameraFrame frame;
+  if (Status s = LoadCameraFrame(ref, &frame); !s) {
+    LOG_WARN("camera frame at " << ref.t_s << " s: " << s.message);
+    return;
+  }
+  estimator->Feed(frame);
+}
+
 /// Feeds every message to the estimator in time order (packets by capture time), as a live rig would.
 void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
               const std::function<void(double)>& progress) {
-  size_t i_imu = 0, i_enc = 0;
+  size_t i_imu = 0, i_enc = 0, i_cam = 0;
   const size_t n = rec.lidar_packets.size();
   size_t next_report = n / 10;
   for (size_t i = 0; i < n; ++i) {
@@ -41,6 +53,8 @@ void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
     while (i_enc < rec.encoder.size() && rec.encoder[i_enc].t_s <= packet.t_capture_s)
       estimator->Feed(rec.encoder[i_enc++]);
     while (i_imu < rec.imu.size() && rec.imu[i_imu].t_s <= packet.t_capture_s) estimator->Feed(rec.imu[i_imu++]);
+    while (i_cam < rec.camera.size() && rec.camera[i_cam].t_s <= packet.t_capture_s)
+      FeedCamera(rec.camera[i_cam++], estimator);
     if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << i << ": " << s.message);
     for (ScanReport& r : estimator->Process()) Keep(std::move(r), result);
     if (progress && i >= next_report) {
@@ -115,11 +129,13 @@ Status WriteLoopTable(const std::string& path, const graph::LoopClosureState& st
 // graph::ToString), GICP's scores.
 Status WriteCandidateTable(const std::string& path, const graph::LoopClosureState& state) {
   std::ofstream out(path);
-  out << "query_id,match_id,t_query_s,t_match_s,descriptor_distance,graph_distance_m,outcome,fitness_rmse_m,overlap\n";
+  out << "query_id,match_id,t_query_s,t_match_s,visual,bow_score,descriptor_distance,graph_distance_m,outcome,"
+         "fitness_rmse_m,overlap\n";
   for (const graph::CandidateRecord& c : state.candidates)
     out << c.query_id << ',' << c.match_id << ',' << state.keyframes[c.query_id].t_s << ','
-        << state.keyframes[c.match_id].t_s << ',' << c.descriptor_distance << ',' << c.graph_distance_m << ','
-        << graph::ToString(c.outcome) << ',' << c.fitness_rmse_m << ',' << c.overlap << '\n';
+        << state.keyframes[c.match_id].t_s << ',' << c.visual << ',' << c.bow_score << ',' << c.descriptor_distance
+        << ',' << c.graph_distance_m << ',' << graph::ToString(c.outcome) << ',' << c.fitness_rmse_m << ','
+        << c.overlap << '\n';
   return out ? Status::Ok() : Status::Error(path + ": write failed");
 }
 
@@ -192,6 +208,11 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
     result->deskew_scan_stride =
         DeskewScanStride(rec.lidar_packets.back().t_capture_s - rec.lidar_packets.front().t_capture_s);
   Estimator estimator(rec.calib, config);
+  if (graph::LoopCloser* loops = estimator.loop_closer(); loops && !config.loop_closure.vocabulary.empty()) {
+    if (Status s = loops->LoadVocabulary(config.loop_closure.vocabulary); !s)
+      return Status::Error("loop_closure.vocabulary: " + s.message);
+    if (rec.camera.empty()) LOG_WARN(recording_dir << ": no camera frames: loop closure's stage 1 is the LiDAR's");
+  }
   const auto t0 = std::chrono::steady_clock::now();
   Playback(rec, &estimator, result, options.progress);
   result->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

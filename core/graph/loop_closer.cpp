@@ -68,8 +68,11 @@ bool LoopClosureConfig::Validate(std::string* error) const {
       !(odometry_sigma_per_rad >= 0.0))
     return fail("odometry_sigma_*: floors must be > 0, shares >= 0");
   if (max_keyframes < 1) return fail("max_keyframes: must be >= 1");
+  if (!(max_camera_offset_s >= 0.0)) return fail("max_camera_offset_s: must be >= 0");
   std::string why;
   if (!descriptor.Validate(&why)) return fail("descriptor: " + why);
+  if (!orb.Validate(&why)) return fail("orb: " + why);
+  if (!bow.Validate(&why)) return fail("bow: " + why);
   if (!verification.Validate(&why)) return fail("verification: " + why);
   if (!loop_information_floor.Validate(&why)) return fail("loop_information_floor: " + why);
   if (!graph.Validate(&why)) return fail("graph: " + why);
@@ -90,6 +93,14 @@ LoopCloser::~LoopCloser() {
   }
   queue_cv_.notify_all();
   if (worker_.joinable()) worker_.join();
+}
+
+Status LoopCloser::LoadVocabulary(const std::string& path) {
+  auto vocabulary = std::make_unique<loop::Vocabulary>();
+  if (Status s = vocabulary->Load(path); !s) return s;
+  if (vocabulary->empty()) return Status::Error(path + ": the vocabulary has no words");
+  vocabulary_ = std::move(vocabulary);
+  return Status::Ok();
 }
 
 void LoopCloser::AddKeyframe(KeyframeInput keyframe) {
@@ -185,11 +196,30 @@ void LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
     graph_status = graph_.AddNode(id, T_world_guess, /*fixed=*/true);
   }
   const Status index_status = index_.Add(id, input.t_s, descriptor);
+  kf->has_bow = vocabulary_ && !input.image.empty() && AddImage(input.image, id, input.t_s);
   std::lock_guard<std::mutex> lock(mutex_);
   keyframes_.push_back(std::move(kf));
   state_.keyframes.push_back({id, input.t_s, input.T_world_base, T_world_guess});
   if (!graph_status) state_.last_message = graph_status.message;
   if (!index_status) state_.last_message = index_status.message;
+}
+
+// The keyframe's image into the bag-of-words database (ORB, then the vocabulary's words); a failure is counted and
+// the keyframe's stage 1 stays the LiDAR one.
+bool LoopCloser::AddImage(const cv::Mat& image, int id, Seconds t_s) {
+  loop::OrbFeatures features;
+  loop::BowVector bow;
+  Status s = loop::ExtractOrb(image, config_.orb, &features);
+  if (s) s = vocabulary_->Transform(features.descriptors, &bow);
+  if (s) s = bow_.Add(id, t_s, bow);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!s) {
+    ++state_.visual_failures;
+    state_.last_message = "keyframe " + std::to_string(id) + " image: " + s.message;
+    return false;
+  }
+  ++state_.visual_keyframes;
+  return true;
 }
 
 }  // namespace rotolidar::graph

@@ -4,8 +4,10 @@
 // never waits); a worker thread, in keyframe order:
 //   1. stores the keyframe (pose, thinned deskewed points, LiDAR descriptor) in a bounded database and adds it to
 //      the pose graph with an odometry edge from the previous keyframe;
-//   2. stage 1, place recognition: the LiDAR place index (Scan Context, yaw-invariant ring key) proposes earlier
-//      keyframes that the rig has left and come back to;
+//   2. stage 1, place recognition: with a camera frame and a vocabulary (LoadVocabulary), the ORB bag-of-words
+//      database proposes earlier keyframes whose images look alike (the seed's stage 1); without, the LiDAR place
+//      index (Scan Context, yaw-invariant ring key) proposes earlier keyframes that the rig has left and come back
+//      to;
 //   3. stage 2, geometric verification: the candidate's descriptor distance must pass, then GICP between the
 //      keyframe's points and the candidate's submap, started from the graph's current relative pose, must converge
 //      with enough overlap and a small residual, and land within the drift the odometry can have accumulated;
@@ -28,10 +30,14 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
 
 #include "core/graph/pose_graph.hpp"
+#include "core/loop/bow_database.hpp"
 #include "core/loop/geometric_verification.hpp"
 #include "core/loop/lidar_descriptor.hpp"
+#include "core/loop/orb_features.hpp"
+#include "core/loop/vocabulary.hpp"
 #include "core/types/trajectory.hpp"
 
 namespace rotolidar::graph {
@@ -75,6 +81,14 @@ struct LoopClosureConfig {
   double odometry_sigma_m = 0.01, odometry_sigma_per_m = 0.01;
   double odometry_sigma_rad = 0.002, odometry_sigma_per_rad = 0.01;
   size_t max_keyframes = 20000;  ///< database bound; beyond it keyframes are not stored (counted)
+  /// Stage 1 with a camera (the seed's): an ORB vocabulary file (`rotolidar vocab train`; the twin's is
+  /// scenes/vocabulary/twin_orb_k8_l5.bin). Empty: the LiDAR descriptor proposes. The caller loads it
+  /// (LoopCloser::LoadVocabulary) and hands camera frames with the keyframes.
+  std::string vocabulary;
+  double max_camera_offset_s = 0.1;  ///< a keyframe takes the camera frame nearest its time within this [s]
+  loop::OrbConfig orb;
+  /// The bag-of-words acceptance (eta >= 0.35, the seed's); its exclude_recent_s is replaced by the one above.
+  loop::LoopQueryConfig bow;
   loop::LidarDescriptorConfig descriptor;
   /// GICP gates. The fitness gate is wider than VerifyLoop's default: on the parking lot's second lap (typical
   /// realism, 0.2 m voxels, moving cars) true revisits measured fitness 0.14-0.21 m at overlap >= 0.77, while
@@ -92,6 +106,7 @@ struct KeyframeInput {
   /// Direction of gravity in world (any length > 0; zero or non-finite: world -z is taken as down).
   Eigen::Vector3d gravity_world = -Eigen::Vector3d::UnitZ();
   std::vector<Eigen::Vector3f> points_base;  ///< deskewed points, base frame at t_s [m]
+  cv::Mat image;  ///< the camera frame nearest t_s (BGR8 or GRAY8; shared, not modified); empty: none
 };
 
 /// A loop that passed stage 2 (and what the graph made of it).
@@ -105,8 +120,10 @@ struct LoopRecord {
 
 /// One stage-1 candidate and how far it got (the raw data of precision/recall studies).
 struct CandidateRecord {
-  enum class Outcome { kTooFar, kGicpFailed, kBeyondDrift, kGraphError, kAccepted };
+  enum class Outcome { kDescriptorRejected, kTooFar, kGicpFailed, kBeyondDrift, kGraphError, kAccepted };
   int query_id = 0, match_id = 0;
+  bool visual = false;     ///< proposed by the camera's bag of words (else by the LiDAR descriptor)
+  double bow_score = 0.0;  ///< the bag of words' normalised score eta (visual proposals)
   double descriptor_distance = 1.0;
   double graph_distance_m = 0.0;  ///< |translation| between the two on the graph when proposed
   Outcome outcome = Outcome::kTooFar;
@@ -139,7 +156,9 @@ struct LoopClosureState {
   std::vector<CandidateRecord> candidates;  ///< every stage-1 candidate, in the order proposed
   size_t keyframes_offered = 0;         ///< AddKeyframe calls
   size_t keyframes_dropped = 0;         ///< over max_keyframes, or a non-finite pose
-  size_t candidates_proposed = 0;       ///< stage-1 candidates (descriptor gate passed, far enough on the path)
+  size_t visual_keyframes = 0;          ///< keyframes with an image in the bag-of-words database
+  size_t visual_failures = 0;           ///< images whose ORB or BoW step failed (LiDAR stage 1 instead)
+  size_t candidates_proposed = 0;       ///< stage-1 candidates far enough back on the path
   size_t candidates_checked = 0;        ///< candidates that reached GICP (near enough on the graph)
   double verify_time_s = 0.0;           ///< total GICP time [s]
   size_t graph_solves = 0;
@@ -154,6 +173,11 @@ class LoopCloser {
   ~LoopCloser();                                          ///< stops the worker (drops unprocessed keyframes)
   LoopCloser(const LoopCloser&) = delete;
   LoopCloser& operator=(const LoopCloser&) = delete;
+
+  /// Loads the vocabulary of the visual stage 1 (before the first AddKeyframe; errors name the file). Without one,
+  /// images handed with keyframes are ignored.
+  Status LoadVocabulary(const std::string& path);
+  bool has_vocabulary() const { return vocabulary_ != nullptr; }
 
   /// Offers an odometry keyframe; takes it when it is spaced enough from the last one taken. Keyframes must come
   /// in time order. Threaded: a queue push (no solve, no search on the caller's thread).
@@ -176,8 +200,11 @@ class LoopCloser {
   void WorkerLoop();
   void Process(KeyframeInput input);
   void StoreKeyframe(KeyframeInput input, int id);
+  bool AddImage(const cv::Mat& image, int id, Seconds t_s);
   void SearchLoops(int id);
-  bool TryCandidate(int id, int match_id, const loop::DescriptorMatch& match);
+  bool SearchVisual(int id);
+  bool SearchLidar(int id);
+  bool TryCandidate(CandidateRecord record, const loop::DescriptorMatch& match);
   bool VerifyCandidate(const loop::DescriptorMatch& match, CandidateRecord* record);
   bool AddLoopEdge(int id, int match_id, const loop::LoopVerification& v, double descriptor_distance);
   void Solve();
@@ -198,6 +225,8 @@ class LoopCloser {
   std::vector<double> path_length_m_;                 // odometry path length at each keyframe
   double last_loop_path_m_ = -1e300;                  // path length at the last accepted loop
   loop::LidarPlaceIndex index_;
+  std::unique_ptr<loop::Vocabulary> vocabulary_;  // null: no visual stage 1
+  loop::BowDatabase bow_;
   PoseGraph graph_;
   LoopClosureState state_;
   std::thread worker_;

@@ -15,6 +15,7 @@ struct LoopCloser::Keyframe {
   Eigen::Matrix3d R_level_base = Eigen::Matrix3d::Identity();  ///< the descriptor's gravity-aligned frame
   std::vector<Eigen::Vector3d> cloud_base;  ///< cloud_voxel_m-thinned points (verification), base frame [m]
   std::vector<Eigen::Vector3f> map_base;    ///< map_voxel_m-thinned points (the rebuilt map), base frame [m]
+  bool has_bow = false;                     ///< its image is in the bag-of-words database
 };
 
 }  // namespace rotolidar::graph

@@ -12,6 +12,7 @@ namespace rotolidar::graph {
 
 const char* ToString(CandidateRecord::Outcome outcome) {
   switch (outcome) {
+    case CandidateRecord::Outcome::kDescriptorRejected: return "descriptor_rejected";
     case CandidateRecord::Outcome::kTooFar: return "too_far";
     case CandidateRecord::Outcome::kGicpFailed: return "gicp_failed";
     case CandidateRecord::Outcome::kBeyondDrift: return "beyond_drift";
@@ -25,34 +26,64 @@ double LoopCloser::PathLengthBetween(int older_id, int newer_id) const {
   return path_length_m_[newer_id] - path_length_m_[older_id];
 }
 
-// Stage 1: the place index's best earlier keyframes that the rig left and came back to; each goes to stage 2
-// until one is accepted.
+// Stage 1: the camera's bag of words when the keyframe has an image in it, else the LiDAR place index; each
+// candidate goes to stage 2 until one is accepted. After an accepted loop the search pauses (after_loop_travel_m).
 void LoopCloser::SearchLoops(int id) {
-  const loop::LidarDescriptor* descriptor = index_.Find(id);
-  if (descriptor == nullptr || path_length_m_[id] - last_loop_path_m_ < config_.after_loop_travel_m) return;
+  if (index_.Find(id) == nullptr || path_length_m_[id] - last_loop_path_m_ < config_.after_loop_travel_m) return;
+  if (keyframes_[id]->has_bow ? SearchVisual(id) : SearchLidar(id)) last_loop_path_m_ = path_length_m_[id];
+}
+
+// The seed's stage 1: keyframes whose images score eta >= bow.min_normalised_score; stage 2 then needs the LiDAR
+// descriptors to agree (max_descriptor_distance) before GICP.
+bool LoopCloser::SearchVisual(int id) {
+  loop::BowVector bow;
+  bow_.Find(id, &bow);
+  loop::LoopQueryConfig query = config_.bow;
+  query.exclude_recent_s = config_.exclude_recent_s;
+  int tried = 0;
+  for (const loop::BowCandidate& c : bow_.DetectLoop(bow, keyframes_[id]->t_s, query).accepted) {
+    const int match_id = int(c.id);
+    if (PathLengthBetween(match_id, id) < config_.min_travel_m) continue;
+    if (tried++ >= config_.num_candidates) break;
+    CandidateRecord record;
+    record.query_id = id, record.match_id = match_id, record.visual = true, record.bow_score = c.normalised_score;
+    const loop::DescriptorMatch match = loop::DescriptorDistance(*index_.Find(id), *index_.Find(match_id));
+    if (TryCandidate(record, match)) return true;
+  }
+  return false;
+}
+
+// Stage 1 without a camera: the place index's best earlier keyframes by Scan Context distance.
+bool LoopCloser::SearchLidar(int id) {
   loop::PlaceQuery query;
   query.t_s = keyframes_[id]->t_s;
   query.exclude_recent_s = config_.exclude_recent_s;
   query.num_results = config_.num_candidates;
   query.max_distance = config_.max_descriptor_distance;  // stage 2's descriptor gate
-  for (const loop::PlaceCandidate& c : index_.Query(*descriptor, query)) {
+  for (const loop::PlaceCandidate& c : index_.Query(*index_.Find(id), query)) {
     const int match_id = int(c.keyframe_id);
     if (PathLengthBetween(match_id, id) < config_.min_travel_m) continue;
-    if (TryCandidate(id, match_id, c.match)) {
-      last_loop_path_m_ = path_length_m_[id];
-      return;
-    }
+    CandidateRecord record;
+    record.query_id = id, record.match_id = match_id;
+    if (TryCandidate(record, c.match)) return true;
   }
+  return false;
 }
 
-// One stage-1 candidate through stage 2, recorded (State().candidates) whatever its outcome.
-bool LoopCloser::TryCandidate(int id, int match_id, const loop::DescriptorMatch& match) {
-  CandidateRecord record;
-  record.query_id = id, record.match_id = match_id, record.descriptor_distance = match.distance;
-  const bool accepted = VerifyCandidate(match, &record);
+// One stage-1 candidate through stage 2 (the descriptor gate, then VerifyCandidate), recorded (State().candidates)
+// whatever its outcome.
+bool LoopCloser::TryCandidate(CandidateRecord record, const loop::DescriptorMatch& match) {
+  record.descriptor_distance = match.distance;
+  bool accepted = false;
+  if (match.distance > config_.max_descriptor_distance)
+    record.outcome = CandidateRecord::Outcome::kDescriptorRejected;
+  else
+    accepted = VerifyCandidate(match, &record);
   std::lock_guard<std::mutex> lock(mutex_);
   ++state_.candidates_proposed;
-  if (record.outcome != CandidateRecord::Outcome::kTooFar) ++state_.candidates_checked;
+  if (record.outcome != CandidateRecord::Outcome::kTooFar &&
+      record.outcome != CandidateRecord::Outcome::kDescriptorRejected)
+    ++state_.candidates_checked;
   state_.candidates.push_back(record);
   return accepted;
 }

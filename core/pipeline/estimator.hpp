@@ -116,6 +116,12 @@ class Estimator {
   /// Decodes a data or position packet; a malformed packet is reported and skipped (no points lost silently:
   /// the Status says which field at which offset).
   Status Feed(const LidarPacket& packet);
+  /// A camera frame for the loop closer's visual stage 1 (frames in time order, the recording's clock). Kept only
+  /// when WantsCameraFrame(frame.t_s) (a loop closer with a vocabulary; about one frame per max_camera_offset_s,
+  /// the last second of them); the others are dropped unread. The image is shared, not copied.
+  void Feed(const CameraFrame& frame);
+  /// Whether Feed would keep a frame at t_s (a player can skip decoding the others).
+  bool WantsCameraFrame(Seconds t_s) const;
   /// Processes every ready scan; returns their reports (in time order).
   std::vector<ScanReport> Process();
   /// End of data: flushes the partial last revolution and processes everything left.
@@ -141,6 +147,8 @@ class Estimator {
   /// The loop closer (config.loop_closure.enabled), or null. It runs beside the odometry: trajectory() and map()
   /// stay the odometry's; its Correct() / CorrectedMap() give the loop-closed ones (final after Finish()).
   const graph::LoopCloser* loop_closer() const { return loop_closer_.get(); }
+  /// The same, for set-up before the first scan (LoopCloser::LoadVocabulary).
+  graph::LoopCloser* loop_closer() { return loop_closer_.get(); }
   /// Waits for the loop closer to process every keyframe handed to it (Finish does this; callers of
   /// ProcessDeskewedScan / ProcessTimedScan call it after their last scan). No-op without loop closure.
   void FinishLoopClosure();
@@ -191,6 +199,7 @@ class Estimator {
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
   std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false
+  std::deque<CameraFrame> camera_frames_;  ///< the last second of kept frames (the loop closer's images)
   std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;
   std::deque<StampedPose> measured_poses_;  ///< the last two scans' mid-scan poses (constant-twist prediction)

@@ -95,6 +95,9 @@ void Visit(V& v, LoopClosureConfig& c) {
   v("odometry_sigma_m", &c.odometry_sigma_m), v("odometry_sigma_per_m", &c.odometry_sigma_per_m);
   v("odometry_sigma_rad", &c.odometry_sigma_rad), v("odometry_sigma_per_rad", &c.odometry_sigma_per_rad);
   v("max_keyframes", &c.max_keyframes);
+  v("vocabulary", yaml::Path(&c.vocabulary)), v("max_camera_offset_s", &c.max_camera_offset_s);
+  v("orb_max_features", &c.orb.max_features), v("bow_min_normalised_score", &c.bow.min_normalised_score);
+  v("bow_min_raw_score", &c.bow.min_raw_score);
   v("descriptor_max_radius_m", &c.descriptor.max_radius_m);
   v("verify_min_overlap", &c.verification.min_overlap);
   v("verify_max_fitness_rmse_m", &c.verification.max_fitness_rmse_m);

@@ -282,7 +282,22 @@ void Estimator::HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base)
   if (window_ && window_->initialized()) keyframe.gravity_world = window_->gravity_world_mps2();
   keyframe.points_base.reserve(preprocessed_.size());
   for (const ScanPoint& p : preprocessed_) keyframe.points_base.push_back(p.p_base);
+  double best_offset_s = config_.loop_closure.max_camera_offset_s;
+  for (const CameraFrame& f : camera_frames_)  // the frame nearest the keyframe, if near enough
+    if (std::abs(f.t_s - t_s) <= best_offset_s) best_offset_s = std::abs(f.t_s - t_s), keyframe.image = f.image;
   loop_closer_->AddKeyframe(std::move(keyframe));
+}
+
+bool Estimator::WantsCameraFrame(Seconds t_s) const {
+  if (!loop_closer_ || !loop_closer_->has_vocabulary()) return false;
+  return camera_frames_.empty() || t_s - camera_frames_.back().t_s >= config_.loop_closure.max_camera_offset_s;
+}
+
+void Estimator::Feed(const CameraFrame& frame) {
+  if (!WantsCameraFrame(frame.t_s) || frame.image.empty()) return;
+  camera_frames_.push_back(frame);
+  constexpr double kKeepS = 1.0;  // keyframes are handed over within a scan (~0.1-0.4 s) of their time
+  while (!camera_frames_.empty() && camera_frames_.front().t_s < frame.t_s - kKeepS) camera_frames_.pop_front();
 }
 
 FreeSpaceCounts Estimator::FlushMap() {

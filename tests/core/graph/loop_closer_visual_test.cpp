@@ -1,0 +1,103 @@
+// The loop closer's visual stage 1 (the seed's): keyframes carry camera images, the ORB bag of words proposes, the
+// LiDAR descriptor and GICP confirm. Synthetic: the two-lap yard of loop_closer_test.cpp, and as each keyframe's
+// image a noisy view of a textured "place" named after its 10 m cell on the truth path.
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/graph/loop_closer.hpp"
+#include "tests/core/graph/synthetic_walk.hpp"
+#include "tests/core/loop/synthetic_images.hpp"
+
+namespace rotolidar::graph {
+namespace {
+
+const std::string kVocabulary = std::string(ROTOLIDAR_SOURCE_DIR) + "/scenes/vocabulary/twin_orb_k8_l5.bin";
+
+// alias: every place shows the same texture (repeated bays, blank walls): the camera cannot tell places apart.
+cv::Mat ImageAt(const Pose3& T_truth, int step, bool alias) {
+  const Eigen::Vector3d p = T_truth.translation();
+  const std::string place = alias ? "everywhere" : "cell-" + std::to_string(int(std::floor(p.x() / 10.0))) + "-" +
+                            std::to_string(int(std::floor(p.y() / 10.0)));
+  return loop::test_util::MakeView(loop::test_util::MakePlace(place), 4.0 * std::sin(step), 3.0 * std::cos(step),
+                                   2.0 * std::sin(0.7 * step), 1.0, 0.0, "noise-" + std::to_string(step));
+}
+
+LoopClosureState RunVisualWalk(bool load_vocabulary, bool alias, std::vector<Pose3>* truth_at_keyframes) {
+  const std::vector<Eigen::Vector3d> world = test_util::MakeWorld(7);
+  test_util::Walk walk = test_util::MakeWalk();
+  walk.truth.resize(400), walk.odometry.resize(400);  // a lap and a quarter
+  LoopClosureConfig config;
+  config.enabled = true, config.threaded = false, config.map_voxel_m = 0.0, config.keyframe_spacing_m = 2.0;
+  LoopCloser closer(config);
+  if (load_vocabulary) {
+    const Status s = closer.LoadVocabulary(kVocabulary);
+    EXPECT_TRUE(s) << s.message;
+  }
+  for (size_t i = 0; i < walk.truth.size(); ++i) {
+    KeyframeInput kf;
+    kf.t_s = 0.5 * double(i);
+    kf.T_world_base = walk.odometry[i];
+    kf.points_base = test_util::Observe(world, walk.truth[i]);
+    kf.image = ImageAt(walk.truth[i], int(i), alias);
+    closer.AddKeyframe(std::move(kf));
+  }
+  closer.Finish();
+  LoopClosureState s = closer.State();
+  for (const KeyframePose& k : s.keyframes) truth_at_keyframes->push_back(walk.truth[size_t(std::lround(k.t_s / 0.5))]);
+  return s;
+}
+
+TEST(LoopCloserVisual, TheBagOfWordsProposesAndGeometryConfirms) {
+  std::vector<Pose3> truth;
+  const LoopClosureState s = RunVisualWalk(true, false, &truth);
+  size_t visual = 0, descriptor_rejected = 0;
+  for (const CandidateRecord& c : s.candidates) {
+    visual += c.visual;
+    descriptor_rejected += c.outcome == CandidateRecord::Outcome::kDescriptorRejected;
+  }
+  std::printf("keyframes %zu (%zu with an image), candidates %zu (%zu visual, %zu stopped by the LiDAR descriptor), "
+              "loops %zu\n", s.keyframes.size(), s.visual_keyframes, s.candidates.size(), visual, descriptor_rejected,
+              s.loops.size());
+  EXPECT_EQ(s.visual_keyframes, s.keyframes.size());
+  EXPECT_EQ(visual, s.candidates.size());  // with images, stage 1 is the camera's only
+  ASSERT_GT(s.loops.size(), 0u);
+  for (const LoopRecord& l : s.loops) {  // every loop is a true revisit with GICP's relative pose
+    const Pose3 err = (truth[l.match_id].inverse() * truth[l.query_id]).inverse() * l.T_match_query;
+    EXPECT_LT(err.translation().norm(), 0.01) << l.query_id << " -> " << l.match_id;
+  }
+}
+
+TEST(LoopCloserVisual, LookAlikeImagesAreStoppedByTheLidar) {
+  std::vector<Pose3> truth;
+  const LoopClosureState s = RunVisualWalk(true, true, &truth);
+  size_t stopped = 0;
+  for (const CandidateRecord& c : s.candidates)
+    stopped += c.outcome != CandidateRecord::Outcome::kAccepted && c.outcome != CandidateRecord::Outcome::kGraphError;
+  std::printf("look-alike images: candidates %zu, %zu stopped by the LiDAR (descriptor, distance, GICP, drift), "
+              "loops %zu\n", s.candidates.size(), stopped, s.loops.size());
+  EXPECT_GT(stopped, 0u);  // the camera proposed places the LiDAR knew to be elsewhere
+  for (const LoopRecord& l : s.loops) {  // and no wrong loop got through
+    const Pose3 err = (truth[l.match_id].inverse() * truth[l.query_id]).inverse() * l.T_match_query;
+    EXPECT_LT(err.translation().norm(), 0.01) << l.query_id << " -> " << l.match_id;
+  }
+}
+
+TEST(LoopCloserVisual, WithoutAVocabularyImagesAreIgnored) {
+  std::vector<Pose3> truth;
+  const LoopClosureState s = RunVisualWalk(false, false, &truth);
+  EXPECT_EQ(s.visual_keyframes, 0u);
+  for (const CandidateRecord& c : s.candidates) EXPECT_FALSE(c.visual);
+  LoopClosureConfig config;
+  LoopCloser closer(config);
+  const Status bad = closer.LoadVocabulary("/nonexistent/vocabulary.bin");
+  EXPECT_FALSE(bad);
+  EXPECT_NE(bad.message.find("/nonexistent/vocabulary.bin"), std::string::npos) << bad.message;
+  EXPECT_FALSE(closer.has_vocabulary());
+}
+
+}  // namespace
+}  // namespace rotolidar::graph

@@ -212,12 +212,24 @@ LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::Lid
     o.stage1_true = truth.IsRevisit(query, o.stage1_match);
     o.stage1_truth_distance_m = truth.Distance(query, o.stage1_match);
     o.stage1_truth_overlap = truth.Overlap(query, o.stage1_match);
+    o.both_match = o.stage1_match;
     if (o.stage1_distance <= c->loop.max_descriptor_distance)
       o.both_fitness_m = Verify(c, query, o.stage1_match, s1.match.yaw_rad, &o.both_verified).fitness_rmse_m;
-    o.both_true = o.stage1_true;
   }
+  const int neighbour = NearestOnOdometry(*c, query, eligible);
+  const double neighbour_m =
+      (c->keyframes[neighbour].T_world_odom.translation() - c->keyframes[query].T_world_odom.translation()).norm();
+  if (!o.both_verified && neighbour != o.stage1_match && neighbour_m <= c->loop.max_revisit_distance_m) {
+    const loop::DescriptorMatch m = loop::DescriptorDistance(d, *index.Find(neighbour));
+    if (m.distance <= c->loop.max_descriptor_distance) {
+      bool verified = false;
+      const double fitness_m = Verify(c, query, neighbour, m.yaw_rad, &verified).fitness_rmse_m;
+      if (verified) o.both_match = neighbour, o.both_verified = true, o.both_fitness_m = fitness_m;
+    }
+  }
+  if (o.both_match >= 0) o.both_true = truth.IsRevisit(query, o.both_match);
   // Stage 2's own proposal has no descriptor: its yaw guess is the odometry's (0 on top of the relative pose).
-  o.stage2_match = NearestOnOdometry(*c, query, eligible);
+  o.stage2_match = neighbour;
   const graph::KeyframeCloud& q = c->keyframes[query];
   const graph::KeyframeCloud& m = c->keyframes[o.stage2_match];
   const Eigen::Matrix3d R = m.R_level_base * (m.T_world_odom.inverse() * q.T_world_odom).linear() *

@@ -13,8 +13,9 @@
 //   stage 2 alone   the nearest eligible keyframe on the odometry poses through the loop closer's stage 2
 //                   (graph::CheckRevisit on the odometry poses: distance gate, GICP, drift bound) with every gate
 //                   but the fitness one; score: GICP fitness [m]
-//   both            stage 1's keyframe when its distance passes the operating descriptor gate, through the same
-//                   stage 2; score: GICP fitness [m]
+//   both            the loop closer's own chain: stage 1's keyframe through the descriptor gate and stage 2; when
+//                   that fails, the keyframe nearest on the odometry poses (within max_revisit_distance_m) the
+//                   same way; score: GICP fitness [m] of the pair that passed
 // precision = TP / (TP + FP) (1 when nothing is detected), recall = TP / positives (0 when there are none).
 // Odometry poses are used as they are (no graph correction between queries): the curves rate the detectors, not
 // the back end.
@@ -83,9 +84,10 @@ struct LoopQueryOutcome {
   double stage2_fitness_m = 0.0;
   bool stage2_true = false;
   double stage2_truth_distance_m = 0.0, stage2_truth_overlap = 0.0;
-  bool both_verified = false;            ///< stage 1 passed the operating gate, stage 2 every gate but fitness
+  int both_match = -1;                   ///< the pair that passed (else stage 1's proposal)
+  bool both_verified = false;            ///< the descriptor gate and stage 2 (every gate but fitness) passed
   double both_fitness_m = 0.0;
-  bool both_true = false;                ///< the pair is stage1_match's
+  bool both_true = false;
 };
 
 struct PrPoint {

@@ -129,11 +129,11 @@ Status WriteLoopTable(const std::string& path, const graph::LoopClosureState& st
 // graph::ToString), GICP's scores.
 Status WriteCandidateTable(const std::string& path, const graph::LoopClosureState& state) {
   std::ofstream out(path);
-  out << "query_id,match_id,t_query_s,t_match_s,visual,bow_score,descriptor_distance,graph_distance_m,outcome,"
+  out << "query_id,match_id,t_query_s,t_match_s,source,bow_score,descriptor_distance,graph_distance_m,outcome,"
          "fitness_rmse_m,overlap\n";
   for (const graph::CandidateRecord& c : state.candidates)
     out << c.query_id << ',' << c.match_id << ',' << state.keyframes[c.query_id].t_s << ','
-        << state.keyframes[c.match_id].t_s << ',' << c.visual << ',' << c.bow_score << ',' << c.descriptor_distance
+        << state.keyframes[c.match_id].t_s << ',' << graph::ToString(c.source) << ',' << c.bow_score << ',' << c.descriptor_distance
         << ',' << c.graph_distance_m << ',' << graph::ToString(c.outcome) << ',' << c.fitness_rmse_m << ','
         << c.overlap << '\n';
   return out ? Status::Ok() : Status::Error(path + ": write failed");

@@ -62,6 +62,7 @@ bool LoopClosureConfig::Validate(std::string* error) const {
   if (submap_neighbours < 0) return fail("submap_neighbours: must be >= 0");
   if (!(after_loop_travel_m >= 0.0)) return fail("after_loop_travel_m: must be >= 0");
   if (!(max_revisit_distance_m > 0.0)) return fail("max_revisit_distance_m: must be > 0");
+  if (!(max_loop_distance_m > 0.0)) return fail("max_loop_distance_m: must be > 0");
   if (!(max_guess_offset_m > 0.0) || !(max_guess_offset_per_m >= 0.0) || !(max_guess_offset_rad > 0.0))
     return fail("max_guess_offset_*: must be > 0 (per_m >= 0)");
   if (!(odometry_sigma_m > 0.0) || !(odometry_sigma_rad > 0.0) || !(odometry_sigma_per_m >= 0.0) ||

@@ -22,6 +22,7 @@ RevisitCheck CheckRevisit(const std::vector<Eigen::Vector3d>& query_base, const 
   check.outcome = CandidateRecord::Outcome::kGicpFailed;
   if (!v.accepted) return check;
   check.outcome = CandidateRecord::Outcome::kBeyondDrift;
+  if (v.T_target_source.translation().norm() > config.max_loop_distance_m) return check;
   const Pose3 offset = T_match_query_guess.inverse() * v.T_target_source;
   if (offset.translation().norm() > drift_bound_m) return check;
   const double max_angle_rad = config.max_guess_offset_rad + config.max_guess_offset_per_m * path_m;

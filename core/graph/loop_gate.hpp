@@ -6,7 +6,8 @@
 //   2. GICP (VerifyLoop) of the query's points onto the candidate's submap from the given relative pose and,
 //      failing that, from the descriptor's yaw at zero offset (the poses may have drifted beyond GICP's reach);
 //   3. beyond drift: the verified relative pose differs from the given one by more than the drift bound
-//      (max_guess_offset_m + max_guess_offset_per_m * path_m; the same for rotation in rad): a look-alike place.
+//      (max_guess_offset_m + max_guess_offset_per_m * path_m; the same for rotation in rad): a look-alike place;
+//      or it joins keyframes farther apart than max_loop_distance_m (too little shared view to trust).
 // Frames: points in each keyframe's base frame [m]; R_level_* rotate base into the descriptor's gravity-aligned
 // frame; T_match_query_guess maps query base into match base.
 #include <functional>

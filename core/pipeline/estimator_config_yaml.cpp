@@ -92,6 +92,7 @@ void Visit(V& v, LoopClosureConfig& c) {
   v("submap_neighbours", &c.submap_neighbours), v("after_loop_travel_m", &c.after_loop_travel_m);
   v("max_guess_offset_m", &c.max_guess_offset_m), v("max_guess_offset_per_m", &c.max_guess_offset_per_m);
   v("max_guess_offset_rad", &c.max_guess_offset_rad), v("max_revisit_distance_m", &c.max_revisit_distance_m);
+  v("max_loop_distance_m", &c.max_loop_distance_m);
   v("odometry_sigma_m", &c.odometry_sigma_m), v("odometry_sigma_per_m", &c.odometry_sigma_per_m);
   v("odometry_sigma_rad", &c.odometry_sigma_rad), v("odometry_sigma_per_rad", &c.odometry_sigma_per_rad);
   v("max_keyframes", &c.max_keyframes);

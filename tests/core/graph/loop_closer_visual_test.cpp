@@ -54,16 +54,19 @@ LoopClosureState RunVisualWalk(bool load_vocabulary, bool alias, std::vector<Pos
 TEST(LoopCloserVisual, TheBagOfWordsProposesAndGeometryConfirms) {
   std::vector<Pose3> truth;
   const LoopClosureState s = RunVisualWalk(true, false, &truth);
-  size_t visual = 0, descriptor_rejected = 0;
+  size_t visual = 0, graph = 0, descriptor_rejected = 0;
   for (const CandidateRecord& c : s.candidates) {
-    visual += c.visual;
+    visual += c.source == CandidateRecord::Source::kVisual;
+    graph += c.source == CandidateRecord::Source::kGraph;
     descriptor_rejected += c.outcome == CandidateRecord::Outcome::kDescriptorRejected;
   }
-  std::printf("keyframes %zu (%zu with an image), candidates %zu (%zu visual, %zu stopped by the LiDAR descriptor), "
-              "loops %zu\n", s.keyframes.size(), s.visual_keyframes, s.candidates.size(), visual, descriptor_rejected,
-              s.loops.size());
+  std::printf("keyframes %zu (%zu with an image), candidates %zu (%zu visual, %zu graph, %zu stopped by the LiDAR "
+              "descriptor), loops %zu\n", s.keyframes.size(), s.visual_keyframes, s.candidates.size(), visual, graph,
+              descriptor_rejected, s.loops.size());
   EXPECT_EQ(s.visual_keyframes, s.keyframes.size());
-  EXPECT_EQ(visual, s.candidates.size());  // with images, stage 1 is the camera's only
+  // With images, stage 1 is the camera's; the only other proposals are the graph's fallback.
+  EXPECT_GT(visual, 0u);
+  EXPECT_EQ(visual + graph, s.candidates.size());
   ASSERT_GT(s.loops.size(), 0u);
   for (const LoopRecord& l : s.loops) {  // every loop is a true revisit with GICP's relative pose
     const Pose3 err = (truth[l.match_id].inverse() * truth[l.query_id]).inverse() * l.T_match_query;
@@ -90,7 +93,7 @@ TEST(LoopCloserVisual, WithoutAVocabularyImagesAreIgnored) {
   std::vector<Pose3> truth;
   const LoopClosureState s = RunVisualWalk(false, false, &truth);
   EXPECT_EQ(s.visual_keyframes, 0u);
-  for (const CandidateRecord& c : s.candidates) EXPECT_FALSE(c.visual);
+  for (const CandidateRecord& c : s.candidates) EXPECT_NE(c.source, CandidateRecord::Source::kVisual);
   LoopClosureConfig config;
   LoopCloser closer(config);
   const Status bad = closer.LoadVocabulary("/nonexistent/vocabulary.bin");

@@ -167,10 +167,12 @@ Status WriteLoopPrOutputs(const std::string& out_dir, const std::string& title, 
   html.Table({"detector", "recall at precision 1", "precision (gate open)", "recall (gate open)"},
              {CurveRow("stage 1 alone", r.stage1), CurveRow("stage 2 alone", r.stage2), CurveRow("both", r.both)});
   html.BeginSection("loops", "Loops the run accepted");
-  int false_loops = 0;
-  for (int v : verdicts) false_loops += v == 0;
+  int false_loops = 0, false_kept = 0;
+  for (size_t i = 0; i < verdicts.size(); ++i)
+    false_loops += verdicts[i] == 0, false_kept += verdicts[i] == 0 && !state.loops[i].rejected;
   html.Paragraph(std::to_string(state.loops.size()) + " loops accepted by stage 2, " + std::to_string(false_loops) +
-                 " of them false: GICP's relative pose off the truth's by more than the bound (loops_truth.csv).");
+                 " of them false (GICP's relative pose off the truth's by more than the bound; loops_truth.csv), " +
+                 std::to_string(false_kept) + " of those kept by the pose graph (the others its chi2 test rejected).");
   html.Figure(LoopTopViewSvg(state, verdicts), "Keyframe positions before (odometry) and after the pose graph, with "
                                                "the loop edges between corrected positions.");
   html.Table({"loop (query -> match)", "truth distance [m]", "truth overlap", "pose error [m]", "pose error [deg]",

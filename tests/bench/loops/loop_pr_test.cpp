@@ -95,8 +95,9 @@ TEST(LoopPr, DetectorsOnTheTwoLapYard) {
   ASSERT_GT(r.positives, 0);
   // No false loop at the operating point on a clean world (the goal on every scene).
   EXPECT_EQ(r.operating.fp, 0);
-  // Recall measured 0.56 (14 of 25 positives: the corners' revisits are short and partly beyond the 8 m gate).
-  EXPECT_GE(r.operating.recall, 0.45);
+  // Recall measured 0.96 (24 of 25 positives; stage 1 alone found 14, the odometry neighbour the rest). The bound
+  // leaves room for one or two more misses, and fails if the neighbour fallback is lost (0.56).
+  EXPECT_GE(r.operating.recall, 0.85);
   // Curves: recall never falls as the gate opens, and stage 1 alone proposes for every query.
   for (const std::vector<PrPoint>* c : {&r.stage1, &r.stage2, &r.both})
     for (size_t i = 1; i < c->size(); ++i) EXPECT_GE((*c)[i].recall, (*c)[i - 1].recall);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <unordered_map>
 
 #include <pcl/kdtree/kdtree_flann.h>
@@ -29,16 +30,28 @@ bool LoopPrConfig::Validate(std::string* error) const {
 struct RevisitTruth::Impl {
   LoopPrConfig config;
   std::vector<Pose3> T_truth_base;                               // truth pose per keyframe
-  std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> world;        // points at the truth pose
-  std::vector<pcl::KdTreeFLANN<pcl::PointXYZ>> tree;
+  std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> world;        // its points at the truth pose
+  // The submap around each keyframe (it and submap_neighbours either side, truth poses), built on first use.
+  mutable std::vector<std::unique_ptr<pcl::KdTreeFLANN<pcl::PointXYZ>>> submap;
   mutable std::unordered_map<long long, double> overlap;         // memo: query * n + match
+
+  const pcl::KdTreeFLANN<pcl::PointXYZ>& Submap(int id) const {
+    if (!submap[id]) {
+      auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+      const int k = config.loop.submap_neighbours, n = int(world.size());
+      for (int j = std::max(0, id - k); j <= std::min(n - 1, id + k); ++j) *cloud += *world[j];
+      submap[id] = std::make_unique<pcl::KdTreeFLANN<pcl::PointXYZ>>();
+      if (!cloud->empty()) submap[id]->setInputCloud(cloud);
+    }
+    return *submap[id];
+  }
 };
 
 RevisitTruth::RevisitTruth(const std::vector<graph::KeyframeCloud>& keyframes, const std::vector<Pose3>& T_truth_base,
                            const LoopPrConfig& config)
     : impl_(new Impl) {
   impl_->config = config;
-  impl_->tree.resize(keyframes.size());
+  impl_->submap.resize(keyframes.size());
   for (size_t i = 0; i < keyframes.size(); ++i) {
     impl_->T_truth_base.push_back(T_truth_base[i]);
     auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
@@ -46,7 +59,6 @@ RevisitTruth::RevisitTruth(const std::vector<graph::KeyframeCloud>& keyframes, c
       const Eigen::Vector3f w = (T_truth_base[i] * p).cast<float>();
       cloud->push_back(pcl::PointXYZ(w.x(), w.y(), w.z()));
     }
-    if (!cloud->empty()) impl_->tree[i].setInputCloud(cloud);
     impl_->world.push_back(cloud);
   }
 }
@@ -57,14 +69,15 @@ double RevisitTruth::Overlap(int query_id, int match_id) const {
   const long long key = (long long)query_id * (long long)impl_->world.size() + match_id;
   if (auto it = impl_->overlap.find(key); it != impl_->overlap.end()) return it->second;
   const auto& query = *impl_->world[query_id];
+  const pcl::KdTreeFLANN<pcl::PointXYZ>& tree = impl_->Submap(match_id);
   double share = 0.0;
-  if (!query.empty() && !impl_->world[match_id]->empty()) {
+  if (!query.empty() && tree.getInputCloud()) {
     std::vector<int> index(1);
     std::vector<float> d2(1);
     const float r2 = float(impl_->config.overlap_radius_m * impl_->config.overlap_radius_m);
     size_t seen = 0;
     for (const pcl::PointXYZ& p : query)
-      if (impl_->tree[match_id].nearestKSearch(p, 1, index, d2) == 1 && d2[0] <= r2) ++seen;
+      if (tree.nearestKSearch(p, 1, index, d2) == 1 && d2[0] <= r2) ++seen;
     share = double(seen) / double(query.size());
   }
   impl_->overlap[key] = share;

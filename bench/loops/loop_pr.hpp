@@ -2,8 +2,10 @@
 // Precision and recall of loop detection against the twin's truth (`rotolidar bench loops`).
 //
 // Truth: two keyframes are a true revisit when their truth positions are within revisit_max_distance_m and, placed
-// with their truth poses, at least revisit_min_overlap of the query's points have a point of the other keyframe
-// within overlap_radius_m (the same surfaces seen again, not just the same spot behind a wall).
+// with their truth poses, at least revisit_min_overlap of the query's points have a point of the other keyframe's
+// submap (it and loop.submap_neighbours either side, as stage 2 registers against) within overlap_radius_m: the
+// same surfaces seen again, not just the same spot behind a wall. A submap, not one keyframe: a rotary rig's scan
+// is one tilted fan of the sphere, and two scans from one spot at other rotor angles share little.
 //
 // Queries: every keyframe that has an eligible earlier keyframe (older by exclude_recent_s and at least
 // min_travel_m of odometry path back, the loop closer's own rule). A query is a positive when one of its eligible
@@ -31,8 +33,7 @@ namespace rotolidar::bench {
 
 struct LoopPrConfig {
   double revisit_max_distance_m = 10.0;  ///< truth distance bound of a true revisit [m]
-  /// Share of the query's points seen again (truth poses). 0.3: on the parking lot's second lap, pairs 1.2 m apart
-  /// measured 0.5-0.9, 3.5 m apart 0.23-0.53 (parked cars hide much from a few metres off).
+  /// Share of the query's points seen again in the other's submap (truth poses).
   double revisit_min_overlap = 0.3;
   double overlap_radius_m = 0.5;         ///< "seen again": a point of the other keyframe within this [m]
   /// An accepted loop is correct when GICP's relative pose is within these of the truth's [m], [rad]; a wrong
@@ -53,7 +54,7 @@ class RevisitTruth {
                const LoopPrConfig& config);
   ~RevisitTruth();
   bool IsRevisit(int query_id, int match_id) const;  ///< the truth label of a pair (memoised)
-  double Overlap(int query_id, int match_id) const;  ///< share of query points seen in match (truth poses)
+  double Overlap(int query_id, int match_id) const;  ///< share of query points seen in match's submap (truth poses)
   double Distance(int query_id, int match_id) const;  ///< between their truth positions [m]
   Pose3 Relative(int query_id, int match_id) const;   ///< truth T_match_query
 

@@ -233,7 +233,10 @@ LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::Lid
   const double neighbour_m =
       (c->keyframes[neighbour].T_world_odom.translation() - c->keyframes[query].T_world_odom.translation()).norm();
   if (!o.both_verified && neighbour != o.stage1_match && neighbour_m <= c->loop.max_revisit_distance_m) {
-    const loop::DescriptorMatch m = loop::DescriptorDistance(d, *index.Find(neighbour));
+    const graph::KeyframeCloud& nk = c->keyframes[neighbour];
+    const loop::DescriptorMatch m =
+        graph::DescriptorAtGuess(c->keyframes[query].cloud_base, d, *index.Find(neighbour), nk.R_level_base,
+                                 nk.T_world_odom.inverse() * c->keyframes[query].T_world_odom, c->loop.descriptor);
     if (m.distance <= c->loop.max_descriptor_distance) {
       bool verified = false;
       const double fitness_m = Verify(c, query, neighbour, m.yaw_rad, &verified).fitness_rmse_m;

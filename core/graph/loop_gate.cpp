@@ -1,6 +1,21 @@
 #include "core/graph/loop_gate.hpp"
 
+#include <algorithm>
+
 namespace rotolidar::graph {
+
+loop::DescriptorMatch DescriptorAtGuess(const std::vector<Eigen::Vector3d>& query_base,
+                                        const loop::LidarDescriptor& query, const loop::LidarDescriptor& match,
+                                        const Eigen::Matrix3d& R_level_match, const Pose3& T_match_query_guess,
+                                        const loop::LidarDescriptorConfig& config) {
+  loop::DescriptorMatch plain = loop::DescriptorDistance(query, match);
+  std::vector<Eigen::Vector3f> moved;  // in the match's levelled frame at its base origin
+  moved.reserve(query_base.size());
+  for (const Eigen::Vector3d& p : query_base) moved.push_back((R_level_match * (T_match_query_guess * p)).cast<float>());
+  const loop::DescriptorMatch at_guess = loop::DescriptorDistance(loop::ComputeLidarDescriptor(moved, config), match);
+  plain.distance = std::min(plain.distance, at_guess.distance);
+  return plain;
+}
 
 RevisitCheck CheckRevisit(const std::vector<Eigen::Vector3d>& query_base, const Eigen::Matrix3d& R_level_query,
                           const std::function<std::vector<Eigen::Vector3d>()>& submap,

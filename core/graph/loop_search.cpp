@@ -54,7 +54,10 @@ void LoopCloser::SearchLoops(int id) {
     if (neighbour >= 0 && !tried) {
       CandidateRecord record;
       record.query_id = id, record.match_id = neighbour, record.source = CandidateRecord::Source::kGraph;
-      found = TryCandidate(record, loop::DescriptorDistance(*index_.Find(id), *index_.Find(neighbour)));
+      found = TryCandidate(record, DescriptorAtGuess(keyframes_[id]->cloud_base, *index_.Find(id),
+                                                     *index_.Find(neighbour), keyframes_[neighbour]->R_level_base,
+                                                     graph_.Pose(neighbour).inverse() * graph_.Pose(id),
+                                                     config_.descriptor));
     }
   }
   if (found) last_loop_path_m_ = path_length_m_[id];

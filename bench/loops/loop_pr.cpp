@@ -129,15 +129,9 @@ bool Eligible(const Context& c, int query, int match) {
 
 // The match's submap (it and submap_neighbours either side, odometry poses), in the match's base frame.
 std::vector<Eigen::Vector3d> Submap(const Context& c, int match) {
-  const int n = int(c.keyframes.size());
-  const Pose3 T_match_world = c.keyframes[match].T_world_odom.inverse();
-  std::vector<Eigen::Vector3d> out;
-  for (int k = std::max(0, match - c.loop.submap_neighbours); k <= std::min(n - 1, match + c.loop.submap_neighbours);
-       ++k) {
-    const Pose3 T_match_k = T_match_world * c.keyframes[k].T_world_odom;
-    for (const Eigen::Vector3d& p : c.keyframes[k].cloud_base) out.push_back(T_match_k * p);
-  }
-  return out;
+  return graph::SubmapAround(
+      match, c.loop.submap_neighbours, int(c.keyframes.size()), [&](int k) { return c.keyframes[k].T_world_odom; },
+      [&](int k) -> const std::vector<Eigen::Vector3d>& { return c.keyframes[k].cloud_base; });
 }
 
 // The loop closer's stage 2 on the odometry poses, with the fitness gate open (the sweep applies it).
@@ -151,13 +145,6 @@ loop::LoopVerification Verify(Context* c, int query, int match, double yaw_rad, 
   c->verify_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   *passed = check.outcome == graph::CandidateRecord::Outcome::kAccepted;
   return check.verification;
-}
-
-loop::LidarDescriptor Describe(const graph::KeyframeCloud& k, const loop::LidarDescriptorConfig& config) {
-  std::vector<Eigen::Vector3f> levelled;
-  levelled.reserve(k.cloud_base.size());
-  for (const Eigen::Vector3d& p : k.cloud_base) levelled.push_back((k.R_level_base * p).cast<float>());
-  return loop::ComputeLidarDescriptor(levelled, config);
 }
 
 // Stage 1's proposal: the place index's best eligible keyframe (ring-key retrieval, Scan Context re-ranking).
@@ -302,7 +289,8 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
   loop::LidarPlaceIndex index(index_config);
   for (size_t i = 0; i < keyframes.size(); ++i) {
     const int query = int(i);
-    const loop::LidarDescriptor d = Describe(keyframes[i], config.loop.descriptor);
+    const loop::LidarDescriptor d =
+        graph::LevelledDescriptor(keyframes[i].cloud_base, keyframes[i].R_level_base, config.loop.descriptor);
     std::vector<int> eligible;
     for (int m = 0; m < query; ++m)
       if (Eligible(c, query, m)) eligible.push_back(m);
@@ -310,8 +298,10 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
       result->queries.push_back(RunQuery(&c, truth, index, d, query, eligible));
       if (result->queries.back().positive) ++result->positives;
     }
-    if (Status s = index.Add(query, keyframes[i].t_s, d); !s) return Status::Error("keyframe " + std::to_string(i) + ": " + s.message);
-    if (progress && (i + 1) % std::max<size_t>(1, keyframes.size() / 10) == 0) progress(double(i + 1) / keyframes.size());
+    if (Status s = index.Add(query, keyframes[i].t_s, d); !s)
+      return Status::Error("keyframe " + std::to_string(i) + ": " + s.message);
+    if (progress && (i + 1) % std::max<size_t>(1, keyframes.size() / 10) == 0)
+      progress(double(i + 1) / double(keyframes.size()));
   }
   Sweep(config, result);
   result->verify_time_s = c.verify_time_s;

@@ -133,9 +133,9 @@ Status WriteCandidateTable(const std::string& path, const graph::LoopClosureStat
          "fitness_rmse_m,overlap\n";
   for (const graph::CandidateRecord& c : state.candidates)
     out << c.query_id << ',' << c.match_id << ',' << state.keyframes[c.query_id].t_s << ','
-        << state.keyframes[c.match_id].t_s << ',' << graph::ToString(c.source) << ',' << c.bow_score << ',' << c.descriptor_distance
-        << ',' << c.graph_distance_m << ',' << graph::ToString(c.outcome) << ',' << c.fitness_rmse_m << ','
-        << c.overlap << '\n';
+        << state.keyframes[c.match_id].t_s << ',' << graph::ToString(c.source) << ',' << c.bow_score << ','
+        << c.descriptor_distance << ',' << c.graph_distance_m << ',' << graph::ToString(c.outcome) << ','
+        << c.fitness_rmse_m << ',' << c.overlap << '\n';
   return out ? Status::Ok() : Status::Error(path + ": write failed");
 }
 

@@ -1,6 +1,7 @@
 // The loop closer's worker: keyframe database, two-stage search, pose graph (loop_closer.hpp).
 #include "core/graph/loop_closer.hpp"
 #include "core/graph/loop_closer_internal.hpp"
+#include "core/graph/loop_gate.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -172,11 +173,7 @@ void LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
     kf->map_base = Thin<Eigen::Vector3f>(input.points_base, config_.map_voxel_m, config_.max_range_m);
   // Descriptor in the levelled frame at the base origin: yaw is the only free rotation (the index's shift search).
   kf->R_level_base = LevelRotation(input.gravity_world) * input.T_world_base.linear();
-  const Eigen::Matrix3f R_level_base = kf->R_level_base.cast<float>();
-  std::vector<Eigen::Vector3f> levelled;
-  levelled.reserve(kf->cloud_base.size());
-  for (const Eigen::Vector3d& p : kf->cloud_base) levelled.push_back(R_level_base * p.cast<float>());
-  const loop::LidarDescriptor descriptor = loop::ComputeLidarDescriptor(levelled, config_.descriptor);
+  const loop::LidarDescriptor descriptor = LevelledDescriptor(kf->cloud_base, kf->R_level_base, config_.descriptor);
 
   Pose3 T_world_guess = input.T_world_base;
   Status graph_status = Status::Ok();

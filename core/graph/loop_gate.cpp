@@ -4,15 +4,25 @@
 
 namespace rotolidar::graph {
 
+loop::LidarDescriptor LevelledDescriptor(const std::vector<Eigen::Vector3d>& points_base,
+                                         const Eigen::Matrix3d& R_level_base, const loop::LidarDescriptorConfig& config) {
+  const Eigen::Matrix3f R = R_level_base.cast<float>();
+  std::vector<Eigen::Vector3f> levelled;
+  levelled.reserve(points_base.size());
+  for (const Eigen::Vector3d& p : points_base) levelled.push_back(R * p.cast<float>());
+  return loop::ComputeLidarDescriptor(levelled, config);
+}
+
 loop::DescriptorMatch DescriptorAtGuess(const std::vector<Eigen::Vector3d>& query_base,
                                         const loop::LidarDescriptor& query, const loop::LidarDescriptor& match,
                                         const Eigen::Matrix3d& R_level_match, const Pose3& T_match_query_guess,
                                         const loop::LidarDescriptorConfig& config) {
   loop::DescriptorMatch plain = loop::DescriptorDistance(query, match);
-  std::vector<Eigen::Vector3f> moved;  // in the match's levelled frame at its base origin
+  std::vector<Eigen::Vector3d> moved;  // in the match's base frame
   moved.reserve(query_base.size());
-  for (const Eigen::Vector3d& p : query_base) moved.push_back((R_level_match * (T_match_query_guess * p)).cast<float>());
-  const loop::DescriptorMatch at_guess = loop::DescriptorDistance(loop::ComputeLidarDescriptor(moved, config), match);
+  for (const Eigen::Vector3d& p : query_base) moved.push_back(T_match_query_guess * p);
+  const loop::DescriptorMatch at_guess =
+      loop::DescriptorDistance(LevelledDescriptor(moved, R_level_match, config), match);
   plain.distance = std::min(plain.distance, at_guess.distance);
   return plain;
 }

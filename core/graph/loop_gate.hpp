@@ -10,6 +10,7 @@
 //      or it joins keyframes farther apart than max_loop_distance_m (too little shared view to trust).
 // Frames: points in each keyframe's base frame [m]; R_level_* rotate base into the descriptor's gravity-aligned
 // frame; T_match_query_guess maps query base into match base.
+#include <algorithm>
 #include <functional>
 #include <vector>
 
@@ -23,6 +24,24 @@ struct RevisitCheck {
   double guess_distance_m = 0.0;     ///< |translation| of T_match_query_guess [m]
   loop::LoopVerification verification;  ///< GICP's outcome (default when it did not run)
 };
+
+/// A keyframe's LiDAR descriptor: its base-frame points turned into its gravity-aligned frame (R_level_base), so
+/// that yaw is the only free rotation (the place index's shift search).
+loop::LidarDescriptor LevelledDescriptor(const std::vector<Eigen::Vector3d>& points_base,
+                                         const Eigen::Matrix3d& R_level_base, const loop::LidarDescriptorConfig& config);
+
+/// The points of keyframes center - neighbours .. center + neighbours (clamped to [0, count)) in the center's base
+/// frame: pose_of(k) gives T_world_base of keyframe k, points_of(k) its base-frame points.
+template <class PoseOf, class PointsOf>
+std::vector<Eigen::Vector3d> SubmapAround(int center, int neighbours, int count, PoseOf pose_of, PointsOf points_of) {
+  const Pose3 T_center_world = pose_of(center).inverse();
+  std::vector<Eigen::Vector3d> out;
+  for (int k = std::max(0, center - neighbours); k <= std::min(count - 1, center + neighbours); ++k) {
+    const Pose3 T_center_k = T_center_world * pose_of(k);
+    for (const Eigen::Vector3d& p : points_of(k)) out.push_back(T_center_k * p);
+  }
+  return out;
+}
 
 /// The descriptor distance of a candidate proposed by its pose (the graph neighbour): the smaller of the plain
 /// distance and the distance with the query's points moved into the candidate's base frame by the guess (Scan

@@ -210,15 +210,9 @@ void LoopCloser::Solve() {
 // The candidate and its neighbours' points in the candidate's frame (graph poses: the submap is consistent with
 // any correction so far).
 std::vector<Eigen::Vector3d> LoopCloser::Submap(int center_id) const {
-  const int first = std::max(0, center_id - config_.submap_neighbours);
-  const int last = std::min(int(keyframes_.size()) - 1, center_id + config_.submap_neighbours);
-  const Pose3 T_center_world = graph_.Pose(center_id).inverse();
-  std::vector<Eigen::Vector3d> out;
-  for (int k = first; k <= last; ++k) {
-    const Pose3 T_center_k = T_center_world * graph_.Pose(k);
-    for (const Eigen::Vector3d& p : keyframes_[k]->cloud_base) out.push_back(T_center_k * p);
-  }
-  return out;
+  return SubmapAround(
+      center_id, config_.submap_neighbours, int(keyframes_.size()), [&](int k) { return graph_.Pose(k); },
+      [&](int k) -> const std::vector<Eigen::Vector3d>& { return keyframes_[k]->cloud_base; });
 }
 
 LoopClosureState LoopCloser::State() const {

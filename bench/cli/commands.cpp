@@ -114,6 +114,9 @@ void AddSimOptions(OptionParser* p, const sim::SimConfig& d) {
 void PrintLoopClosure(const graph::LoopClosureState& s) {
   size_t rejected = 0;
   for (const graph::LoopRecord& l : s.loops) rejected += l.rejected ? 1 : 0;
+  if (s.keyframes_dropped > 0)
+    std::printf("loop closure: %zu keyframes dropped (database full or a pose that is no rotation)\n",
+                s.keyframes_dropped);
   std::printf("loop closure: %zu keyframes (%zu with an image), %zu loops (%zu rejected by the graph); %zu "
               "candidates, %zu verified by GICP in %.1f s; %zu graph solves, the longest %.3f s%s%s\n",
               s.keyframes.size(), s.visual_keyframes, s.loops.size(), rejected, s.candidates_proposed,
@@ -206,6 +209,8 @@ int CmdSlam(int argc, char** argv) {
                      "elements; minutes on long runs, as `rotolidar mapeval`)");
   p.AddFlag("save-keyframes", "with loop closure on: write the keyframe database (poses, thinned points) into "
                               "OUT/keyframes/ (~100 kB per keyframe)");
+  p.AddFlag("loop-snapshots", "with loop closure on: after each loop correction write the corrected map and "
+                              "trajectory so far into OUT/loop_snapshots/ (one dense map per loop)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EstimatorConfig config;
   if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);
@@ -213,8 +218,11 @@ int CmdSlam(int argc, char** argv) {
   SlamRunOptions run;
   run.progress = MakeProgressPrinter("slam");
   run.save_keyframes = p.Flag("save-keyframes");
-  if (run.save_keyframes && !config.loop_closure.enabled)
-    return Fail(Status::Error("--save-keyframes: loop closure is off (loop_closure: {enabled: true} in --config)"));
+  run.loop_snapshots = p.Flag("loop-snapshots");
+  for (const char* flag : {"save-keyframes", "loop-snapshots"})
+    if (p.Flag(flag) && !config.loop_closure.enabled)
+      return Fail(Status::Error(std::string("--") + flag +
+                                ": loop closure is off (loop_closure: {enabled: true} in --config)"));
   if (Status s = RunSlam(p.Get("RECORDING"), config, p.Get("out"), &r, run); !s) return Fail(s);
   std::printf("%zu scans, median %.1f ms per scan, %.1fx real time; outputs in %s\n", r.scans.size(),
               r.median_scan_ms, r.wall_time_s > 0 ? r.data_duration_s / r.wall_time_s : 0.0, p.Get("out").c_str());
@@ -226,6 +234,9 @@ int CmdSlam(int argc, char** argv) {
   RunEvaluation ev;
   if (Status s = WriteSlamRunReport(p.Get("RECORDING"), p.Get("out"), r, score, &ev); !s) return Fail(s);
   if (config.loop_closure.enabled) PrintLoopClosure(r.loops);
+  if (r.loop_snapshots > 0)
+    std::printf("%zu loop snapshots (map and trajectory after each correction) in %s/loop_snapshots/\n",
+                r.loop_snapshots, p.Get("out").c_str());
   if (ev.has_truth)
     std::printf("ATE vs truth (SE(3)): RMSE %.4f m over %zu poses\n", ev.ape.stats.rmse, ev.ape.num_associated);
   if (ev.has_map_metrics)

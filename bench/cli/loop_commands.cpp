@@ -24,24 +24,6 @@ int Fail(const Status& s, int code = 1) {
   return code;
 }
 
-// The truth pose at every keyframe's time; an error names the keyframe the truth does not cover.
-Status TruthAtKeyframes(const std::string& recording, const std::vector<graph::KeyframeCloud>& keyframes,
-                        std::vector<Pose3>* T_truth_base) {
-  Trajectory truth;
-  const std::string path = recording + "/truth/base.tum";
-  if (Status s = ReadTrajectory(path, TrajectoryFormat::kTum, &truth); !s)
-    return Status::Error(s.message + " (bench loops needs the twin's truth)");
-  T_truth_base->clear();
-  for (const graph::KeyframeCloud& k : keyframes) {
-    Pose3 T;
-    if (!PoseAt(truth, k.t_s, &T))
-      return Status::Error(path + ": no truth at keyframe " + std::to_string(k.id) + " (t " + std::to_string(k.t_s) +
-                           " s)");
-    T_truth_base->push_back(T);
-  }
-  return Status::Ok();
-}
-
 Status WriteSummaryJson(const std::string& path, const LoopPrResult& r, const graph::LoopClosureState& state,
                         const std::vector<LoopTruthCheck>& checks, const LoopPrConfig& c) {
   nlohmann::json j;

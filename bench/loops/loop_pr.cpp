@@ -8,7 +8,9 @@
 
 #include <pcl/kdtree/kdtree_flann.h>
 
+#include "bench/eval/trajectory_lookup.hpp"
 #include "core/graph/loop_gate.hpp"
+#include "core/io/trajectory_io.hpp"
 
 namespace rotolidar::bench {
 
@@ -223,7 +225,9 @@ LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::Lid
     const graph::KeyframeCloud& nk = c->keyframes[neighbour];
     const loop::DescriptorMatch m =
         graph::DescriptorAtGuess(c->keyframes[query].cloud_base, d, *index.Find(neighbour), nk.R_level_base,
-                                 nk.T_world_odom.inverse() * c->keyframes[query].T_world_odom, c->loop.descriptor);
+                                 nk.T_world_odom.inverse() * c->keyframes[query].T_world_odom,
+                                 graph::DescriptorSearchRadius(c->path_m[query] - c->path_m[neighbour], c->loop),
+                                 c->loop.descriptor);
     if (m.distance <= c->loop.max_descriptor_distance) {
       bool verified = false;
       const double fitness_m = Verify(c, query, neighbour, m.yaw_rad, &verified).fitness_rmse_m;
@@ -305,6 +309,23 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
   }
   Sweep(config, result);
   result->verify_time_s = c.verify_time_s;
+  return Status::Ok();
+}
+
+Status TruthAtKeyframes(const std::string& recording, const std::vector<graph::KeyframeCloud>& keyframes,
+                        std::vector<Pose3>* T_truth_base) {
+  Trajectory truth;
+  const std::string path = recording + "/truth/base.tum";
+  if (Status s = ReadTrajectory(path, TrajectoryFormat::kTum, &truth); !s)
+    return Status::Error(s.message + " (bench loops needs the twin's truth)");
+  T_truth_base->clear();
+  for (const graph::KeyframeCloud& k : keyframes) {
+    Pose3 T;
+    if (!PoseAt(truth, k.t_s, &T))
+      return Status::Error(path + ": no truth at keyframe " + std::to_string(k.id) + " (t " + std::to_string(k.t_s) +
+                           " s)");
+    T_truth_base->push_back(T);
+  }
   return Status::Ok();
 }
 

@@ -115,4 +115,9 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
 /// as above. Exposed for the tests.
 std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives);
 
+/// The truth pose (recording/truth/base.tum, T_world_base) at every keyframe's time, index-aligned. Errors name
+/// the file, or the keyframe the truth does not cover.
+Status TruthAtKeyframes(const std::string& recording, const std::vector<graph::KeyframeCloud>& keyframes,
+                        std::vector<Pose3>* T_truth_base);
+
 }  // namespace rotolidar::bench

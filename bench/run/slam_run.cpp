@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bench/run/keyframe_db.hpp"
+#include "bench/run/loop_snapshots.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/point_cloud_io.hpp"
@@ -43,8 +44,10 @@ void FeedCamera(const CameraFrameRef& ref, Estimator* estimator) {
 }
 
 /// Feeds every message to the estimator in time order (packets by capture time), as a live rig would.
-void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
-              const std::function<void(double)>& progress) {
+/// With `snapshots`, polled after each scan (a failed write stops the snapshots and is returned at the end).
+Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
+                const std::function<void(double)>& progress, LoopSnapshotWriter* snapshots) {
+  Status snapshot_status = Status::Ok();
   size_t i_imu = 0, i_enc = 0, i_cam = 0;
   const size_t n = rec.lidar_packets.size();
   size_t next_report = n / 10;
@@ -57,6 +60,7 @@ void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
       FeedCamera(rec.camera[i_cam++], estimator);
     if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << i << ": " << s.message);
     for (ScanReport& r : estimator->Process()) Keep(std::move(r), result);
+    if (snapshots && snapshot_status) snapshot_status = snapshots->Poll(*estimator);
     if (progress && i >= next_report) {
       progress(double(i) / double(n));
       next_report += n / 10;
@@ -65,6 +69,8 @@ void Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
   while (i_enc < rec.encoder.size()) estimator->Feed(rec.encoder[i_enc++]);
   while (i_imu < rec.imu.size()) estimator->Feed(rec.imu[i_imu++]);
   for (ScanReport& r : estimator->Finish()) Keep(std::move(r), result);
+  if (snapshots && snapshot_status) snapshot_status = snapshots->Poll(*estimator);  // Finish waited for the closer
+  return snapshot_status;
 }
 
 Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& scans) {
@@ -214,7 +220,11 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
     if (rec.camera.empty()) LOG_WARN(recording_dir << ": no camera frames: loop closure's stage 1 is the LiDAR's");
   }
   const auto t0 = std::chrono::steady_clock::now();
-  Playback(rec, &estimator, result, options.progress);
+  LoopSnapshotWriter snapshots(out_dir);
+  const Status playback = Playback(rec, &estimator, result, options.progress,
+                                   options.loop_snapshots ? &snapshots : nullptr);
+  if (!playback) return playback;
+  result->loop_snapshots = snapshots.written();
   result->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   result->odometry_trajectory = estimator.trajectory();
   result->trajectory = estimator.trajectory();

@@ -28,6 +28,7 @@ struct SlamRunResult {
   graph::LoopClosureState loops;    ///< empty without loop closure
   /// The loop closer's keyframe database (SlamRunOptions::keep_keyframes; ~24 B per stored point), else empty.
   std::vector<graph::KeyframeCloud> loop_keyframes;
+  size_t loop_snapshots = 0;  ///< snapshots written (SlamRunOptions::loop_snapshots)
   std::vector<ScanReport> scans;
   size_t map_points = 0;
   size_t bad_packets = 0;
@@ -53,6 +54,9 @@ struct SlamRunOptions {
   std::function<void(double)> progress;  ///< called with the fraction done, about every 10 % of the data
   bool save_keyframes = false;  ///< loop closure on: write the keyframe database into <out_dir>/keyframes/
   bool keep_keyframes = false;  ///< loop closure on: fill SlamRunResult::loop_keyframes
+  /// Loop closure on: after each pose-graph correction write the corrected map and trajectory so far into
+  /// <out_dir>/loop_snapshots/ (bench/run/loop_snapshots.hpp).
+  bool loop_snapshots = false;
 };
 
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,

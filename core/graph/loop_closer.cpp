@@ -153,18 +153,26 @@ void LoopCloser::WorkerLoop() {
 
 void LoopCloser::Process(KeyframeInput input) {
   // A full database, or a pose the graph cannot take (non-finite odometry): the keyframe is counted, not kept.
-  if (keyframes_.size() >= config_.max_keyframes || !input.T_world_base.matrix().allFinite()) {
+  // Odometry rotations carry round-off (KITTI's calibration is printed to 6 digits, and composing with it leaves
+  // R^T R - I ~1e-6); they are projected onto SO(3) so that the graph's 1e-6 orthonormality check holds.
+  bool usable = keyframes_.size() < config_.max_keyframes && input.T_world_base.matrix().allFinite();
+  if (usable) {
+    const Eigen::Matrix3d R = input.T_world_base.linear();
+    usable = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3 && R.determinant() > 0.0;
+    if (usable) input.T_world_base.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+  }
+  const int id = int(keyframes_.size());
+  if (!usable || !StoreKeyframe(std::move(input), id)) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++state_.keyframes_dropped;
     return;
   }
-  const int id = int(keyframes_.size());
-  StoreKeyframe(std::move(input), id);
   SearchLoops(id);
 }
 
 // The keyframe into the database, the place index and the graph (odometry edge from the previous keyframe).
-void LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
+// False, with state_.last_message, when the graph refuses its node; nothing is kept then.
+bool LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
   auto kf = std::make_unique<Keyframe>();
   kf->t_s = input.t_s;
   kf->T_world_odom = input.T_world_base;
@@ -176,22 +184,27 @@ void LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
   const loop::LidarDescriptor descriptor = LevelledDescriptor(kf->cloud_base, kf->R_level_base, config_.descriptor);
 
   Pose3 T_world_guess = input.T_world_base;
-  Status graph_status = Status::Ok();
+  Pose3 T_prev_cur = Pose3::Identity();
   if (id > 0) {
-    const Keyframe& prev = *keyframes_[id - 1];
-    const Pose3 T_prev_cur = prev.T_world_odom.inverse() * input.T_world_base;
+    T_prev_cur = keyframes_[id - 1]->T_world_odom.inverse() * input.T_world_base;
+    T_prev_cur.linear() = Eigen::Quaterniond(T_prev_cur.linear()).normalized().toRotationMatrix();
     T_world_guess = graph_.Pose(id - 1) * T_prev_cur;  // carry the latest correction forward
+    T_world_guess.linear() = Eigen::Quaterniond(T_world_guess.linear()).normalized().toRotationMatrix();
+  }
+  Status graph_status = graph_.AddNode(id, T_world_guess, /*fixed=*/id == 0);
+  if (!graph_status) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    state_.last_message = graph_status.message;
+    return false;
+  }
+  if (id > 0) {
     path_length_m_.push_back(path_length_m_.back() + T_prev_cur.translation().norm());
-    graph_status = graph_.AddNode(id, T_world_guess);
-    if (graph_status) {
-      PoseGraphEdge edge;
-      edge.from_id = id - 1, edge.to_id = id, edge.T_from_to = T_prev_cur, edge.kind = EdgeKind::kOdometry;
-      edge.information = InformationInToFrame(OdometryInformation(T_prev_cur, config_), T_prev_cur);
-      graph_status = graph_.AddEdge(edge);
-    }
+    PoseGraphEdge edge;
+    edge.from_id = id - 1, edge.to_id = id, edge.T_from_to = T_prev_cur, edge.kind = EdgeKind::kOdometry;
+    edge.information = InformationInToFrame(OdometryInformation(T_prev_cur, config_), T_prev_cur);
+    graph_status = graph_.AddEdge(edge);
   } else {
     path_length_m_.push_back(0.0);
-    graph_status = graph_.AddNode(id, T_world_guess, /*fixed=*/true);
   }
   const Status index_status = index_.Add(id, input.t_s, descriptor);
   kf->has_bow = vocabulary_ && !input.image.empty() && AddImage(input.image, id, input.t_s);
@@ -200,6 +213,7 @@ void LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
   state_.keyframes.push_back({id, input.t_s, input.T_world_base, T_world_guess});
   if (!graph_status) state_.last_message = graph_status.message;
   if (!index_status) state_.last_message = index_status.message;
+  return true;
 }
 
 // The keyframe's image into the bag-of-words database (ORB, then the vocabulary's words); a failure is counted and

@@ -162,7 +162,7 @@ struct LoopClosureState {
   std::vector<LoopRecord> loops;        ///< in the order they were found
   std::vector<CandidateRecord> candidates;  ///< every stage-1 candidate, in the order proposed
   size_t keyframes_offered = 0;         ///< AddKeyframe calls
-  size_t keyframes_dropped = 0;         ///< over max_keyframes, or a non-finite pose
+  size_t keyframes_dropped = 0;         ///< over max_keyframes, a non-finite or non-rotation pose
   size_t visual_keyframes = 0;          ///< keyframes with an image in the bag-of-words database
   size_t visual_failures = 0;           ///< images whose ORB or BoW step failed (LiDAR stage 1 instead)
   size_t candidates_proposed = 0;       ///< stage-1 candidates far enough back on the path
@@ -193,6 +193,9 @@ class LoopCloser {
   void Finish();
 
   LoopClosureState State() const;
+  /// Pose-graph solves so far (each accepted loop triggers one): cheap to poll after every scan to rebuild outputs
+  /// when it changes (State() copies the whole record).
+  size_t GraphSolves() const;
   /// The odometry trajectory mapped onto the corrected keyframes (continuous interpolation of the corrections);
   /// unchanged when no keyframe exists. Call after Finish for the final answer.
   Trajectory Correct(const Trajectory& odometry) const;
@@ -206,7 +209,7 @@ class LoopCloser {
   struct Keyframe;
   void WorkerLoop();
   void Process(KeyframeInput input);
-  void StoreKeyframe(KeyframeInput input, int id);
+  bool StoreKeyframe(KeyframeInput input, int id);
   bool AddImage(const cv::Mat& image, int id, Seconds t_s);
   void SearchLoops(int id);
   bool SearchVisual(int id);

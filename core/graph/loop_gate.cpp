@@ -1,6 +1,7 @@
 #include "core/graph/loop_gate.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace rotolidar::graph {
 
@@ -16,15 +17,29 @@ loop::LidarDescriptor LevelledDescriptor(const std::vector<Eigen::Vector3d>& poi
 loop::DescriptorMatch DescriptorAtGuess(const std::vector<Eigen::Vector3d>& query_base,
                                         const loop::LidarDescriptor& query, const loop::LidarDescriptor& match,
                                         const Eigen::Matrix3d& R_level_match, const Pose3& T_match_query_guess,
-                                        const loop::LidarDescriptorConfig& config) {
-  loop::DescriptorMatch plain = loop::DescriptorDistance(query, match);
-  std::vector<Eigen::Vector3d> moved;  // in the match's base frame
-  moved.reserve(query_base.size());
-  for (const Eigen::Vector3d& p : query_base) moved.push_back(T_match_query_guess * p);
-  const loop::DescriptorMatch at_guess =
-      loop::DescriptorDistance(LevelledDescriptor(moved, R_level_match, config), match);
-  plain.distance = std::min(plain.distance, at_guess.distance);
-  return plain;
+                                        double search_radius_m, const loop::LidarDescriptorConfig& config) {
+  loop::DescriptorMatch best = loop::DescriptorDistance(query, match);
+  // The query in the candidate's gravity-aligned frame at the guess; offsets are horizontal in that frame.
+  std::vector<Eigen::Vector3d> levelled;
+  levelled.reserve(query_base.size());
+  for (const Eigen::Vector3d& p : query_base) levelled.push_back(R_level_match * (T_match_query_guess * p));
+  const int steps = int(std::floor(std::max(0.0, search_radius_m)));  // 1 m grid
+  std::vector<Eigen::Vector3d> shifted(levelled.size());
+  for (int ix = -steps; ix <= steps; ++ix)
+    for (int iy = -steps; iy <= steps; ++iy) {
+      if (ix * ix + iy * iy > steps * steps) continue;
+      const Eigen::Vector3d d(ix, iy, 0.0);
+      for (size_t k = 0; k < levelled.size(); ++k) shifted[k] = levelled[k] + d;
+      const double distance =
+          loop::DescriptorDistance(LevelledDescriptor(shifted, Eigen::Matrix3d::Identity(), config), match).distance;
+      best.distance = std::min(best.distance, distance);
+    }
+  return best;
+}
+
+double DescriptorSearchRadius(double path_m, const LoopClosureConfig& config) {
+  return std::min(config.max_guess_offset_m + config.max_guess_offset_per_m * path_m,
+                  0.5 * config.max_revisit_distance_m);
 }
 
 RevisitCheck CheckRevisit(const std::vector<Eigen::Vector3d>& query_base, const Eigen::Matrix3d& R_level_query,

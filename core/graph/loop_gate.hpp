@@ -43,14 +43,21 @@ std::vector<Eigen::Vector3d> SubmapAround(int center, int neighbours, int count,
   return out;
 }
 
-/// The descriptor distance of a candidate proposed by its pose (the graph neighbour): the smaller of the plain
-/// distance and the distance with the query's points moved into the candidate's base frame by the guess (Scan
-/// Context's polar grid changes fast with an offset between the two scans: 0.58-0.97 at 1-9 m on streets). The
-/// yaw stays the plain match's (stage 2's fallback guess is taken at zero offset).
+/// The descriptor distance of a candidate proposed by its pose (the graph neighbour): the smallest of the plain
+/// distance and the distances with the query's points moved into the candidate's base frame by the guess plus a
+/// horizontal offset on a 1 m grid within search_radius_m (0: the guess alone). Scan Context's polar grid changes
+/// fast with an offset between the two scans (0.58-0.97 at 1-9 m on streets) and the guess carries the drift;
+/// the search is Scan Context's own yaw search extended to translation (as Scan Context++, Kim et al., T-RO 2021,
+/// searches lateral shifts). The yaw stays the plain match's (stage 2's fallback guess is taken at zero offset).
+/// Cost: one descriptor per grid offset (~pi r^2 / 1 m^2 of them).
 loop::DescriptorMatch DescriptorAtGuess(const std::vector<Eigen::Vector3d>& query_base,
                                         const loop::LidarDescriptor& query, const loop::LidarDescriptor& match,
                                         const Eigen::Matrix3d& R_level_match, const Pose3& T_match_query_guess,
-                                        const loop::LidarDescriptorConfig& config);
+                                        double search_radius_m, const loop::LidarDescriptorConfig& config);
+
+/// DescriptorAtGuess's search radius for a guess over path_m of odometry [m]: the drift bound of CheckRevisit
+/// (max_guess_offset_m + max_guess_offset_per_m * path_m), at most half of max_revisit_distance_m.
+double DescriptorSearchRadius(double path_m, const LoopClosureConfig& config);
 
 /// One candidate through stage 2. `submap` is called only when GICP runs (it may be costly); `yaw_rad` is the
 /// descriptor's yaw of T_match_query; `path_m` the odometry path between the two keyframes [m].

@@ -57,6 +57,7 @@ void LoopCloser::SearchLoops(int id) {
       found = TryCandidate(record, DescriptorAtGuess(keyframes_[id]->cloud_base, *index_.Find(id),
                                                      *index_.Find(neighbour), keyframes_[neighbour]->R_level_base,
                                                      graph_.Pose(neighbour).inverse() * graph_.Pose(id),
+                                                     DescriptorSearchRadius(PathLengthBetween(neighbour, id), config_),
                                                      config_.descriptor));
     }
   }
@@ -213,6 +214,11 @@ std::vector<Eigen::Vector3d> LoopCloser::Submap(int center_id) const {
   return SubmapAround(
       center_id, config_.submap_neighbours, int(keyframes_.size()), [&](int k) { return graph_.Pose(k); },
       [&](int k) -> const std::vector<Eigen::Vector3d>& { return keyframes_[k]->cloud_base; });
+}
+
+size_t LoopCloser::GraphSolves() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return state_.graph_solves;
 }
 
 LoopClosureState LoopCloser::State() const {

@@ -92,6 +92,25 @@ TEST(LoopCloser, ThreadedGivesTheSameAnswer) {
     EXPECT_TRUE(a.keyframes[i].T_world_corrected.isApprox(b.keyframes[i].T_world_corrected, 0.0)) << i;
 }
 
+// An estimator's rotations carry round-off (composed with KITTI's 6-digit calibration, R^T R - I reaches ~1e-6, the
+// graph's own orthonormality tolerance); the loop closer projects them onto SO(3) and keeps every keyframe. A pose
+// that is no rotation at all is counted as dropped, never handed to the graph (it once ended in a missing node).
+TEST(LoopCloser, RoundedRotationsAreKeptAndBrokenOnesDropped) {
+  const std::vector<Eigen::Vector3d> world = MakeWorld(7);
+  Walk walk = MakeWalk();
+  walk.truth.resize(400), walk.odometry.resize(400);
+  const LoopClosureState exact = RunWalk(false, walk, world);
+  for (Pose3& T : walk.odometry) T.linear() *= 1.0 + 3e-6;  // fails a 1e-6 check on R^T R - I
+  walk.odometry[0].linear()(0, 1) += 0.1;                   // a shear: the first keyframe offered is unusable
+  const LoopClosureState rounded = RunWalk(false, walk, world);
+  EXPECT_EQ(exact.keyframes_dropped, 0u);
+  EXPECT_EQ(rounded.keyframes_dropped, 1u);
+  EXPECT_EQ(rounded.keyframes.size() + 1, exact.keyframes.size());
+  EXPECT_GT(exact.loops.size(), 0u);
+  EXPECT_GT(rounded.loops.size(), 0u);
+  EXPECT_TRUE(rounded.last_message.empty()) << rounded.last_message;
+}
+
 TEST(LoopCloser, KeyframeSpacingAndBadConfig) {
   LoopClosureConfig config;
   config.enabled = true;
@@ -149,11 +168,24 @@ TEST(LoopGate, DescriptorAtGuessUndoesTheOffset) {
   const double plain = loop::DescriptorDistance(query, match).distance;
   const loop::DescriptorMatch at_guess =
       DescriptorAtGuess(query_cloud, query, match, Eigen::Matrix3d::Identity(), T_world_match.inverse() * T_world_query,
-                        loop::LidarDescriptorConfig{});
+                        0.0, loop::LidarDescriptorConfig{});
   std::printf("Scan Context distance 4 m apart: plain %.3f, at the guess %.3f\n", plain, at_guess.distance);
   EXPECT_LT(at_guess.distance, plain);
   // Measured 0.069 (plain 0.260): the same surfaces from one origin; the two 25 m discs differ at their edges.
   EXPECT_LT(at_guess.distance, 0.1);
+
+  // A drifted guess (2 m and 1 m off, as odometry after ~40 m at 5 %): the guess alone no longer undoes the offset;
+  // the 1 m grid search within 3 m finds the offset again.
+  Pose3 T_drift = Pose3::Identity();
+  T_drift.translation() << 2.0, -1.0, 0.0;
+  const Pose3 T_guess = T_drift * T_world_match.inverse() * T_world_query;
+  const double drifted = DescriptorAtGuess(query_cloud, query, match, Eigen::Matrix3d::Identity(), T_guess, 0.0,
+                                           loop::LidarDescriptorConfig{}).distance;
+  const double searched = DescriptorAtGuess(query_cloud, query, match, Eigen::Matrix3d::Identity(), T_guess, 3.0,
+                                            loop::LidarDescriptorConfig{}).distance;
+  std::printf("drifted guess: %.3f, with the 3 m search %.3f\n", drifted, searched);
+  EXPECT_LE(searched, at_guess.distance + 1e-6);  // the grid contains the offset that undoes the drift exactly
+  EXPECT_LT(searched, drifted);
 }
 
 }  // namespace

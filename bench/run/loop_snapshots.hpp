@@ -1,0 +1,30 @@
+#pragma once
+// Snapshots of a loop-closed run while it runs: after each pose-graph solve (an accepted loop), the dense map and
+// the trajectory so far rebuilt from the corrected keyframe poses, the seed's "ghost" removal (LV-SLAM, Sensors
+// 2025, Fig. 5c/d) made visible step by step. Files, in <out_dir>/loop_snapshots/ (NNN = the solve count):
+//   NNN_map.ply         CorrectedMap at the estimator's output voxel [world, m]
+//   NNN_trajectory.tum  the odometry so far through LoopCloser::Correct (T_world_base at each scan start)
+// Each file is written to a temporary name and renamed, so a reader never sees half of one. The loop closer
+// solves in its own thread: a snapshot shows the scans processed when the solve was seen (polled after each
+// scan), so its length is not deterministic; the final outputs are.
+#include <string>
+
+#include "core/pipeline/estimator.hpp"
+#include "core/util/status.hpp"
+
+namespace rotolidar::bench {
+
+class LoopSnapshotWriter {
+ public:
+  explicit LoopSnapshotWriter(std::string out_dir) : dir_(std::move(out_dir) + "/loop_snapshots") {}
+  /// Writes a snapshot when the loop closer has solved since the last call; no-op without a loop closer. Fails
+  /// naming the file that could not be written.
+  Status Poll(const Estimator& estimator);
+  size_t written() const { return written_; }
+
+ private:
+  std::string dir_;
+  size_t seen_solves_ = 0, written_ = 0;
+};
+
+}  // namespace rotolidar::bench

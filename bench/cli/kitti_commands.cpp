@@ -92,10 +92,15 @@ int CmdSlamKitti(int argc, char** argv) {
   PrintScanHealth(r.scans);
   std::printf("deskew: %s\n", r.deskewed ? "by the estimator from the per-point times" : "none (compensated bins)");
   if (r.nominal_times) std::printf("note: no times file: nominal 10 Hz frame times\n");
+  if (r.loop_closure) PrintLoopClosure(r.loops);
   if (r.has_ground_truth) {
     std::printf("vs %s (cam0 convention, rebased to frame %d):\n", r.poses_path.c_str(), r.frame_ids.front());
     PrintStats("APE translation (no align)", r.ape, "m");
     PrintStats("APE translation (SE(3))", r.ape_se3, "m");
+    if (r.loop_closure) {
+      PrintStats("APE odometry (no align)", r.ape_odometry, "m");
+      PrintStats("APE odometry (SE(3))", r.ape_se3_odometry, "m");
+    }
     PrintStats("RPE translation (1 frame)", r.rpe_translation, "m");
     PrintStats("RPE rotation (1 frame)", r.rpe_rotation, "deg");
   }

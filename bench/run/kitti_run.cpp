@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "bench/run/loop_outputs.hpp"
 #include "bench/run/scan_health.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/csv.hpp"
@@ -135,8 +136,16 @@ Status RunFrames(const KittiSequence& seq, const std::vector<size_t>& picked, co
   }
   r->wall_time_s = estimator_s;
   estimator.FinishLoopClosure();
-  r->trajectory_velo = estimator.loop_closer() ? estimator.loop_closer()->Correct(estimator.trajectory())
-                                               : estimator.trajectory();
+  r->trajectory_velo = estimator.trajectory();
+  if (const graph::LoopCloser* loops = estimator.loop_closer()) {
+    r->loop_closure = true;
+    r->loops = loops->State();
+    for (const StampedPose& p : estimator.trajectory())
+      r->odometry_cam0.push_back({p.t_s, VeloToCam0Pose(seq.calib.T_cam0_velo, p.T_ref_body)});
+    r->trajectory_velo = loops->Correct(estimator.trajectory());
+    // trajectory_odometry.tum in the cam0 convention of trajectory.tum; map_corrected.ply in velo(first).
+    if (Status s = WriteLoopOutputs(o.out_dir, *loops, r->loops, r->odometry_cam0, estimator.config()); !s) return s;
+  }
   if (r->trajectory_velo.size() != r->scans.size())
     return Status::Error("estimator returned " + std::to_string(r->trajectory_velo.size()) + " poses for " +
                          std::to_string(r->scans.size()) + " frames");
@@ -162,6 +171,11 @@ void Evaluate(const KittiSequence& seq, KittiRunResult* r) {
   r->ape = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);
   o.align = Alignment::kSe3;
   r->ape_se3 = EvaluateTrajectories(r->ground_truth_cam0, r->trajectory_cam0, o, false);
+  if (r->loop_closure) {
+    r->ape_se3_odometry = EvaluateTrajectories(r->ground_truth_cam0, r->odometry_cam0, o, false);
+    o.align = Alignment::kNone;
+    r->ape_odometry = EvaluateTrajectories(r->ground_truth_cam0, r->odometry_cam0, o, false);
+  }
   o.align = Alignment::kNone;
   o.metric = EvalMetric::kRpe;
   o.delta = 1.0;
@@ -221,6 +235,17 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
     j["rpe_translation_m"] = StatsJson(r.rpe_translation, "none");
     j["rpe_rotation_deg"] = StatsJson(r.rpe_rotation, "none");
     j["rpe_delta"] = "1 frame";
+  }
+  if (r.loop_closure) {
+    size_t rejected = 0;
+    for (const graph::LoopRecord& l : r.loops.loops) rejected += l.rejected ? 1 : 0;
+    j["loop_closure"] = {{"keyframes", r.loops.keyframes.size()}, {"loops", r.loops.loops.size()},
+                         {"rejected_by_graph", rejected}, {"graph_solves", r.loops.graph_solves},
+                         {"max_solve_time_s", r.loops.max_solve_time_s}, {"verify_time_s", r.loops.verify_time_s}};
+    if (r.has_ground_truth) {
+      j["loop_closure"]["ape_translation_m_odometry"] = StatsJson(r.ape_odometry, "none");
+      j["loop_closure"]["ape_translation_m_se3_odometry"] = StatsJson(r.ape_se3_odometry, "se3");
+    }
   }
   std::ofstream file(path);
   file << j.dump(2) << "\n";

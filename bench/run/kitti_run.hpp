@@ -87,6 +87,11 @@ struct KittiRunResult {
   EvalResult ape_se3;                ///< translation [m], SE(3) Umeyama (status not ok when degenerate)
   EvalResult rpe_translation;        ///< consecutive frames, translation [m]
   EvalResult rpe_rotation;           ///< consecutive frames, angle [deg]
+  /// With loop closure on (estimator.loop_closure.enabled): trajectory_* are loop-closed; these are the odometry's.
+  bool loop_closure = false;
+  graph::LoopClosureState loops;     ///< the loop closer's record after Finish
+  Trajectory odometry_cam0;          ///< the odometry before loop closure, KITTI cam0 convention
+  EvalResult ape_odometry, ape_se3_odometry;  ///< as ape / ape_se3, of odometry_cam0 (with ground truth)
 };
 
 /// Opens the sequence, runs the estimator over the chosen frames, evaluates against the poses file when there is

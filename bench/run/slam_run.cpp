@@ -9,7 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bench/run/keyframe_db.hpp"
-#include "bench/run/loop_snapshots.hpp"
+#include "bench/run/loop_outputs.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/point_cloud_io.hpp"
@@ -115,36 +115,6 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
   return csv.Close();
 }
 
-// One row per accepted stage-2 loop: the two keyframes, GICP's relative pose and scores, the graph's verdict.
-Status WriteLoopTable(const std::string& path, const graph::LoopClosureState& state) {
-  CsvWriter csv;
-  if (Status s = csv.Open(path, {"t_query_s", "t_match_s", "query_id", "match_id", "x_m", "y_m", "z_m", "qx", "qy",
-                                 "qz", "qw", "descriptor_distance", "fitness_rmse_m", "overlap", "rejected"});
-      !s)
-    return s;
-  for (const graph::LoopRecord& l : state.loops) {
-    const Eigen::Quaterniond q(l.T_match_query.linear());
-    const Eigen::Vector3d t = l.T_match_query.translation();
-    csv.Row({l.t_query_s, l.t_match_s, double(l.query_id), double(l.match_id), t.x(), t.y(), t.z(), q.x(), q.y(),
-             q.z(), q.w(), l.descriptor_distance, l.fitness_rmse_m, l.overlap, double(l.rejected)});
-  }
-  return csv.Close();
-}
-
-// One row per stage-1 candidate: the pair, the descriptor and graph distances, how far it got (outcome words:
-// graph::ToString), GICP's scores.
-Status WriteCandidateTable(const std::string& path, const graph::LoopClosureState& state) {
-  std::ofstream out(path);
-  out << "query_id,match_id,t_query_s,t_match_s,source,bow_score,descriptor_distance,graph_distance_m,outcome,"
-         "fitness_rmse_m,overlap\n";
-  for (const graph::CandidateRecord& c : state.candidates)
-    out << c.query_id << ',' << c.match_id << ',' << state.keyframes[c.query_id].t_s << ','
-        << state.keyframes[c.match_id].t_s << ',' << graph::ToString(c.source) << ',' << c.bow_score << ','
-        << c.descriptor_distance << ',' << c.graph_distance_m << ',' << graph::ToString(c.outcome) << ','
-        << c.fitness_rmse_m << ',' << c.overlap << '\n';
-  return out ? Status::Ok() : Status::Error(path + ": write failed");
-}
-
 Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
                     const SlamRunResult& result) {
   const Trajectory& traj = result.trajectory;
@@ -156,13 +126,9 @@ Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
   if (Status s = SavePointCloud(out_dir + "/map.pcd", map); !s) return s;
   if (Status s = WriteScanTable(out_dir + "/scans.csv", result.scans); !s) return s;
   if (const graph::LoopCloser* loops = estimator.loop_closer()) {
-    const Trajectory& odom = result.odometry_trajectory;
-    if (Status s = WriteTrajectory(out_dir + "/trajectory_odometry.tum", TrajectoryFormat::kTum, odom); !s) return s;
-    if (Status s = WriteLoopTable(out_dir + "/loops.csv", result.loops); !s) return s;
-    if (Status s = WriteCandidateTable(out_dir + "/loop_candidates.csv", result.loops); !s) return s;
-    const std::vector<Eigen::Vector3d> corrected =
-        loops->CorrectedMap(estimator.config().output_map_voxel_m, estimator.config().output_map_points_per_voxel);
-    if (Status s = SavePointCloud(out_dir + "/map_corrected.ply", corrected); !s) return s;
+    if (Status s = WriteLoopOutputs(out_dir, *loops, result.loops, result.odometry_trajectory, estimator.config());
+        !s)
+      return s;
   }
   YAML::Emitter out;
   EmitEstimatorConfig(out, estimator.config());  // resolved against calib.yaml

@@ -55,7 +55,7 @@ struct SlamRunOptions {
   bool save_keyframes = false;  ///< loop closure on: write the keyframe database into <out_dir>/keyframes/
   bool keep_keyframes = false;  ///< loop closure on: fill SlamRunResult::loop_keyframes
   /// Loop closure on: after each pose-graph correction write the corrected map and trajectory so far into
-  /// <out_dir>/loop_snapshots/ (bench/run/loop_snapshots.hpp).
+  /// <out_dir>/loop_snapshots/ (bench/run/loop_outputs.hpp).
   bool loop_snapshots = false;
 };
 

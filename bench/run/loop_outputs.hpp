@@ -1,4 +1,10 @@
 #pragma once
+// What a loop-closed run writes beside its trajectory (rotolidar slam, slam --kitti; docs/loop_closure.md):
+//   trajectory_odometry.tum  the odometry before loop closure (T_world_base at each scan start, TUM)
+//   loops.csv                accepted loops: times, keyframe ids, GICP's T_match_query, scores, the graph's verdict
+//   loop_candidates.csv      every stage-1 candidate, its source and how far it got
+//   map_corrected.ply        the keyframes' points at their corrected poses [world, m]
+//
 // Snapshots of a loop-closed run while it runs: after each pose-graph solve (an accepted loop), the dense map and
 // the trajectory so far rebuilt from the corrected keyframe poses, the seed's "ghost" removal (LV-SLAM, Sensors
 // 2025, Fig. 5c/d) made visible step by step. Files, in <out_dir>/loop_snapshots/ (NNN = the solve count):
@@ -13,6 +19,11 @@
 #include "core/util/status.hpp"
 
 namespace rotolidar::bench {
+
+/// Writes the four files above into out_dir (State() and Correct() after LoopCloser::Finish). Fails naming the file.
+Status WriteLoopOutputs(const std::string& out_dir, const graph::LoopCloser& loops,
+                        const graph::LoopClosureState& state, const Trajectory& odometry,
+                        const EstimatorConfig& config);
 
 class LoopSnapshotWriter {
  public:

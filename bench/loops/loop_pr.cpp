@@ -23,6 +23,7 @@ bool LoopPrConfig::Validate(std::string* error) const {
   if (!(revisit_min_overlap > 0.0 && revisit_min_overlap <= 1.0)) return fail("revisit_min_overlap: must be in (0, 1]");
   if (!(overlap_radius_m > 0.0)) return fail("overlap_radius_m: must be > 0");
   if (!(max_loop_error_m > 0.0) || !(max_loop_error_rad > 0.0)) return fail("max_loop_error_*: must be > 0");
+  if (!(descriptor_window_s >= 0.0)) return fail("descriptor_window_s: must be >= 0");
   return loop.Validate(error);
 }
 
@@ -196,9 +197,24 @@ std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, in
 
 namespace {
 
-// One query through the three detectors.
+// The points a keyframe's descriptor is made of, in its base frame: its own, or with window_s > 0 those of the
+// keyframes of the last window_s seconds placed by the odometry (LoopPrConfig::descriptor_window_s).
+std::vector<Eigen::Vector3d> DescribedPoints(const std::vector<graph::KeyframeCloud>& keyframes, size_t i,
+                                             double window_s) {
+  if (window_s <= 0.0) return keyframes[i].cloud_base;
+  const Pose3 T_i_world = keyframes[i].T_world_odom.inverse();
+  std::vector<Eigen::Vector3d> out;
+  for (size_t k = i + 1; k-- > 0 && keyframes[k].t_s >= keyframes[i].t_s - window_s;) {
+    const Pose3 T_i_k = T_i_world * keyframes[k].T_world_odom;
+    for (const Eigen::Vector3d& p : keyframes[k].cloud_base) out.push_back(T_i_k * p);
+  }
+  return out;
+}
+
+// One query through the three detectors; `described` are the points of its descriptor d (DescribedPoints).
 LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::LidarPlaceIndex& index,
-                          const loop::LidarDescriptor& d, int query, const std::vector<int>& eligible) {
+                          const std::vector<Eigen::Vector3d>& described, const loop::LidarDescriptor& d, int query,
+                          const std::vector<int>& eligible) {
   LoopQueryOutcome o;
   o.query_id = query;
   o.t_query_s = c->keyframes[query].t_s;
@@ -224,7 +240,7 @@ LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::Lid
   if (!o.both_verified && neighbour != o.stage1_match && neighbour_m <= c->loop.max_revisit_distance_m) {
     const graph::KeyframeCloud& nk = c->keyframes[neighbour];
     const loop::DescriptorMatch m =
-        graph::DescriptorAtGuess(c->keyframes[query].cloud_base, d, *index.Find(neighbour), nk.R_level_base,
+        graph::DescriptorAtGuess(described, d, *index.Find(neighbour), nk.R_level_base,
                                  nk.T_world_odom.inverse() * c->keyframes[query].T_world_odom,
                                  graph::DescriptorSearchRadius(c->path_m[query] - c->path_m[neighbour], c->loop),
                                  c->loop.descriptor);
@@ -293,13 +309,13 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
   loop::LidarPlaceIndex index(index_config);
   for (size_t i = 0; i < keyframes.size(); ++i) {
     const int query = int(i);
-    const loop::LidarDescriptor d =
-        graph::LevelledDescriptor(keyframes[i].cloud_base, keyframes[i].R_level_base, config.loop.descriptor);
+    const std::vector<Eigen::Vector3d> described = DescribedPoints(keyframes, i, config.descriptor_window_s);
+    const loop::LidarDescriptor d = graph::LevelledDescriptor(described, keyframes[i].R_level_base, config.loop.descriptor);
     std::vector<int> eligible;
     for (int m = 0; m < query; ++m)
       if (Eligible(c, query, m)) eligible.push_back(m);
     if (!eligible.empty()) {
-      result->queries.push_back(RunQuery(&c, truth, index, d, query, eligible));
+      result->queries.push_back(RunQuery(&c, truth, index, described, d, query, eligible));
       if (result->queries.back().positive) ++result->positives;
     }
     if (Status s = index.Add(query, keyframes[i].t_s, d); !s)

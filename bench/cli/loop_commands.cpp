@@ -69,17 +69,19 @@ int BenchLoops(int argc, char** argv) {
   p.Add("config", "", "-", "estimator config YAML (loop closure is switched on; its gates are the operating point)");
   p.Add("revisit-distance", "10", "m", "truth: a true revisit's keyframes are at most this far apart");
   p.Add("revisit-overlap", "0.3", "-", "truth: and this share of the query's points is seen again (truth poses)");
-  p.Add("descriptor-window", "0", "s", "what-if for the curves: describe each keyframe by the keyframes of the last "
-                                      "this many seconds (0: its own scan, as the loop closer; the run is unchanged)");
+  p.Add("descriptor-window", "", "s", "loop_closure.descriptor_window_s for the run and the curves: "
+                                             "describe each keyframe with the keyframes of the last this many "
+                                             "seconds (0: its own scan)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EstimatorConfig config;
   if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);
   config.loop_closure.enabled = true;
+  if (!p.Get("descriptor-window").empty())  // else the --config value (default 0)
+    if (Status s = p.GetDouble("descriptor-window", &config.loop_closure.descriptor_window_s); !s) return Fail(s, 2);
   LoopPrConfig pr;
   pr.loop = config.loop_closure;
   if (Status s = p.GetDouble("revisit-distance", &pr.revisit_max_distance_m); !s) return Fail(s, 2);
   if (Status s = p.GetDouble("revisit-overlap", &pr.revisit_min_overlap); !s) return Fail(s, 2);
-  if (Status s = p.GetDouble("descriptor-window", &pr.descriptor_window_s); !s) return Fail(s, 2);
   if (std::string why; !pr.Validate(&why)) return Fail(Status::Error(why), 2);
 
   const std::string out = p.Get("out");

@@ -23,7 +23,6 @@ bool LoopPrConfig::Validate(std::string* error) const {
   if (!(revisit_min_overlap > 0.0 && revisit_min_overlap <= 1.0)) return fail("revisit_min_overlap: must be in (0, 1]");
   if (!(overlap_radius_m > 0.0)) return fail("overlap_radius_m: must be > 0");
   if (!(max_loop_error_m > 0.0) || !(max_loop_error_rad > 0.0)) return fail("max_loop_error_*: must be > 0");
-  if (!(descriptor_window_s >= 0.0)) return fail("descriptor_window_s: must be >= 0");
   return loop.Validate(error);
 }
 
@@ -197,21 +196,7 @@ std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, in
 
 namespace {
 
-// The points a keyframe's descriptor is made of, in its base frame: its own, or with window_s > 0 those of the
-// keyframes of the last window_s seconds placed by the odometry (LoopPrConfig::descriptor_window_s).
-std::vector<Eigen::Vector3d> DescribedPoints(const std::vector<graph::KeyframeCloud>& keyframes, size_t i,
-                                             double window_s) {
-  if (window_s <= 0.0) return keyframes[i].cloud_base;
-  const Pose3 T_i_world = keyframes[i].T_world_odom.inverse();
-  std::vector<Eigen::Vector3d> out;
-  for (size_t k = i + 1; k-- > 0 && keyframes[k].t_s >= keyframes[i].t_s - window_s;) {
-    const Pose3 T_i_k = T_i_world * keyframes[k].T_world_odom;
-    for (const Eigen::Vector3d& p : keyframes[k].cloud_base) out.push_back(T_i_k * p);
-  }
-  return out;
-}
-
-// One query through the three detectors; `described` are the points of its descriptor d (DescribedPoints).
+// One query through the three detectors; `described` are the points of its descriptor d (graph::DescribedPoints).
 LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::LidarPlaceIndex& index,
                           const std::vector<Eigen::Vector3d>& described, const loop::LidarDescriptor& d, int query,
                           const std::vector<int>& eligible) {
@@ -309,7 +294,10 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
   loop::LidarPlaceIndex index(index_config);
   for (size_t i = 0; i < keyframes.size(); ++i) {
     const int query = int(i);
-    const std::vector<Eigen::Vector3d> described = DescribedPoints(keyframes, i, config.descriptor_window_s);
+    const std::vector<Eigen::Vector3d> described = graph::DescribedPoints(
+        query, keyframes[i].cloud_base, keyframes[i].T_world_odom, config.loop.descriptor_window_s, keyframes[i].t_s,
+        [&](int k) { return keyframes[k].t_s; }, [&](int k) { return keyframes[k].T_world_odom; },
+        [&](int k) -> const std::vector<Eigen::Vector3d>& { return keyframes[k].cloud_base; });
     const loop::LidarDescriptor d = graph::LevelledDescriptor(described, keyframes[i].R_level_base, config.loop.descriptor);
     std::vector<int> eligible;
     for (int m = 0; m < query; ++m)

@@ -43,11 +43,6 @@ struct LoopPrConfig {
   /// The loop closer's settings: eligibility (exclude_recent_s, min_travel_m), the descriptor, stage 2's gates
   /// (CheckRevisit). The operating point is its max_descriptor_distance and verification.max_fitness_rmse_m.
   graph::LoopClosureConfig loop;
-  /// A what-if for the LiDAR descriptor (bench only; the loop closer describes each keyframe's own scan, one
-  /// 30 deg fan of a rotary rig): > 0 describes each keyframe by the points of the keyframes of the last
-  /// descriptor_window_s seconds (it included), moved into its base frame by the odometry [s]. 0: as the loop
-  /// closer. Stage 2 (GICP) is unchanged.
-  double descriptor_window_s = 0.0;
   bool Validate(std::string* error) const;
 };
 

@@ -60,6 +60,8 @@ bool LoopClosureConfig::Validate(std::string* error) const {
   if (num_candidates < 1) return fail("num_candidates: must be >= 1");
   if (!(max_descriptor_distance > 0.0 && max_descriptor_distance <= 1.0))
     return fail("max_descriptor_distance: must be in (0, 1]");
+  if (!(descriptor_window_s >= 0.0 && std::isfinite(descriptor_window_s)))
+    return fail("descriptor_window_s: must be >= 0 and finite");
   if (submap_neighbours < 0) return fail("submap_neighbours: must be >= 0");
   if (!(after_loop_travel_m >= 0.0)) return fail("after_loop_travel_m: must be >= 0");
   if (!(max_revisit_distance_m > 0.0)) return fail("max_revisit_distance_m: must be > 0");
@@ -181,7 +183,11 @@ bool LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
     kf->map_base = Thin<Eigen::Vector3f>(input.points_base, config_.map_voxel_m, config_.max_range_m);
   // Descriptor in the levelled frame at the base origin: yaw is the only free rotation (the index's shift search).
   kf->R_level_base = LevelRotation(input.gravity_world) * input.T_world_base.linear();
-  const loop::LidarDescriptor descriptor = LevelledDescriptor(kf->cloud_base, kf->R_level_base, config_.descriptor);
+  described_ = DescribedPoints(
+      id, kf->cloud_base, input.T_world_base, config_.descriptor_window_s, input.t_s,
+      [&](int k) { return keyframes_[k]->t_s; }, [&](int k) { return keyframes_[k]->T_world_odom; },
+      [&](int k) -> const std::vector<Eigen::Vector3d>& { return keyframes_[k]->cloud_base; });
+  const loop::LidarDescriptor descriptor = LevelledDescriptor(described_, kf->R_level_base, config_.descriptor);
 
   Pose3 T_world_guess = input.T_world_base;
   Pose3 T_prev_cur = Pose3::Identity();

@@ -43,6 +43,23 @@ std::vector<Eigen::Vector3d> SubmapAround(int center, int neighbours, int count,
   return out;
 }
 
+/// The points keyframe `id`'s LiDAR descriptor describes, in its base frame: its own (`own`, at T_world_own, time
+/// t_s) and, with window_s > 0, those of the earlier keyframes id-1, id-2, ... no older than t_s - window_s,
+/// placed by pose_of(k) (T_world_base, the odometry). LoopClosureConfig::descriptor_window_s.
+template <class TimeOf, class PoseOf, class PointsOf>
+std::vector<Eigen::Vector3d> DescribedPoints(int id, const std::vector<Eigen::Vector3d>& own, const Pose3& T_world_own,
+                                             double window_s, double t_s, TimeOf time_of, PoseOf pose_of,
+                                             PointsOf points_of) {
+  std::vector<Eigen::Vector3d> out = own;
+  if (!(window_s > 0.0)) return out;
+  const Pose3 T_own_world = T_world_own.inverse();
+  for (int k = id - 1; k >= 0 && time_of(k) >= t_s - window_s; --k) {
+    const Pose3 T_own_k = T_own_world * pose_of(k);
+    for (const Eigen::Vector3d& p : points_of(k)) out.push_back(T_own_k * p);
+  }
+  return out;
+}
+
 /// The descriptor distance of a candidate proposed by its pose (the graph neighbour): the smallest of the plain
 /// distance and the distances with the query's points moved into the candidate's base frame by the guess plus a
 /// horizontal offset on a 1 m grid within search_radius_m (0: the guess alone). Scan Context's polar grid changes

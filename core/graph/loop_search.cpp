@@ -54,7 +54,7 @@ void LoopCloser::SearchLoops(int id) {
     if (neighbour >= 0 && !tried) {
       CandidateRecord record;
       record.query_id = id, record.match_id = neighbour, record.source = CandidateRecord::Source::kGraph;
-      found = TryCandidate(record, DescriptorAtGuess(keyframes_[id]->cloud_base, *index_.Find(id),
+      found = TryCandidate(record, DescriptorAtGuess(described_, *index_.Find(id),
                                                      *index_.Find(neighbour), keyframes_[neighbour]->R_level_base,
                                                      graph_.Pose(neighbour).inverse() * graph_.Pose(id),
                                                      DescriptorSearchRadius(PathLengthBetween(neighbour, id), config_),

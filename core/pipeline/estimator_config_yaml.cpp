@@ -89,6 +89,7 @@ void Visit(V& v, LoopClosureConfig& c) {
   v("cloud_voxel_m", &c.cloud_voxel_m), v("map_voxel_m", &c.map_voxel_m), v("max_range_m", &c.max_range_m);
   v("exclude_recent_s", &c.exclude_recent_s), v("min_travel_m", &c.min_travel_m);
   v("num_candidates", &c.num_candidates), v("max_descriptor_distance", &c.max_descriptor_distance);
+  v("descriptor_window_s", &c.descriptor_window_s);
   v("submap_neighbours", &c.submap_neighbours), v("after_loop_travel_m", &c.after_loop_travel_m);
   v("max_guess_offset_m", &c.max_guess_offset_m), v("max_guess_offset_per_m", &c.max_guess_offset_per_m);
   v("max_guess_offset_rad", &c.max_guess_offset_rad), v("max_revisit_distance_m", &c.max_revisit_distance_m);

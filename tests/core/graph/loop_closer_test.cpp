@@ -188,5 +188,34 @@ TEST(LoopGate, DescriptorAtGuessUndoesTheOffset) {
   EXPECT_LT(searched, drifted);
 }
 
+// A keyframe described with the window: its own points plus those of the earlier keyframes within the window, each
+// moved into its base frame by the odometry; 0 keeps its own points only.
+TEST(LoopGate, DescribedPointsGatherTheWindowInTheKeyframesFrame) {
+  std::vector<Pose3> poses(3, Pose3::Identity());
+  poses[1].translation() << 1.0, 0.0, 0.0;
+  poses[2] = RotZ(M_PI / 2.0);
+  poses[2].translation() << 2.0, 0.0, 0.0;
+  const std::vector<double> times = {0.0, 1.0, 2.0};
+  const std::vector<std::vector<Eigen::Vector3d>> points = {{{0.0, 0.0, 0.0}}, {{0.0, 0.0, 1.0}}, {{1.0, 0.0, 0.0}}};
+  auto described = [&](double window_s) {
+    return DescribedPoints(
+        2, points[2], poses[2], window_s, times[2], [&](int k) { return times[size_t(k)]; },
+        [&](int k) { return poses[size_t(k)]; },
+        [&](int k) -> const std::vector<Eigen::Vector3d>& { return points[size_t(k)]; });
+  };
+  EXPECT_EQ(described(0.0).size(), 1u);
+  const std::vector<Eigen::Vector3d> one = described(1.5);  // keyframe 1 (1 s old), not 0 (2 s old)
+  ASSERT_EQ(one.size(), 2u);
+  EXPECT_TRUE(one[0].isApprox(Eigen::Vector3d(1.0, 0.0, 0.0)));
+  // Keyframe 1's point (1, 0, 1) in the world seen from keyframe 2 at (2, 0, 0) turned 90 deg: (0, 1, 1).
+  EXPECT_LT((one[1] - Eigen::Vector3d(0.0, 1.0, 1.0)).norm(), 1e-12);
+  EXPECT_EQ(described(2.0).size(), 3u);
+  LoopClosureConfig bad;
+  bad.descriptor_window_s = -1.0;
+  std::string why;
+  EXPECT_FALSE(bad.Validate(&why));
+  EXPECT_NE(why.find("descriptor_window_s"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace rotolidar::graph

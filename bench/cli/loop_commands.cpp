@@ -69,9 +69,9 @@ int BenchLoops(int argc, char** argv) {
   p.Add("config", "", "-", "estimator config YAML (loop closure is switched on; its gates are the operating point)");
   p.Add("revisit-distance", "10", "m", "truth: a true revisit's keyframes are at most this far apart");
   p.Add("revisit-overlap", "0.3", "-", "truth: and this share of the query's points is seen again (truth poses)");
-  p.Add("descriptor-window", "", "s", "loop_closure.descriptor_window_s for the run and the curves: "
-                                             "describe each keyframe with the keyframes of the last this many "
-                                             "seconds (0: its own scan)");
+  p.Add("descriptor-window", "", "s", "loop_closure.descriptor_window_s for the run and the curves (none: the "
+                                     "--config value, default 2.5): describe each keyframe with the keyframes "
+                                     "of the last this many seconds (0: its own scan)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   EstimatorConfig config;
   if (Status s = LoadSlamConfig(p.Get("config"), &config); !s) return Fail(s);

@@ -10,11 +10,11 @@
 #include "bench/report/run_evaluation.hpp"
 #include "bench/run/slam_run.hpp"
 #include "sim/sim_runner.hpp"
+#include "tests/scenario/scenario_sim.hpp"
 
 namespace rotolidar::bench {
 namespace {
 
-namespace fs = std::filesystem;
 
 /// The dense map's dynamic share and the ATE of one run of `recording` with `config`.
 RunEvaluation SlamAndScore(const std::string& recording, const EstimatorConfig& config, const std::string& out) {
@@ -37,11 +37,8 @@ TEST(DynamicScenario, FreeSpaceTestKeepsWalkersOutOfTheDenseMap) {
   sim_config.scene = "lab_people";
   sim_config.duration_s = 12.0;
   sim_config.carrier.type = sim::CarrierType::kHandheld;
-  const std::string dir = (fs::temp_directory_path() / "rotolidar_dynamic_scenario").string();
-  fs::remove_all(dir);
-  sim::SimSummary summary;
-  const Status sim_status = sim::RunSimulation(sim_config, dir + "/recording", &summary);
-  ASSERT_TRUE(sim_status.ok) << sim_status.message;
+  const std::string dir = test_util::SimulateFresh(sim_config, "rotolidar_dynamic_scenario");
+  ASSERT_FALSE(HasFailure());
 
   EstimatorConfig off;
   off.free_space.enabled = false;

@@ -14,6 +14,7 @@
 #include "core/io/point_cloud_io.hpp"
 #include "core/io/trajectory_io.hpp"
 #include "sim/sim_runner.hpp"
+#include "tests/scenario/scenario_sim.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -27,11 +28,8 @@ TEST(LoopClosureScenario, ParkingLapClosesWithoutFalseLoops) {
   sim_config.camera.enabled = false;
   sim_config.carrier.type = sim::CarrierType::kHandheld;
   sim_config.carrier.handheld.waypoints = {{-20, -10, 2}, {20, -10}, {20, 10}, {-20, 10}, {-20, -10}, {0, -10}};
-  const std::string dir = (fs::temp_directory_path() / "rotolidar_loop_closure_scenario").string();
-  fs::remove_all(dir);
-  sim::SimSummary summary;
-  const Status sim_status = sim::RunSimulation(sim_config, dir + "/recording", &summary);
-  ASSERT_TRUE(sim_status.ok) << sim_status.message;
+  const std::string dir = test_util::SimulateFresh(sim_config, "rotolidar_loop_closure_scenario");
+  ASSERT_FALSE(HasFailure());
 
   EstimatorConfig config;
   config.loop_closure.enabled = true;

@@ -191,8 +191,12 @@ Pose3 Estimator::Register(const FeatureSet& features, const Pose3& T_world_base_
 // The hold lasts while the IMU stays still, across IMU initialisation: the window then takes over from the held
 // pose without a step (registering against the few bands of a young map pulled the pose by ~1.4 deg), and the
 // map keeps growing from the held pose until the rig moves.
+// A fixed sensor (motor_speed_radps 0, e.g. a KITTI car's HDL-64E) sees the whole view every scan, so nothing is
+// ill-posed, and an IMU cannot tell constant velocity from rest: the KITTI 00 twin, setting off smoothly, was
+// held for 36 frames while the car covered 33 m. No hold there.
 bool Estimator::HoldStaticStart(ScanReport* report) {
   if (!config_.hold_static_start || !static_start_ || imu_.empty() || trajectory_.empty()) return false;
+  if (calib_.motor_speed_radps == 0.0) return false;
   const Seconds t1 = report->t_end_s;
   static_start_ = ImuIsStill(imu_, t1 - config_.imu_init.static_window_s, t1, config_.imu_init, nullptr);
   report->held_static = static_start_;

@@ -14,13 +14,15 @@
 // solves in its own thread: a snapshot shows the scans processed when the solve was seen (polled after each
 // scan), so its length is not deterministic; the final outputs are.
 #include <string>
+#include <utility>
 
 #include "core/pipeline/estimator.hpp"
 #include "core/util/status.hpp"
 
 namespace rotolidar::bench {
 
-/// Writes the four files above into out_dir (State() and Correct() after LoopCloser::Finish). Fails naming the file.
+/// Writes the four files above into out_dir (after LoopCloser::Finish; map_corrected.ply only when the loop closer
+/// keeps map points, loop_closure.map_voxel_m > 0). Fails naming the file.
 Status WriteLoopOutputs(const std::string& out_dir, const graph::LoopCloser& loops,
                         const graph::LoopClosureState& state, const Trajectory& odometry,
                         const EstimatorConfig& config);

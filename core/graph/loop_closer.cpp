@@ -192,10 +192,9 @@ bool LoopCloser::StoreKeyframe(KeyframeInput input, int id) {
   Pose3 T_world_guess = input.T_world_base;
   Pose3 T_prev_cur = Pose3::Identity();
   if (id > 0) {
+    // Both poses are rotations to round-off (Process projected the input; the graph's come from quaternions).
     T_prev_cur = keyframes_[id - 1]->T_world_odom.inverse() * input.T_world_base;
-    T_prev_cur.linear() = Eigen::Quaterniond(T_prev_cur.linear()).normalized().toRotationMatrix();
     T_world_guess = graph_.Pose(id - 1) * T_prev_cur;  // carry the latest correction forward
-    T_world_guess.linear() = Eigen::Quaterniond(T_world_guess.linear()).normalized().toRotationMatrix();
   }
   Status graph_status = graph_.AddNode(id, T_world_guess, /*fixed=*/id == 0);
   if (!graph_status) {

@@ -106,6 +106,14 @@ void SlidingWindow::Reset() {
   states_.clear();
   num_marginalized_ = 0;
   Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
+  if (visual_) visual_->Clear();
+}
+
+Status SlidingWindow::AddVisualObservations(const std::vector<VisualObservation>& observations) {
+  if (!initialized()) return Status::Error("SlidingWindow::AddVisualObservations: not initialised");
+  if (!visual_) return Status::Error("SlidingWindow::AddVisualObservations: no landmarks attached (AttachVisual)");
+  visual_->AddObservations(states_.back()->pose, observations);
+  return Status::Ok();
 }
 
 std::unique_ptr<ceres::CostFunction> SlidingWindow::MakeImuFactor(const PreintegratedImu& imu) const {
@@ -188,6 +196,7 @@ void SlidingWindow::SlideOut() {
   } else {
     prior_.reset();  // the only prior sits on the dropped state
   }
+  if (visual_) visual_->RemoveState(states_.front()->pose);
   states_.pop_front();
   states_.front()->imu.reset();  // the interval into the new oldest state left with the dropped state
   states_.front()->imu_factor.reset();
@@ -233,7 +242,12 @@ Status SlidingWindow::MarginalizeOldest() {
   State& oldest = *states_[0];
   std::vector<const double*> dropped = {oldest.pose, oldest.speed_bias};
   if (config_.estimate_gravity) dropped.push_back(gravity_past_);
-  MarginalizationResult m = Marginalize(TermsOfOldest(), dropped);
+  std::vector<MarginalizationTerm> terms = TermsOfOldest();
+  if (visual_) {  // the landmarks anchored at the oldest state leave with it (VINS-Mono's marginalisation)
+    std::vector<MarginalizationTerm> visual = visual_->TermsOf(oldest.pose, &dropped);
+    terms.insert(terms.end(), visual.begin(), visual.end());
+  }
+  MarginalizationResult m = Marginalize(terms, dropped);
   gravity_walk_.reset();
   if (!m.success) return Status::Error("SlidingWindow: marginalisation failed: " + m.message);
   prior_ = std::move(m.prior);
@@ -267,8 +281,10 @@ WindowResult SlidingWindow::Optimize() {
     if (config_.estimate_gravity) blocks.push_back(gravity_);
     problem.AddResidualBlock(s.imu_factor.get(), nullptr, blocks);
   }
+  if (visual_) visual_->AddToProblem(&problem);
   ceres::Solver::Summary summary;
   ceres::Solve(config_.SolverOptions(), &problem, &summary);
+  if (visual_) visual_->RejectOutliers();
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;  // iteration 0 is the initial evaluation
   result.initial_cost = summary.initial_cost;

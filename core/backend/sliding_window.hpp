@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "core/backend/pose_factors.hpp"
+#include "core/backend/visual_landmarks.hpp"
 #include "core/imu/imu_factor.hpp"
 #include "core/imu/preintegration.hpp"
 #include "core/types/time.hpp"
@@ -157,7 +158,14 @@ class SlidingWindow {
   int num_marginalized() const { return num_marginalized_; }
   const SlidingWindowConfig& config() const { return config_; }
 
-  void Reset();  ///< drops every state and the prior
+  void Reset();  ///< drops every state and the prior (and the attached landmarks)
+
+  /// Attaches the visual landmarks (not owned; must outlive the window or be detached with nullptr): from then on
+  /// Optimize adds their factors, drops their outliers after the solve, and the marginalisation folds the
+  /// landmarks anchored at the oldest state into the prior.
+  void AttachVisual(VisualLandmarks* landmarks) { visual_ = landmarks; }
+  /// The camera observations of the newest state (attach first). Error when not initialised or none attached.
+  Status AddVisualObservations(const std::vector<VisualObservation>& observations);
 
  private:
   struct State;
@@ -179,6 +187,7 @@ class SlidingWindow {
   std::deque<std::unique_ptr<State>> states_;
   std::unique_ptr<LinearizedPriorFactor> prior_;
   int num_marginalized_ = 0;
+  VisualLandmarks* visual_ = nullptr;  ///< not owned
 };
 
 }  // namespace rotolidar

@@ -1,0 +1,220 @@
+#include "core/backend/visual_landmarks.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/util/log.hpp"
+#include "core/util/validation.hpp"
+#include "core/visual/feature_depth.hpp"
+
+namespace rotolidar {
+
+struct VisualLandmarks::Observation {
+  const double* pose = nullptr;  ///< the observing state's pose block (T_world_imu)
+  Eigen::Vector2d normalized = Eigen::Vector2d::Zero();
+  std::unique_ptr<ReprojectionFactor> factor;  ///< null for the anchor's own observation
+};
+
+struct VisualLandmarks::Landmark {
+  uint64_t feature_id = 0;
+  double inverse_depth = 0.0;  ///< the parameter block [1/m]
+  bool lidar_depth = false;    ///< the depth came from the LiDAR
+  bool triangulated = false;
+  bool in_problem = false;     ///< its factors were in the last problem
+  std::vector<Observation> observations;  ///< observations[0] is the anchor's
+  const double* anchor() const { return observations.front().pose; }
+  const Eigen::Vector2d& anchor_normalized() const { return observations.front().normalized; }
+};
+
+bool VisualWindowConfig::Validate(std::string* error) const {
+  auto positive = [](double x) { return x > 0.0 && std::isfinite(x); };
+  if (!positive(pixel_sigma_px)) return FailValidation(error, "visual.pixel_sigma_px must be > 0");
+  if (!positive(huber_sigmas)) return FailValidation(error, "visual.huber_sigmas must be > 0");
+  if (min_observations < 2) return FailValidation(error, "visual.min_observations must be >= 2");
+  if (!positive(min_depth_m)) return FailValidation(error, "visual.min_depth_m must be > 0");
+  if (!(max_depth_m > min_depth_m) || !std::isfinite(max_depth_m))
+    return FailValidation(error, "visual.max_depth_m must be > min_depth_m");
+  if (!positive(max_reprojection_px)) return FailValidation(error, "visual.max_reprojection_px must be > 0");
+  if (!(initial_depth_m >= min_depth_m && initial_depth_m <= max_depth_m))
+    return FailValidation(error, "visual.initial_depth_m must lie in [min_depth_m, max_depth_m]");
+  if (max_landmarks < 1) return FailValidation(error, "visual.max_landmarks must be >= 1");
+  return true;
+}
+
+VisualLandmarks::VisualLandmarks(const VisualWindowConfig& config, const Pose3& T_imu_cam, double focal_px)
+    : config_(config), T_imu_cam_(T_imu_cam), focal_px_(focal_px) {
+  std::string error;
+  ROTOLIDAR_CHECK(config.Validate(&error), error);
+  ROTOLIDAR_CHECK(focal_px > 0.0 && std::isfinite(focal_px), "VisualLandmarks: focal_px must be > 0");
+  sqrt_information_ = ReprojectionSqrtInformation(focal_px, config.pixel_sigma_px);
+  loss_ = std::make_unique<ceres::HuberLoss>(config.huber_sigmas);
+}
+
+VisualLandmarks::~VisualLandmarks() = default;
+
+void VisualLandmarks::Clear() {
+  landmarks_.clear();
+  stats_.live = stats_.in_problem = stats_.with_lidar_depth = stats_.factors = 0;
+}
+
+void VisualLandmarks::AddObservations(const double* pose, const std::vector<VisualObservation>& observations) {
+  for (const VisualObservation& o : observations) {
+    if (!o.normalized.allFinite()) {
+      ++stats_.skipped_total;
+      continue;
+    }
+    auto it = landmarks_.find(o.feature_id);
+    if (it == landmarks_.end()) {
+      if (int(landmarks_.size()) >= config_.max_landmarks) {
+        ++stats_.skipped_total;
+        continue;
+      }
+      auto l = std::make_unique<Landmark>();
+      l->feature_id = o.feature_id;
+      const bool has_depth = std::isfinite(o.lidar_depth_m) && o.lidar_depth_m >= config_.min_depth_m &&
+                             o.lidar_depth_m <= config_.max_depth_m;
+      l->lidar_depth = has_depth;
+      l->inverse_depth = 1.0 / (has_depth ? o.lidar_depth_m : config_.initial_depth_m);
+      l->observations.push_back({pose, o.normalized, nullptr});
+      landmarks_.emplace(o.feature_id, std::move(l));
+      continue;
+    }
+    Landmark& l = *it->second;
+    if (l.observations.back().pose == pose) continue;  // one observation per state
+    ReprojectionMeasurement m;
+    m.anchor_normalized = l.anchor_normalized();
+    m.normalized = o.normalized;
+    m.sqrt_information = sqrt_information_;
+    l.observations.push_back({pose, o.normalized, std::make_unique<ReprojectionFactor>(m, T_imu_cam_)});
+    if (!l.lidar_depth && !l.triangulated) Triangulate(&l);
+  }
+}
+
+int VisualLandmarks::AddToProblem(ceres::Problem* problem) {
+  int factors = 0, in_problem = 0;
+  for (auto& [id, l] : landmarks_) {
+    l->in_problem = int(l->observations.size()) >= config_.min_observations;
+    if (!l->in_problem) continue;
+    ++in_problem;
+    problem->AddParameterBlock(&l->inverse_depth, kInverseDepthBlockSize);
+    for (Observation& o : l->observations) {
+      if (!o.factor) continue;
+      problem->AddResidualBlock(o.factor.get(), loss_.get(), const_cast<double*>(l->anchor()),
+                                const_cast<double*>(o.pose), &l->inverse_depth);
+      ++factors;
+    }
+    if (l->lidar_depth && config_.fix_lidar_depth) problem->SetParameterBlockConstant(&l->inverse_depth);
+  }
+  stats_.factors = factors;
+  stats_.in_problem = in_problem;
+  return factors;
+}
+
+bool VisualLandmarks::InFrontEverywhere(const Landmark& l) const {
+  const Pose3 T_a = UnpackImuPose(l.anchor());
+  for (const Observation& o : l.observations)
+    if (!LandmarkInFront(T_a, UnpackImuPose(o.pose), T_imu_cam_, l.anchor_normalized(), l.inverse_depth,
+                         config_.min_depth_m))
+      return false;
+  return true;
+}
+
+double VisualLandmarks::MaxReprojectionPx(const Landmark& l) const {
+  const Pose3 T_a = UnpackImuPose(l.anchor());
+  double worst = 0.0;
+  for (const Observation& o : l.observations) {
+    const Eigen::Vector2d u =
+        PredictNormalized(T_a, UnpackImuPose(o.pose), T_imu_cam_, l.anchor_normalized(), l.inverse_depth);
+    worst = std::max(worst, focal_px_ * (u - o.normalized).norm());
+  }
+  return worst;
+}
+
+int VisualLandmarks::RejectOutliers() {
+  int dropped = 0;
+  for (auto it = landmarks_.begin(); it != landmarks_.end();) {
+    const Landmark& l = *it->second;
+    const bool bad = l.in_problem && (!std::isfinite(l.inverse_depth) || !InFrontEverywhere(l) ||
+                                      MaxReprojectionPx(l) > config_.max_reprojection_px);
+    if (bad) {
+      it = landmarks_.erase(it);
+      ++dropped;
+    } else {
+      ++it;
+    }
+  }
+  stats_.rejected_total += dropped;
+  return dropped;
+}
+
+std::vector<MarginalizationTerm> VisualLandmarks::TermsOf(const double* pose, std::vector<const double*>* dropped) {
+  std::vector<MarginalizationTerm> terms;
+  for (auto& [id, l] : landmarks_) {
+    if (l->anchor() != pose || !l->in_problem) continue;
+    const BlockRef depth{&l->inverse_depth, BlockKind::kVector, kInverseDepthBlockSize};
+    for (Observation& o : l->observations) {
+      if (!o.factor) continue;
+      terms.push_back({o.factor.get(), loss_.get(),
+                       {BlockRef{const_cast<double*>(l->anchor()), BlockKind::kPose, kImuPoseBlockSize},
+                        BlockRef{const_cast<double*>(o.pose), BlockKind::kPose, kImuPoseBlockSize}, depth}});
+    }
+    dropped->push_back(&l->inverse_depth);
+  }
+  return terms;
+}
+
+void VisualLandmarks::RemoveState(const double* pose) {
+  for (auto it = landmarks_.begin(); it != landmarks_.end();) {
+    Landmark& l = *it->second;
+    if (l.anchor() == pose) {
+      it = landmarks_.erase(it);
+      continue;
+    }
+    // Not its anchor: a later observation (anchors are the oldest observation, so this only happens when states
+    // leave out of order, e.g. a reset); drop it.
+    l.observations.erase(std::remove_if(l.observations.begin(), l.observations.end(),
+                                        [&](const Observation& o) { return o.pose == pose; }),
+                         l.observations.end());
+    ++it;
+  }
+}
+
+// A landmark without a LiDAR depth takes the depth of a triangulation over its observations at the current pose
+// estimates (VINS-Mono's triangulate), once the rays open past the parallax gate; until then the initial depth.
+void VisualLandmarks::Triangulate(Landmark* l) const {
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<Pose3> T_world_cam;
+  for (const Observation& o : l->observations) {
+    xy.push_back(o.normalized);
+    T_world_cam.push_back(UnpackImuPose(o.pose) * T_imu_cam_);
+  }
+  visual::TriangulationConfig config;
+  config.focal_length_px = focal_px_;
+  config.max_reprojection_rms_px = config_.max_reprojection_px;
+  config.min_depth_m = config_.min_depth_m;
+  const visual::Triangulation t = visual::TriangulateFeature(xy, T_world_cam, config);
+  if (!t.valid || t.depth_anchor_m > config_.max_depth_m) return;
+  l->inverse_depth = 1.0 / t.depth_anchor_m;
+  l->triangulated = true;
+}
+
+VisualLandmarkStats VisualLandmarks::stats() const {
+  VisualLandmarkStats s = stats_;
+  s.live = int(landmarks_.size());
+  s.with_lidar_depth = int(std::count_if(landmarks_.begin(), landmarks_.end(),
+                                         [](const auto& kv) { return kv.second->lidar_depth; }));
+  return s;
+}
+
+std::vector<std::pair<uint64_t, Eigen::Vector3d>> VisualLandmarks::LandmarkPositions() const {
+  std::vector<std::pair<uint64_t, Eigen::Vector3d>> out;
+  for (const auto& [id, l] : landmarks_) {
+    if (!l->in_problem || !(l->inverse_depth > 0.0)) continue;
+    const Eigen::Vector3d p_cam(l->anchor_normalized().x() / l->inverse_depth,
+                                l->anchor_normalized().y() / l->inverse_depth, 1.0 / l->inverse_depth);
+    out.emplace_back(id, UnpackImuPose(l->anchor()) * (T_imu_cam_ * p_cam));
+  }
+  return out;
+}
+
+}  // namespace rotolidar

@@ -1,0 +1,127 @@
+#pragma once
+// The visual half of the sliding window (seed paper "LV-SLAM", Sec. 3.3; VINS-Mono's FeatureManager and its
+// marginalisation, as LVI-SAM uses them): inverse-depth landmarks anchored in the camera of their first window
+// state, their reprojection factors (core/visual/reprojection_factor.hpp) against the window's pose blocks, and
+// the terms that fold them into the marginalisation prior when their anchor state leaves the window.
+//
+// Life of a landmark (one tracked feature, keyed by the tracker's id):
+//   - created at the first window state that observes it (its anchor), with the inverse depth of its LiDAR
+//     depth (LVI-SAM's depth association) when the observation carries one, else of a triangulation from later
+//     observations, else of config.initial_depth_m (VINS-Mono's 5 m);
+//   - enters the problem once seen in at least min_observations window states (one reprojection factor per
+//     observation after the anchor's, on {anchor pose, observing pose, inverse depth}, with a Huber loss);
+//     with config.fix_lidar_depth a LiDAR-depth landmark's inverse depth is held constant (LVI-SAM);
+//   - after each solve, dropped when it lies behind a camera, nearer than min_depth_m, or any of its observations
+//     reprojects farther than max_reprojection_px (VINS-Mono's removeFailures / outlier rejection);
+//   - when its anchor state is marginalised, its factors and inverse depth are marginalised with it (TermsOf);
+//     a feature still tracked afterwards starts a new landmark at its next observation.
+//
+// Frames and units: observations are undistorted normalised coordinates (x/z, y/z) in the camera at the window
+// state's time [1]; pose blocks are T_world_imu (core/imu/imu_factor.hpp); T_imu_cam from RigCalib
+// (CameraExtrinsic); depths along the camera's optical axis [m]; pixel quantities through focal_px.
+// States are identified by the address of their pose block (stable: the window keeps states behind pointers).
+// Ownership: the landmarks own their inverse-depth blocks, factors and loss; the window owns the pose blocks.
+// Thread safety: none; the window's owner calls everything. Failure: bad observations (non-finite) are skipped and
+// counted; an invalid config is a programmer error (ROTOLIDAR_CHECK, Validate first).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <ceres/loss_function.h>
+#include <ceres/problem.h>
+#include <Eigen/Core>
+
+#include "core/backend/pose_factors.hpp"
+#include "core/types/geometry.hpp"
+#include "core/visual/reprojection_factor.hpp"
+
+namespace rotolidar {
+
+struct VisualWindowConfig {
+  /// Reprojection noise [px]: KLT's sub-pixel error plus the image-to-state time alignment; VINS-Mono whitens
+  /// with 1.5 px (FOCAL_LENGTH / 1.5).
+  double pixel_sigma_px = 1.5;
+  /// Huber threshold on the whitened residual [sigmas] (VINS-Mono: HuberLoss(1.0)).
+  double huber_sigmas = 1.0;
+  /// A landmark enters the problem when seen in this many window states (2: the anchor and one more).
+  int min_observations = 2;
+  /// Landmarks nearer than this [m] (or behind a camera) are dropped after each solve; farther than
+  /// max_depth_m they carry rotation only and are not created from a LiDAR depth.
+  double min_depth_m = 0.3;
+  double max_depth_m = 80.0;
+  /// After a solve, a landmark whose observation reprojects farther than this [px] is dropped (3 sigma at the
+  /// default 1.5 px is 4.5 px; 5 px leaves the Huber loss to weigh the rest).
+  double max_reprojection_px = 5.0;
+  /// Depth of a landmark with neither a LiDAR depth nor a triangulation [m] (VINS-Mono's INIT_DEPTH).
+  double initial_depth_m = 5.0;
+  /// Hold LiDAR-depth landmarks' inverse depth constant (LVI-SAM): the LiDAR measured it to ~cm, and a free
+  /// depth would let the camera trade it against the poses.
+  bool fix_lidar_depth = true;
+  int max_landmarks = 400;  ///< new observations are ignored beyond this many live landmarks
+  bool Validate(std::string* error) const;
+};
+
+/// One feature seen in one window state.
+struct VisualObservation {
+  uint64_t feature_id = 0;
+  Eigen::Vector2d normalized = Eigen::Vector2d::Zero();  ///< undistorted, at the state's time
+  double lidar_depth_m = 0.0;  ///< depth along the optical axis from the LiDAR [m]; <= 0 or NaN: none
+};
+
+struct VisualLandmarkStats {
+  int live = 0;            ///< landmarks held
+  int in_problem = 0;      ///< landmarks with factors in the last problem
+  int with_lidar_depth = 0;
+  int factors = 0;         ///< reprojection factors in the last problem
+  int rejected_total = 0;  ///< landmarks dropped by RejectOutliers so far
+  int skipped_total = 0;   ///< non-finite observations and those over max_landmarks
+};
+
+class VisualLandmarks {
+ public:
+  /// focal_px > 0 (the camera's mean focal length) and a valid config are checked (ROTOLIDAR_CHECK).
+  VisualLandmarks(const VisualWindowConfig& config, const Pose3& T_imu_cam, double focal_px);
+  ~VisualLandmarks();
+  VisualLandmarks(const VisualLandmarks&) = delete;
+  VisualLandmarks& operator=(const VisualLandmarks&) = delete;
+
+  /// The observations of the window state whose pose block is `pose` (its current value is the state's
+  /// estimate). A feature without a landmark starts one anchored here.
+  void AddObservations(const double* pose, const std::vector<VisualObservation>& observations);
+  /// Adds the inverse-depth blocks and factors of every landmark seen in >= min_observations states. The pose
+  /// blocks must already be in `problem` (with their manifold). Returns the number of factors added.
+  int AddToProblem(ceres::Problem* problem);
+  /// After a solve: drops landmarks behind a camera, too near, or reprojecting beyond max_reprojection_px.
+  int RejectOutliers();
+  /// Marginalisation terms of the landmarks anchored at `pose` (their factors in the last problem), with their
+  /// inverse-depth blocks appended to *dropped. Call before RemoveState(pose).
+  std::vector<MarginalizationTerm> TermsOf(const double* pose, std::vector<const double*>* dropped);
+  /// Forgets a state leaving the window: its landmarks and every observation made in it.
+  void RemoveState(const double* pose);
+  void Clear();
+
+  VisualLandmarkStats stats() const;
+  /// World positions [m] of the landmarks the last problem estimated (for tests and maps); needs the anchor pose
+  /// blocks alive.
+  std::vector<std::pair<uint64_t, Eigen::Vector3d>> LandmarkPositions() const;  ///< (feature id, p_world)
+
+ private:
+  struct Observation;
+  struct Landmark;
+  bool InFrontEverywhere(const Landmark& l) const;
+  double MaxReprojectionPx(const Landmark& l) const;
+  void Triangulate(Landmark* l) const;
+
+  VisualWindowConfig config_;
+  Pose3 T_imu_cam_;
+  double focal_px_;
+  Eigen::Matrix2d sqrt_information_;
+  std::unique_ptr<ceres::LossFunction> loss_;
+  std::map<uint64_t, std::unique_ptr<Landmark>> landmarks_;  ///< by feature id (stable addresses)
+  VisualLandmarkStats stats_;
+};
+
+}  // namespace rotolidar

@@ -1,0 +1,180 @@
+// The sliding window with visual landmarks: the camera holds an axis the LiDAR does not see (a corridor), the
+// landmarks' depths converge, outliers leave, and marginalisation keeps the estimate continuous.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/backend/sliding_window.hpp"
+#include "core/backend/visual_landmarks.hpp"
+#include "tests/core/backend/window_test_sim.hpp"
+
+namespace rotolidar {
+namespace {
+
+using namespace window_test;
+
+constexpr double kFocalPx = 460.0;
+
+/// The camera looks along the imu's x axis (camera z = imu x, camera x = -imu y, camera y = -imu z), 10 cm ahead.
+Pose3 CameraInImu() {
+  Eigen::Matrix3d R;
+  R << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return MakePose(Eigen::Vector3d(0.1, 0.0, 0.05), Eigen::Quaterniond(R));
+}
+
+/// Landmarks on a shell 4-15 m around the motion's path (it stays within ~5 m of the origin), so that the
+/// camera sees some in every direction it turns to.
+std::vector<Eigen::Vector3d> MakeLandmarks(int count) {
+  RandomStream rng(21, "visual_window_test.landmarks");
+  std::vector<Eigen::Vector3d> out;
+  while (int(out.size()) < count) {
+    const Eigen::Vector3d d(rng.Normal(), rng.Normal(), 0.3 * rng.Normal());
+    if (d.norm() < 1e-3) continue;
+    out.push_back(Eigen::Vector3d(2.0, 1.0, 0.0) + d.normalized() * (9.0 + 5.0 * rng.Uniform()));
+  }
+  return out;
+}
+
+/// The landmarks state k's camera sees (in front, inside a 640 x 480 image), with `noise_px` of pixel noise.
+std::vector<VisualObservation> Observe(int k, const std::vector<Eigen::Vector3d>& landmarks, RandomStream& rng,
+                                       double noise_px) {
+  const NavState truth = Motion::State(StateTime(k));
+  const Pose3 T_cam_world = (MakePose(truth.p_world_m, Eigen::Quaterniond(truth.R_world_imu)) * CameraInImu()).inverse();
+  std::vector<VisualObservation> out;
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    const Eigen::Vector3d p = T_cam_world * landmarks[i];
+    if (p.z() < 0.5) continue;
+    const Eigen::Vector2d u = p.head<2>() / p.z();
+    if (std::abs(u.x() * kFocalPx) > 320.0 || std::abs(u.y() * kFocalPx) > 240.0) continue;
+    VisualObservation o;
+    o.feature_id = i;
+    o.normalized = u + Eigen::Vector2d(rng.Normal(0.0, noise_px), rng.Normal(0.0, noise_px)) / kFocalPx;
+    out.push_back(o);
+  }
+  return out;
+}
+
+SlidingWindowConfig WindowConfig() {
+  SlidingWindowConfig c;
+  c.estimate_gravity = false;
+  c.max_iterations = 10;
+  return c;
+}
+
+struct CorridorOutcome {
+  double x_err_m = 0.0;   ///< worst |x error| of the latest state over the degenerate stretch
+  double yz_err_m = 0.0;
+  VisualLandmarkStats stats;
+};
+
+/// 3 s with full LiDAR information, then `degenerate_s` with none along world x (a corridor): with a camera,
+/// the landmarks hold x; without, the IMU alone does.
+CorridorOutcome RunCorridor(bool camera, double degenerate_s) {
+  constexpr int kDegenerateFrom = 30;
+  const int states = kDegenerateFrom + int(std::lround(degenerate_s * 10.0));
+  const std::vector<ImuSample> imu = MakeImu(states * 0.1 + 0.1, true, 31);
+  const std::vector<Eigen::Vector3d> landmarks = MakeLandmarks(400);
+  SlidingWindow window{WindowConfig()};
+  VisualLandmarks visual(VisualWindowConfig{}, CameraInImu(), kFocalPx);
+  if (camera) window.AttachVisual(&visual);
+  RandomStream pixel_noise(32, "visual_window_test.pixels");
+  auto lidar = [](int k, RandomStream& rng) -> std::optional<LidarPoseMeasurement> {
+    LidarPoseMeasurement m = MakeLidar(StateTime(k), rng);
+    if (k >= kDegenerateFrom) m.information.row(0).setZero(), m.information.col(0).setZero();
+    return m;
+  };
+  RandomStream rng(5, "visual_window_test.lidar");
+  EXPECT_TRUE(window.Initialize(0.0, InitialGuess(), lidar(0, rng)).ok);
+  if (camera) {
+    EXPECT_TRUE(window.AddVisualObservations(Observe(0, landmarks, pixel_noise, 0.5)).ok);
+  }
+  CorridorOutcome out;
+  for (int k = 1; k < states; ++k) {
+    const Status st = window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), lidar(k, rng));
+    EXPECT_TRUE(st.ok) << st.message;
+    if (camera) {
+      EXPECT_TRUE(window.AddVisualObservations(Observe(k, landmarks, pixel_noise, 0.5)).ok);
+    }
+    window.Optimize();
+    if (k < kDegenerateFrom) continue;
+    const Eigen::Vector3d e = window.latest_state().p_world_m - Motion::State(StateTime(k)).p_world_m;
+    out.x_err_m = std::max(out.x_err_m, std::abs(e.x()));
+    out.yz_err_m = std::max(out.yz_err_m, e.tail<2>().norm());
+  }
+  out.stats = visual.stats();
+  return out;
+}
+
+TEST(VisualWindow, TheCameraHoldsAnAxisTheLidarDoesNotSee) {
+  const CorridorOutcome with = RunCorridor(true, 6.0);
+  const CorridorOutcome without = RunCorridor(false, 6.0);
+  std::printf("[measured] 6 s without x from the LiDAR: camera x %.4f yz %.4f m (%d landmarks, %d factors, %d "
+              "rejected) | IMU only x %.4f yz %.4f m\n",
+              with.x_err_m, with.yz_err_m, with.stats.live, with.stats.factors, with.stats.rejected_total,
+              without.x_err_m, without.yz_err_m);
+  // Measured: camera x 1.5 cm, y/z 1.3 cm; IMU alone x 12.9 cm (its velocity error integrates over 6 s).
+  EXPECT_GT(with.stats.factors, 100);
+  EXPECT_LT(with.x_err_m, 0.04);
+  EXPECT_LT(with.x_err_m, 0.5 * without.x_err_m);
+  EXPECT_LT(with.yz_err_m, 0.04);
+}
+
+TEST(VisualWindow, DepthsConvergeAndOutliersLeave) {
+  const std::vector<ImuSample> imu = MakeImu(2.1, true, 33);
+  const std::vector<Eigen::Vector3d> landmarks = MakeLandmarks(300);
+  SlidingWindow window{WindowConfig()};
+  VisualLandmarks visual(VisualWindowConfig{}, CameraInImu(), kFocalPx);
+  window.AttachVisual(&visual);
+  RandomStream rng(5, "visual_window_test.lidar"), pixels(34, "visual_window_test.pixels");
+  EXPECT_TRUE(window.Initialize(0.0, InitialGuess(), MakeLidar(0.0, rng)).ok);
+  EXPECT_TRUE(window.AddVisualObservations(Observe(0, landmarks, pixels, 0.5)).ok);
+  for (int k = 1; k < 20; ++k) {
+    EXPECT_TRUE(window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()),
+                                MakeLidar(StateTime(k), rng)).ok);
+    std::vector<VisualObservation> obs = Observe(k, landmarks, pixels, 0.5);
+    // Every 10th feature id is a mismatched track from state 10 on: it jumps 40 px.
+    if (k >= 10)
+      for (VisualObservation& o : obs)
+        if (o.feature_id % 10 == 0) o.normalized.x() += 40.0 / kFocalPx;
+    EXPECT_TRUE(window.AddVisualObservations(obs).ok);
+    window.Optimize();
+  }
+  // The landmarks the window estimated lie near their true positions: the depths left the 5 m initial guess.
+  const std::vector<std::pair<uint64_t, Eigen::Vector3d>> estimated = visual.LandmarkPositions();
+  ASSERT_GT(estimated.size(), 30u);
+  std::vector<double> errors;  // relative to the landmark's distance from the last camera
+  const Eigen::Vector3d camera = Motion::State(StateTime(19)).p_world_m;
+  for (const auto& [id, p] : estimated) {
+    const Eigen::Vector3d& truth = landmarks[id];
+    errors.push_back((p - truth).norm() / (truth - camera).norm());
+  }
+  std::sort(errors.begin(), errors.end());
+  const double median = errors[errors.size() / 2], p90 = errors[errors.size() * 9 / 10];
+  std::printf("[measured] %zu landmarks in the window, position error / distance median %.3f p90 %.3f max %.3f; "
+              "%d rejected\n",
+              estimated.size(), median, p90, errors.back(), visual.stats().rejected_total);
+  // Measured 0.042 / 0.24 (landmarks 9-14 m away seen over <= 1 s of ~0.3-1 m/s motion: the far, low-parallax
+  // ones keep most of their depth error); 2x margins.
+  EXPECT_LT(median, 0.08);
+  EXPECT_LT(p90, 0.5);
+  EXPECT_GT(visual.stats().rejected_total, 0);
+}
+
+TEST(VisualWindowConfig, ValidateNamesTheField) {
+  VisualWindowConfig c;
+  std::string error;
+  EXPECT_TRUE(c.Validate(&error));
+  c.min_observations = 1;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("min_observations"), std::string::npos);
+  c = VisualWindowConfig{};
+  c.initial_depth_m = 100.0;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("initial_depth_m"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rotolidar

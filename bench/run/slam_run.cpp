@@ -84,7 +84,10 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
                                  "total_ms", "held_static", "vx_mps", "vy_mps", "vz_mps", "bgx_radps", "bgy_radps",
                                  "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2", "keyframe", "neighbour_searches",
-                                 "dynamic_features", "map_judged", "map_dynamic"});
+                                 "dynamic_features", "map_judged", "map_dynamic", "vis_image", "vis_image_offset_s",
+                                 "vis_frames", "vis_tracked", "vis_inliers", "vis_new", "vis_observations",
+                                 "vis_lidar_depths", "vis_landmarks", "vis_factors", "vis_rejected_total",
+                                 "vis_track_ms", "vis_depth_ms"});
       !s)
     return s;
   for (const ScanReport& r : scans) {
@@ -110,6 +113,11 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
     row.push_back(double(r.num_dynamic_features));
     row.push_back(double(r.map_free_space.judged));
     row.push_back(double(r.map_free_space.dynamic));
+    const VisualScanReport& v = r.visual;
+    for (double x : {double(v.image), v.image_offset_s, double(v.frames_tracked), double(v.tracked),
+                     double(v.inliers), double(v.new_features), double(v.observations), double(v.lidar_depths),
+                     double(v.landmarks), double(v.factors), double(v.rejected_total), v.track_ms, v.depth_ms})
+      row.push_back(x);
     csv.Row(row);
   }
   return csv.Close();

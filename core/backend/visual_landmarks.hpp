@@ -103,6 +103,7 @@ class VisualLandmarks {
   void RemoveState(const double* pose);
   void Clear();
 
+  bool HasLandmark(uint64_t feature_id) const { return landmarks_.count(feature_id) > 0; }
   VisualLandmarkStats stats() const;
   /// World positions [m] of the landmarks the last problem estimated (for tests and maps); needs the anchor pose
   /// blocks alive.

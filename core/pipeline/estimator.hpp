@@ -91,6 +91,7 @@ struct ScanReport {
   /// how many were tested and how many were dynamic (kept out of the dense map).
   size_t num_dynamic_features = 0;
   FreeSpaceCounts map_free_space;
+  VisualScanReport visual;  ///< the camera path (config.visual.enabled; zeros otherwise)
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
   Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();  ///< imu origin velocity from the window, world [m/s] (0 before IMU init)
@@ -116,9 +117,9 @@ class Estimator {
   /// Decodes a data or position packet; a malformed packet is reported and skipped (no points lost silently:
   /// the Status says which field at which offset).
   Status Feed(const LidarPacket& packet);
-  /// A camera frame for the loop closer's visual stage 1 (frames in time order, the recording's clock). Kept only
-  /// when WantsCameraFrame(frame.t_s) (a loop closer with a vocabulary; about one frame per max_camera_offset_s,
-  /// the last second of them); the others are dropped unread. The image is shared, not copied.
+  /// A camera frame (frames in time order, the recording's clock): tracked when config.visual.enabled (every
+  /// frame), and kept for the loop closer's visual stage 1 when it has a vocabulary (about one frame per
+  /// max_camera_offset_s, the last second of them); otherwise dropped unread. The image is shared, not copied.
   void Feed(const CameraFrame& frame);
   /// Whether Feed would keep a frame at t_s (a player can skip decoding the others).
   bool WantsCameraFrame(Seconds t_s) const;
@@ -199,6 +200,7 @@ class Estimator {
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
   std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false
+  std::unique_ptr<VisualFrontEnd> visual_;  ///< null when config.visual.enabled is false
   std::deque<CameraFrame> camera_frames_;  ///< the last second of kept frames (the loop closer's images)
   std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;

@@ -34,7 +34,7 @@ bool EstimatorConfig::Validate(std::string* error) const {
   if (features_resolved.range_sigma_m == kRangeSigmaFromCalib) features_resolved.range_sigma_m = 0.0;
   if (!preprocess.Validate(error) || !features_resolved.Validate(error) || !registration.Validate(error) ||
       !local_map.Validate(error) || !window.Validate(error) || !imu_init.Validate(error) ||
-      !free_space.Validate(error) || !loop_closure.Validate(error))
+      !free_space.Validate(error) || !loop_closure.Validate(error) || !visual.Validate(error))
     return false;
   if (!(lidar_point_sigma_m > 0) || !std::isfinite(lidar_point_sigma_m))
     return fail("lidar_point_sigma_m must be > 0");

@@ -9,6 +9,7 @@
 #include "core/features/curvature_features.hpp"
 #include "core/graph/loop_closer.hpp"
 #include "core/pipeline/free_space.hpp"
+#include "core/pipeline/visual_frontend.hpp"
 #include "core/preprocess/filters.hpp"
 #include "core/registration/local_map.hpp"
 #include "core/registration/scan_to_map.hpp"
@@ -79,6 +80,9 @@ struct EstimatorConfig {
   FreeSpaceConfig free_space;
   /// Two-stage loop closure and pose graph beside the odometry (core/graph/loop_closer.hpp); off by default.
   graph::LoopClosureConfig loop_closure;
+  /// The camera in the sliding window (core/pipeline/visual_frontend.hpp): tracked features as inverse-depth
+  /// landmarks with reprojection factors, depths from the LiDAR. Off by default (docs/visual.md).
+  VisualConfig visual;
 
   /// Keep each scan's decoded points and their deskewed positions in the ScanReport (deskew evaluation; memory
   /// grows with the run: ~30 k points x 44 B per scan).

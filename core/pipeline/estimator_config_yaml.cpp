@@ -141,6 +141,46 @@ void Visit(V& v, ImuInitConfig& c) {
   v("gravity_refine_iterations", &c.gravity_refine_iterations);
 }
 
+// The visual module's configs live in rotolidar::visual: their field lists too, for the visitors' lookup.
+namespace visual {
+
+template <class V>
+void Visit(V& v, FeatureTrackerConfig& c) {
+  v("max_features", &c.max_features), v("min_distance_px", &c.min_distance_px);
+  v("klt_window_px", &c.klt_window_px), v("klt_max_level", &c.klt_max_level);
+  v("klt_max_iterations", &c.klt_max_iterations), v("klt_epsilon_px", &c.klt_epsilon_px);
+  v("border_px", &c.border_px), v("fb_threshold_px", &c.fb_threshold_px);
+  v("ransac_threshold_px", &c.ransac_threshold_px), v("ransac_confidence", &c.ransac_confidence);
+  v("ransac_max_iterations", &c.ransac_max_iterations), v("ransac_min_matches", &c.ransac_min_matches);
+  v("corner_quality", &c.corner_quality), v("corner_block_px", &c.corner_block_px);
+  v("grid_rows", &c.grid_rows), v("grid_cols", &c.grid_cols);
+}
+
+template <class V>
+void Visit(V& v, LidarDepthConfig& c) {
+  v("search_radius_deg", &c.search_radius_deg), v("max_neighbours", &c.max_neighbours);
+  v("min_neighbours", &c.min_neighbours), v("max_depth_spread_m", &c.max_depth_spread_m);
+  v("min_bearing_spread_deg", &c.min_bearing_spread_deg), v("max_plane_rms_m", &c.max_plane_rms_m);
+  v("min_incidence_deg", &c.min_incidence_deg), v("min_depth_m", &c.min_depth_m), v("max_depth_m", &c.max_depth_m);
+}
+
+}  // namespace visual
+
+template <class V>
+void Visit(V& v, VisualWindowConfig& c) {
+  v("pixel_sigma_px", &c.pixel_sigma_px), v("huber_sigmas", &c.huber_sigmas);
+  v("min_observations", &c.min_observations), v("min_depth_m", &c.min_depth_m), v("max_depth_m", &c.max_depth_m);
+  v("max_reprojection_px", &c.max_reprojection_px), v("initial_depth_m", &c.initial_depth_m);
+  v("fix_lidar_depth", &c.fix_lidar_depth), v("max_landmarks", &c.max_landmarks);
+}
+
+template <class V>
+void Visit(V& v, VisualConfig& c) {
+  v("enabled", &c.enabled), v("max_image_offset_s", &c.max_image_offset_s), v("depth_cloud_s", &c.depth_cloud_s);
+  v("depth_cloud_max_range_m", &c.depth_cloud_max_range_m);
+  v("tracker", &c.tracker), v("landmarks", &c.landmarks), v("depth", &c.depth);
+}
+
 template <class V>
 void Visit(V& v, EstimatorConfig& c) {
   v("cut_azimuth_deg", &c.cut_azimuth_deg), v("keyframe_every_scans", &c.keyframe_every_scans);
@@ -150,7 +190,7 @@ void Visit(V& v, EstimatorConfig& c) {
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
   v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);
   v("output_map_max_range_m", &c.output_map_max_range_m), v("free_space", &c.free_space);
-  v("loop_closure", &c.loop_closure);
+  v("loop_closure", &c.loop_closure), v("visual", &c.visual);
   v("keep_deskewed", &c.keep_deskewed);
   v("preprocess", &c.preprocess), v("features", &c.features), v("registration", &c.registration);
   v("local_map", &c.local_map), v("window", &c.window), v("imu_init", &c.imu_init);

@@ -214,6 +214,11 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
     std::optional<LidarPoseMeasurement> lidar;
     if (information_base.norm() > 0) lidar = LidarMeasurementInImuFrame(T_world_base_lidar, information_base, T_bi);
     if (Status st = window_->AddState(t_s, *prediction.imu_since_latest, lidar); st) {
+      if (visual_) {
+        const Status v =
+            window_->AddVisualObservations(visual_->ObservationsAt(t_s, T_world_base_lidar, &report->visual));
+        if (!v) LOG_WARN("estimator: camera observations at " << t_s << " s not used: " << v.message);
+      }
       window_->Optimize();
       const NavState x = window_->latest_state();
       T_world_base = PoseOf(x) * T_bi.inverse();
@@ -274,6 +279,7 @@ void Estimator::UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& 
     if (loop_closer_) HandKeyframeToLoopCloser(t_s, T_world_base);
   }
   report->map_free_space = AddToDenseMap(t_s, T_world_base, false);
+  if (visual_) visual_->AddDepthPoints(t_s, T_world_base, preprocessed_);
   report->timings.map_ms = watch.ms();
 }
 
@@ -293,12 +299,17 @@ void Estimator::HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base)
 }
 
 bool Estimator::WantsCameraFrame(Seconds t_s) const {
+  if (visual_) return true;
   if (!loop_closer_ || !loop_closer_->has_vocabulary()) return false;
   return camera_frames_.empty() || t_s - camera_frames_.back().t_s >= config_.loop_closure.max_camera_offset_s;
 }
 
 void Estimator::Feed(const CameraFrame& frame) {
-  if (!WantsCameraFrame(frame.t_s) || frame.image.empty()) return;
+  if (visual_ && !frame.image.empty()) visual_->Track(frame);
+  const bool for_loops = loop_closer_ && loop_closer_->has_vocabulary() &&
+                         (camera_frames_.empty() ||
+                          frame.t_s - camera_frames_.back().t_s >= config_.loop_closure.max_camera_offset_s);
+  if (!for_loops || frame.image.empty()) return;
   camera_frames_.push_back(frame);
   constexpr double kKeepS = 1.0;  // keyframes are handed over within a scan (~0.1-0.4 s) of their time
   while (!camera_frames_.empty() && camera_frames_.front().t_s < frame.t_s - kKeepS) camera_frames_.pop_front();

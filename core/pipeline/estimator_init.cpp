@@ -62,6 +62,7 @@ bool Estimator::StartWindow(const Eigen::Vector3d& gravity_world_mps2, const Nav
     return false;
   }
   window_ = std::move(window);
+  if (visual_) window_->AttachVisual(visual_->landmarks());
   init_poses_imu_.clear();
   init_times_s_.clear();
   return true;

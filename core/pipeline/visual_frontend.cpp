@@ -1,0 +1,128 @@
+#include "core/pipeline/visual_frontend.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "core/util/log.hpp"
+#include "core/util/validation.hpp"
+
+namespace rotolidar {
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+bool VisualConfig::Validate(std::string* error) const {
+  if (!tracker.Validate(error) || !landmarks.Validate(error) || !depth.Validate(error)) return false;
+  if (!(max_image_offset_s > 0.0) || !std::isfinite(max_image_offset_s))
+    return FailValidation(error, "visual.max_image_offset_s must be > 0");
+  if (!(depth_cloud_s >= 0.0) || !std::isfinite(depth_cloud_s))
+    return FailValidation(error, "visual.depth_cloud_s must be >= 0");
+  if (!(depth_cloud_max_range_m > 0.0)) return FailValidation(error, "visual.depth_cloud_max_range_m must be > 0");
+  return true;
+}
+
+VisualFrontEnd::VisualFrontEnd(const VisualConfig& config, const RigCalib& calib)
+    : config_(config),
+      calib_(calib),
+      tracker_(config.tracker),
+      landmarks_(config.landmarks, CameraExtrinsic(calib), 0.5 * (calib.camera.fx_px + calib.camera.fy_px)) {
+  std::string error;
+  ROTOLIDAR_CHECK(config.Validate(&error), error);
+}
+
+void VisualFrontEnd::Track(const CameraFrame& frame) {
+  const visual::FeatureTrackResult r = tracker_.Track(frame, calib_.camera);
+  if (!r.ok) {
+    LOG_WARN("camera frame at " << frame.t_s << " s not tracked: " << r.message);
+    return;
+  }
+  ++frames_since_state_;
+  track_ms_since_state_ += r.stats.time_ms;
+  recent_.push_back(r);
+  constexpr double kKeepS = 0.3;  // states come every scan (0.1 s) and look back at most max_image_offset_s
+  while (!recent_.empty() && recent_.front().t_s < frame.t_s - kKeepS) recent_.pop_front();
+}
+
+void VisualFrontEnd::AddDepthPoints(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points) {
+  if (!(config_.depth_cloud_s > 0.0)) return;
+  DepthScan scan{t_s, {}};
+  scan.points_world.reserve(points.size());
+  const Eigen::Matrix4f T = T_world_base.matrix().cast<float>();
+  for (const ScanPoint& p : points)
+    if (p.range_m <= config_.depth_cloud_max_range_m)
+      scan.points_world.push_back((T * p.p_base.homogeneous()).head<3>());
+  depth_cloud_.push_back(std::move(scan));
+  while (!depth_cloud_.empty() && depth_cloud_.front().t_s < t_s - config_.depth_cloud_s) depth_cloud_.pop_front();
+}
+
+// The depth cloud's points in the camera's view (the LidarDepthMap drops those behind it), then one query per
+// feature that will start a landmark.
+std::vector<double> VisualFrontEnd::LidarDepths(const std::vector<Eigen::Vector2d>& normalized,
+                                                const Pose3& T_world_cam, int* valid) {
+  std::vector<double> depths(normalized.size(), std::numeric_limits<double>::quiet_NaN());
+  *valid = 0;
+  if (normalized.empty() || depth_cloud_.empty()) return depths;
+  const Eigen::Matrix4f T_cam_world = T_world_cam.inverse().matrix().cast<float>();
+  const double half_w = 0.5 * calib_.camera.width_px / calib_.camera.fx_px + 0.1;  // the view plus a margin
+  const double half_h = 0.5 * calib_.camera.height_px / calib_.camera.fy_px + 0.1;
+  std::vector<Eigen::Vector3d> in_view;
+  for (const DepthScan& scan : depth_cloud_)
+    for (const Eigen::Vector3f& p : scan.points_world) {
+      const Eigen::Vector3f c = (T_cam_world * p.homogeneous()).head<3>();
+      if (c.z() < config_.depth.min_depth_m || std::abs(c.x()) > half_w * c.z() || std::abs(c.y()) > half_h * c.z())
+        continue;
+      in_view.push_back(c.cast<double>());
+    }
+  visual::LidarDepthMap map(config_.depth);
+  if (map.Build(in_view) == 0) return depths;
+  for (size_t i = 0; i < normalized.size(); ++i) {
+    const visual::FeatureDepth d = map.Query(normalized[i]);
+    if (!d.valid) continue;
+    depths[i] = d.depth_m;
+    ++*valid;
+  }
+  return depths;
+}
+
+std::vector<VisualObservation> VisualFrontEnd::ObservationsAt(Seconds t_s, const Pose3& T_world_base,
+                                                             VisualScanReport* report) {
+  *report = VisualScanReport{};
+  report->frames_tracked = frames_since_state_;
+  report->track_ms = track_ms_since_state_;
+  frames_since_state_ = 0;
+  track_ms_since_state_ = 0.0;
+  const VisualLandmarkStats stats = landmarks_.stats();
+  report->landmarks = stats.live, report->factors = stats.factors, report->rejected_total = stats.rejected_total;
+  const visual::FeatureTrackResult* best = nullptr;
+  for (const visual::FeatureTrackResult& r : recent_)
+    if (!best || std::abs(r.t_s - t_s) < std::abs(best->t_s - t_s)) best = &r;
+  if (!best || std::abs(best->t_s - t_s) > config_.max_image_offset_s) return {};
+  report->image = true;
+  report->image_offset_s = best->t_s - t_s;
+  report->tracked = best->stats.tracked, report->inliers = best->stats.inliers;
+  report->new_features = best->stats.new_features;
+  std::vector<VisualObservation> out;
+  std::vector<Eigen::Vector2d> fresh;  // features that will start a landmark: they need a depth
+  std::vector<size_t> fresh_index;
+  for (const visual::TrackedFeature& f : best->features) {
+    VisualObservation o;
+    o.feature_id = f.id;
+    o.normalized = f.normalized + f.velocity_normalized_ps * (t_s - best->t_s);  // moved to the state's time
+    o.lidar_depth_m = std::numeric_limits<double>::quiet_NaN();
+    if (!landmarks_.HasLandmark(f.id)) fresh.push_back(o.normalized), fresh_index.push_back(out.size());
+    out.push_back(o);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<double> depths = LidarDepths(fresh, T_world_base * calib_.T_base_cam, &report->lidar_depths);
+  for (size_t i = 0; i < fresh_index.size(); ++i) out[fresh_index[i]].lidar_depth_m = depths[i];
+  report->depth_ms = MsSince(t0);
+  report->observations = int(out.size());
+  return out;
+}
+
+}  // namespace rotolidar

@@ -1,0 +1,97 @@
+#pragma once
+// The estimator's camera path (seed paper "LV-SLAM", Sec. 3.3; LVI-SAM's visual-inertial subsystem): every camera
+// frame is tracked (core/visual/feature_tracker.hpp, KLT at the camera's rate), and each window state takes the
+// tracked frame nearest its time as observations of landmarks (core/backend/visual_landmarks.hpp). A feature
+// that starts a landmark gets its depth from the LiDAR points of the last depth_cloud_s (one rotor turn of a
+// rotary rig covers the camera's view) when they give one (core/visual/feature_depth.hpp), as LVI-SAM does.
+//
+// Time: the image's mid-exposure time t_img and the state's time t_s differ by up to half a frame period; each
+// observation is moved to t_s along the feature's tracked velocity on the normalised plane (VINS-Mono's
+// time-offset model with a known offset).
+// Frames: T_world_base estimates of the estimator; RigCalib's T_base_cam; observations are undistorted
+// normalised coordinates of the camera at t_s.
+// Ownership: owns the tracker, its recent results, the depth cloud and the landmarks (the window only points at
+// them). Thread safety: none (the estimator's thread).
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/backend/visual_landmarks.hpp"
+#include "core/types/calib.hpp"
+#include "core/types/messages.hpp"
+#include "core/types/scan_point.hpp"
+#include "core/visual/feature_depth.hpp"
+#include "core/visual/feature_tracker.hpp"
+
+namespace rotolidar {
+
+struct VisualConfig {
+  /// Off: camera frames serve only the loop closer (when it has a vocabulary). On: every frame is tracked and
+  /// the window fuses reprojection factors (LiDAR-visual-inertial).
+  bool enabled = false;
+  visual::FeatureTrackerConfig tracker;
+  VisualWindowConfig landmarks;
+  visual::LidarDepthConfig depth;
+  /// A window state takes its observations from the tracked frame nearest its time, when within this [s]
+  /// (half of a 30 Hz frame period is 0.017 s; 0.05 s tolerates a dropped frame).
+  double max_image_offset_s = 0.05;
+  /// LiDAR points of the last this many seconds give new landmarks their depth [s]: 2.5 s is one rotor turn at
+  /// 2.6 rad/s, so the camera's whole view has been swept.
+  double depth_cloud_s = 2.5;
+  /// Depth points farther from the camera than this are not kept [m] (the camera's features are nearer).
+  double depth_cloud_max_range_m = 40.0;
+  bool Validate(std::string* error) const;
+};
+
+/// What the camera path did for one window state (ScanReport::visual; scans.csv columns).
+struct VisualScanReport {
+  bool image = false;          ///< a tracked frame within max_image_offset_s gave observations
+  double image_offset_s = 0.0; ///< t_img - t_s of that frame [s]
+  int frames_tracked = 0;      ///< frames tracked since the previous state
+  int tracked = 0, inliers = 0, new_features = 0;  ///< FeatureTrackStats of the frame used
+  int observations = 0;        ///< handed to the window
+  int lidar_depths = 0;        ///< of those, features without a landmark that got a LiDAR depth
+  int landmarks = 0, factors = 0, rejected_total = 0;  ///< VisualLandmarkStats after the previous solve
+  double track_ms = 0.0;       ///< tracker time since the previous state [ms]
+  double depth_ms = 0.0;       ///< depth-cloud projection and queries [ms]
+};
+
+class VisualFrontEnd {
+ public:
+  /// config must Validate and calib's camera intrinsics be usable (ROTOLIDAR_CHECK).
+  VisualFrontEnd(const VisualConfig& config, const RigCalib& calib);
+
+  /// Tracks one frame (frames in time order). A frame the tracker refuses (bad image) is logged and skipped.
+  void Track(const CameraFrame& frame);
+  /// One scan's points (base frame at the scan's start, posed by T_world_base) into the depth cloud.
+  void AddDepthPoints(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points);
+  /// The observations of the window state at t_s whose base pose is estimated as T_world_base; empty without a
+  /// tracked frame near t_s. Fills *report.
+  std::vector<VisualObservation> ObservationsAt(Seconds t_s, const Pose3& T_world_base, VisualScanReport* report);
+
+  VisualLandmarks* landmarks() { return &landmarks_; }
+
+ private:
+  struct DepthScan {
+    Seconds t_s;
+    std::vector<Eigen::Vector3f> points_world;
+  };
+  /// The depth of each feature without a landmark (NaN where the LiDAR gives none).
+  std::vector<double> LidarDepths(const std::vector<Eigen::Vector2d>& normalized, const Pose3& T_world_cam,
+                                  int* valid);
+
+  VisualConfig config_;
+  RigCalib calib_;
+  visual::FeatureTracker tracker_;
+  VisualLandmarks landmarks_;
+  std::deque<visual::FeatureTrackResult> recent_;  ///< tracked frames of the last ~0.2 s
+  std::deque<DepthScan> depth_cloud_;
+  int frames_since_state_ = 0;
+  double track_ms_since_state_ = 0.0;
+};
+
+}  // namespace rotolidar

@@ -299,7 +299,7 @@ void Estimator::HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base)
 }
 
 bool Estimator::WantsCameraFrame(Seconds t_s) const {
-  if (visual_) return true;
+  if (visual_ && visual_->WantsFrame(t_s)) return true;
   if (!loop_closer_ || !loop_closer_->has_vocabulary()) return false;
   return camera_frames_.empty() || t_s - camera_frames_.back().t_s >= config_.loop_closure.max_camera_offset_s;
 }

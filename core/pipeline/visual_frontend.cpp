@@ -1,5 +1,6 @@
 #include "core/pipeline/visual_frontend.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -23,6 +24,10 @@ bool VisualConfig::Validate(std::string* error) const {
   if (!(depth_cloud_s >= 0.0) || !std::isfinite(depth_cloud_s))
     return FailValidation(error, "visual.depth_cloud_s must be >= 0");
   if (!(depth_cloud_max_range_m > 0.0)) return FailValidation(error, "visual.depth_cloud_max_range_m must be > 0");
+  if (!(max_tracking_rate_hz >= 0.0) || !std::isfinite(max_tracking_rate_hz))
+    return FailValidation(error, "visual.max_tracking_rate_hz must be >= 0");
+  if (!(depth_view_margin_rad >= 0.0 && depth_view_margin_rad < 1.0))
+    return FailValidation(error, "visual.depth_view_margin_rad must be in [0, 1)");
   return true;
 }
 
@@ -35,12 +40,19 @@ VisualFrontEnd::VisualFrontEnd(const VisualConfig& config, const RigCalib& calib
   ROTOLIDAR_CHECK(config.Validate(&error), error);
 }
 
+bool VisualFrontEnd::WantsFrame(Seconds t_s) const {
+  return !last_tracked_s_ || !(config_.max_tracking_rate_hz > 0.0) ||
+         t_s - *last_tracked_s_ >= 0.9 / config_.max_tracking_rate_hz;
+}
+
 void VisualFrontEnd::Track(const CameraFrame& frame) {
+  if (!WantsFrame(frame.t_s)) return;
   const visual::FeatureTrackResult r = tracker_.Track(frame, calib_.camera);
   if (!r.ok) {
     LOG_WARN("camera frame at " << frame.t_s << " s not tracked: " << r.message);
     return;
   }
+  last_tracked_s_ = frame.t_s;
   ++frames_since_state_;
   track_ms_since_state_ += r.stats.time_ms;
   recent_.push_back(r);
@@ -50,12 +62,20 @@ void VisualFrontEnd::Track(const CameraFrame& frame) {
 
 void VisualFrontEnd::AddDepthPoints(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points) {
   if (!(config_.depth_cloud_s > 0.0)) return;
+  // The camera's view cone in the base frame (tangents of its half angles), widened by the margin.
+  const double half_w = std::tan(std::atan(0.5 * calib_.camera.width_px / calib_.camera.fx_px) +
+                                 config_.depth_view_margin_rad);
+  const double half_h = std::tan(std::atan(0.5 * calib_.camera.height_px / calib_.camera.fy_px) +
+                                 config_.depth_view_margin_rad);
+  const Eigen::Matrix4f T_cam_base = calib_.T_base_cam.inverse().matrix().cast<float>();
+  const Eigen::Matrix4f T_world = T_world_base.matrix().cast<float>();
   DepthScan scan{t_s, {}};
-  scan.points_world.reserve(points.size());
-  const Eigen::Matrix4f T = T_world_base.matrix().cast<float>();
-  for (const ScanPoint& p : points)
-    if (p.range_m <= config_.depth_cloud_max_range_m)
-      scan.points_world.push_back((T * p.p_base.homogeneous()).head<3>());
+  for (const ScanPoint& p : points) {
+    if (p.range_m > config_.depth_cloud_max_range_m) continue;
+    const Eigen::Vector3f c = (T_cam_base * p.p_base.homogeneous()).head<3>();
+    if (c.z() <= 0.0f || std::abs(c.x()) > half_w * c.z() || std::abs(c.y()) > half_h * c.z()) continue;
+    scan.points_world.push_back((T_world * p.p_base.homogeneous()).head<3>());
+  }
   depth_cloud_.push_back(std::move(scan));
   while (!depth_cloud_.empty() && depth_cloud_.front().t_s < t_s - config_.depth_cloud_s) depth_cloud_.pop_front();
 }

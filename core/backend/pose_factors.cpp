@@ -7,6 +7,7 @@
 #include <Eigen/QR>
 #include <Eigen/Geometry>
 
+#include "core/imu/pose_block_view.hpp"
 #include "core/imu/preintegration.hpp"
 #include "core/util/log.hpp"
 
@@ -21,19 +22,8 @@ using Eigen::Vector3d;
 using Eigen::VectorXd;
 using RowMajorXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-struct PoseView {
-  Vector3d t;
-  Quaterniond q;
-  Matrix3d R;
-};
-
-PoseView ReadPose(const double* pose7) {
-  PoseView v;
-  v.t = Eigen::Map<const Vector3d>(pose7);
-  v.q = Eigen::Map<const Quaterniond>(pose7 + 3).normalized();
-  v.R = v.q.toRotationMatrix();
-  return v;
-}
+using detail::PoseView;
+using detail::ReadPose;
 
 /// Jl^-1(phi) = Jr^-1(-phi): Log(Exp(d) Exp(phi)) ~= phi + Jl^-1(phi) d.
 Matrix3d LeftJacobianInverse(const Vector3d& phi) { return so3::RightJacobianInverse(-phi); }

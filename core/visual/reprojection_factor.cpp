@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include "core/imu/pose_block_view.hpp"
 #include "core/imu/preintegration.hpp"
 #include "core/util/log.hpp"
 
@@ -18,20 +19,8 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 using Jac23 = Eigen::Matrix<double, 2, 3>;
 
-/// A pose block (or Pose3) read once: quaternion normalised.
-struct PoseView {
-  Vector3d t;
-  Quaterniond q;
-  Matrix3d R;
-};
-
-PoseView ReadPose(const double* pose7) {
-  PoseView v;
-  v.t = Eigen::Map<const Vector3d>(pose7);
-  v.q = Eigen::Map<const Quaterniond>(pose7 + 3).normalized();
-  v.R = v.q.toRotationMatrix();
-  return v;
-}
+using detail::PoseView;
+using detail::ReadPose;
 
 PoseView ViewOf(const Pose3& T) {
   double pose7[kImuPoseBlockSize];

@@ -9,6 +9,7 @@
 
 #include "core/backend/pose_factors.hpp"
 #include "core/util/rng.hpp"
+#include "tests/common/jacobian_check.hpp"
 
 namespace rotolidar {
 namespace {
@@ -44,30 +45,7 @@ Matrix6d RandomInformation(RandomStream& rng, double scale) {
   return scale * (M * M.transpose() + 0.1 * Matrix6d::Identity());
 }
 
-double MaxMixedError(const Eigen::MatrixXd& a, const Eigen::MatrixXd& n) {
-  return ((a - n).array().abs() / (1.0 + n.array().abs())).maxCoeff();
-}
-
-/// Worst mixed error between analytic and numeric Jacobians (tangent and ambient) over the blocks; pose blocks
-/// (size 7) get the pose manifold.
-double JacobianError(const ceres::CostFunction& cost, const std::vector<double*>& blocks) {
-  const std::unique_ptr<ceres::Manifold> pose_manifold = MakeImuPoseManifold();
-  std::vector<const ceres::Manifold*> manifolds;
-  for (size_t k = 0; k < blocks.size(); ++k) {
-    manifolds.push_back(cost.parameter_block_sizes()[k] == kImuPoseBlockSize ? pose_manifold.get() : nullptr);
-  }
-  ceres::GradientChecker checker(&cost, &manifolds, ceres::NumericDiffOptions{});
-  ceres::GradientChecker::ProbeResults results;
-  std::vector<const double*> parameters(blocks.begin(), blocks.end());
-  checker.Probe(parameters.data(), 1e-5, &results);
-  EXPECT_TRUE(results.return_value);
-  double worst = 0.0;
-  for (size_t k = 0; k < blocks.size(); ++k) {
-    worst = std::max(worst, MaxMixedError(results.local_jacobians[k], results.local_numeric_jacobians[k]));
-    worst = std::max(worst, MaxMixedError(results.jacobians[k], results.numeric_jacobians[k]));
-  }
-  return worst;
-}
+using test_util::JacobianError;
 
 TEST(PoseFactors, LidarAndRelativeJacobiansMatchNumeric) {
   RandomStream rng(21, "pose_factors_test.jacobians");

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "core/imu/imu_factor.hpp"
+#include "tests/common/jacobian_check.hpp"
 #include "core/util/rng.hpp"
 
 namespace rotolidar {
@@ -47,10 +48,7 @@ NavState RandomStateI(RandomStream& rng, const PreintegratedImu& pre) {
   return i;
 }
 
-/// Max over entries of |a - n| / (1 + |n|).
-double MaxMixedError(const Eigen::MatrixXd& a, const Eigen::MatrixXd& n) {
-  return ((a - n).array().abs() / (1.0 + n.array().abs())).maxCoeff();
-}
+using test_util::MaxMixedError;
 
 TEST(ImuFactor, AnalyticJacobiansMatchNumericWithManifold) {
   RandomStream rng(11, "imu_factor_test.jacobians");

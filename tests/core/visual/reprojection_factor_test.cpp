@@ -12,6 +12,7 @@
 
 #include "core/util/rng.hpp"
 #include "core/visual/reprojection_factor.hpp"
+#include "tests/common/jacobian_check.hpp"
 
 namespace rotolidar {
 namespace {
@@ -68,33 +69,11 @@ ReprojectionMeasurement Measure(const Scene& s, const Eigen::Vector2d& u_j) {
   return m;
 }
 
-double MaxMixedError(const Eigen::MatrixXd& a, const Eigen::MatrixXd& n) {
-  return ((a - n).array().abs() / (1.0 + n.array().abs())).maxCoeff();
-}
-
-/// Worst mixed error between analytic and numeric Jacobians (tangent and ambient); 7-blocks get the pose manifold.
+// Ceres' checker differentiates by Ridders' method from an initial step that is also its minimum absolute step:
+// the default 1e-2 is 25 % of a 25 m landmark's rho (0.04 1/m) and its extrapolation then stops ~1 % off; 1e-4 is
+// small against every block here.
 double JacobianError(const ceres::CostFunction& cost, const std::vector<double*>& blocks) {
-  const std::unique_ptr<ceres::Manifold> pose_manifold = MakeImuPoseManifold();
-  std::vector<const ceres::Manifold*> manifolds;
-  for (size_t k = 0; k < blocks.size(); ++k) {
-    manifolds.push_back(cost.parameter_block_sizes()[k] == kImuPoseBlockSize ? pose_manifold.get() : nullptr);
-  }
-  // The checker differentiates by Ridders' method from an initial step of ridders_relative_initial_step_size,
-  // which is also its minimum absolute step: the default 1e-2 is 25 % of a 25 m landmark's rho (0.04 1/m) and
-  // its extrapolation then stops ~1 % off; 1e-4 is small against every block here.
-  ceres::NumericDiffOptions options;
-  options.ridders_relative_initial_step_size = 1e-4;
-  ceres::GradientChecker checker(&cost, &manifolds, options);
-  ceres::GradientChecker::ProbeResults results;
-  std::vector<const double*> parameters(blocks.begin(), blocks.end());
-  checker.Probe(parameters.data(), 1e-5, &results);
-  EXPECT_TRUE(results.return_value);
-  double worst = 0.0;
-  for (size_t k = 0; k < blocks.size(); ++k) {
-    worst = std::max(worst, MaxMixedError(results.local_jacobians[k], results.local_numeric_jacobians[k]));
-    worst = std::max(worst, MaxMixedError(results.jacobians[k], results.numeric_jacobians[k]));
-  }
-  return worst;
+  return test_util::JacobianError(cost, blocks, 1e-4);
 }
 
 TEST(ReprojectionFactor, JacobiansMatchNumericForAllVariants) {

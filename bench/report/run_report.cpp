@@ -9,6 +9,7 @@
 #include "bench/eval/trajectory_lookup.hpp"
 #include "bench/loops/loop_report.hpp"
 #include "bench/report/html_report.hpp"
+#include "bench/report/visual_section.hpp"
 #include "bench/report/run_report_sections.hpp"
 #include "bench/run/scan_health.hpp"
 #include "core/util/log.hpp"
@@ -140,6 +141,7 @@ std::string RenderRunReport(const RunReportInput& in) {
   report::AddCoverageSection(in, &html);
   report::AddElementsSection(in, &html);
   AddLoopSection(in, &html);
+  report::AddVisualSection(in, &html);
   AddConfigSection(in, &html);
   return html.Render();
 }
@@ -213,6 +215,7 @@ Status WriteSlamRunReport(const std::string& recording_dir, const std::string& s
   in.run_info = {{"recording", recording_dir}, {"outputs", slam_dir}};
   in.slam = &slam;
   in.evaluation = ev;
+  in.recording_dir = recording_dir;
   in.config_files = {{"estimator (slam_config.yaml)", slam_dir + "/slam_config.yaml"},
                      {"rig calibration (calib.yaml)", recording_dir + "/calib.yaml"}};
   return WriteRunReport(slam_dir + "/report.html", in);

@@ -13,6 +13,7 @@
 //   coverage     covered vs missed surface samples (top view), coverage per surface class (map metrics only)
 //   elements     measured vs true door / window / column sizes                (map metrics only)
 //   loops        loop closure: counts and the loop edges on a top view        (loop closure on)
+//   camera       the camera path per scan and tracked features on sample frames (visual.enabled)
 //   config       the resolved configs of the run (collapsed)
 // Sections whose data is missing are left out; a note at the top says which and why. Nothing is faked.
 #include <string>
@@ -32,6 +33,8 @@ struct RunReportInput {
   std::vector<std::pair<std::string, std::string>> run_info;  ///< first rows of the headline (scene, seed ...)
   const SlamRunResult* slam = nullptr;                        ///< required (borrowed)
   const RunEvaluation* evaluation = nullptr;                  ///< required (borrowed); may hold no truth
+  /// The recording (for the camera section's sample frames); empty: none.
+  std::string recording_dir;
   /// Resolved config files shown in the config section: (title, path); unreadable paths are noted.
   std::vector<std::pair<std::string, std::string>> config_files;
 };

@@ -55,24 +55,6 @@ Status LoadEncoder(const std::string& path, uint32_t counts_per_rev, std::vector
   return reader.status();
 }
 
-Status LoadCamera(const std::string& dir, std::vector<CameraFrameRef>* out) {
-  const std::string path = dir + "/" + RecordingLayout::kCamera;
-  if (!fs::exists(path)) return Status::Ok();  // the camera stream is optional
-  CsvReader reader;
-  if (Status s = reader.Open(path, kCameraColumns); !s) return s;
-  std::vector<double> v;
-  while (reader.Next(&v)) {
-    if (!out->empty())
-      if (Status s = CheckIncreasing(path, reader, out->back().t_s, v[0]); !s) return s;
-    const std::string image = dir + "/" + RecordingLayout::kCameraDir + "/" + CameraImageName(long(v[1]));
-    if (!fs::exists(image))
-      return Status::Error(path + ":" + std::to_string(reader.line()) + ": column 2 ('index'): image " + image +
-                           " does not exist");
-    out->push_back({v[0], image});
-  }
-  return reader.status();
-}
-
 Status LoadPackets(const std::string& path, double epoch_unix_s, std::vector<LidarPacket>* out) {
   PcapReader reader;
   if (Status s = reader.Open(path, epoch_unix_s); !s) return s;  // record time - epoch = rig time
@@ -117,10 +99,28 @@ Status LoadRecording(const std::string& dir, Recording* recording) {
   if (Status s = LoadImuCsv(dir + "/" + RecordingLayout::kImu, &r.imu); !s) return s;
   if (Status s = LoadEncoder(dir + "/" + RecordingLayout::kEncoder, r.calib.encoder.counts_per_rev, &r.encoder); !s)
     return s;
-  if (Status s = LoadCamera(dir, &r.camera); !s) return s;
+  if (Status s = LoadCameraIndex(dir, &r.camera); !s) return s;
   if (r.encoder.size() < 2) return Status::Error(dir + "/" + RecordingLayout::kEncoder + ": fewer than 2 samples");
   *recording = std::move(r);
   return Status::Ok();
+}
+
+Status LoadCameraIndex(const std::string& dir, std::vector<CameraFrameRef>* out) {
+  const std::string path = dir + "/" + RecordingLayout::kCamera;
+  if (!fs::exists(path)) return Status::Ok();  // the camera stream is optional
+  CsvReader reader;
+  if (Status s = reader.Open(path, kCameraColumns); !s) return s;
+  std::vector<double> v;
+  while (reader.Next(&v)) {
+    if (!out->empty())
+      if (Status s = CheckIncreasing(path, reader, out->back().t_s, v[0]); !s) return s;
+    const std::string image = dir + "/" + RecordingLayout::kCameraDir + "/" + CameraImageName(long(v[1]));
+    if (!fs::exists(image))
+      return Status::Error(path + ":" + std::to_string(reader.line()) + ": column 2 ('index'): image " + image +
+                           " does not exist");
+    out->push_back({v[0], image});
+  }
+  return reader.status();
 }
 
 Status LoadCameraFrame(const CameraFrameRef& ref, CameraFrame* frame) {

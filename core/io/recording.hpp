@@ -58,6 +58,10 @@ Status SaveImuCsv(const std::string& path, const std::vector<ImuSample>& samples
 /// Reads one camera image (BGR8); fails with the file name when it cannot be read.
 Status LoadCameraFrame(const CameraFrameRef& ref, CameraFrame* frame);
 
+/// Appends the camera frames of camera.csv in `dir` (none when the file is missing: the stream is optional),
+/// without loading the images or the other streams. Errors name the file, the line and the column.
+Status LoadCameraIndex(const std::string& dir, std::vector<CameraFrameRef>* out);
+
 /// Streams sensor messages into a new recording folder. Not thread-safe; call Close() to flush.
 class RecordingWriter {
  public:

@@ -1,0 +1,103 @@
+#include "bench/report/visual_section.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench/report/svg_plot.hpp"
+#include "bench/report/svg_raster.hpp"
+#include "core/io/calib_yaml.hpp"
+#include "core/io/recording.hpp"
+#include "core/visual/feature_tracker.hpp"
+
+namespace rotolidar::bench::report {
+namespace {
+
+/// Observations, inliers, LiDAR depths and landmarks per scan over time.
+std::string StatisticsSvg(const std::vector<ScanReport>& scans) {
+  std::vector<PlotSeries> series(4);
+  series[0].label = "observations", series[1].label = "KLT inliers", series[2].label = "new LiDAR depths";
+  series[3].label = "landmarks in the window";
+  const Seconds t0 = scans.front().t_start_s;
+  for (const ScanReport& r : scans) {
+    if (!r.visual.image) continue;
+    const double t = r.t_start_s - t0;
+    const double values[4] = {double(r.visual.observations), double(r.visual.inliers),
+                              double(r.visual.lidar_depths), double(r.visual.landmarks)};
+    for (int k = 0; k < 4; ++k) series[k].x.push_back(t), series[k].y.push_back(values[k]);
+  }
+  PlotOptions options;
+  options.title = "Camera path per scan";
+  options.x_label = "time [s]";
+  options.y_label = "count";
+  options.y_include_zero = true;
+  options.legend_above = true;
+  return LinePlotSvg(series, options);
+}
+
+/// The frame at t_s with the features tracked over the half second before it: each track's last positions as a
+/// line, its current position as a dot (red: new, orange: 2-9 frames, green: 10 or more). Empty on failure.
+std::string TrackedFrameSvg(const std::vector<CameraFrameRef>& frames, Seconds t_s, const RigCalib& calib) {
+  visual::FeatureTracker tracker;
+  std::map<uint64_t, std::vector<cv::Point2f>> history;
+  visual::FeatureTrackResult last;
+  CameraFrame frame;
+  for (const CameraFrameRef& ref : frames) {
+    if (ref.t_s < t_s - 0.5 || ref.t_s > t_s) continue;
+    if (!LoadCameraFrame(ref, &frame)) return "";
+    last = tracker.Track(frame, calib.camera);
+    if (!last.ok) return "";
+    for (const visual::TrackedFeature& f : last.features)
+      history[f.id].push_back(cv::Point2f(float(f.pixel_px.x()), float(f.pixel_px.y())));
+  }
+  if (!last.ok || frame.image.empty()) return "";
+  cv::Mat canvas = frame.image.clone();
+  for (const visual::TrackedFeature& f : last.features) {
+    const std::vector<cv::Point2f>& h = history[f.id];
+    for (size_t k = h.size() > 10 ? h.size() - 10 : 1; k < h.size(); ++k)
+      cv::line(canvas, h[k - 1], h[k], cv::Scalar(0, 255, 255), 1, cv::LINE_AA);
+    const cv::Scalar color = f.track_length >= 10 ? cv::Scalar(0, 200, 0)
+                             : f.track_length >= 2 ? cv::Scalar(0, 165, 255) : cv::Scalar(0, 0, 255);
+    cv::circle(canvas, h.back(), 3, color, cv::FILLED, cv::LINE_AA);
+  }
+  std::vector<uint8_t> png;
+  if (!cv::imencode(".png", canvas, png)) return "";
+  return "<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" width=\"" +
+         std::to_string(canvas.cols) + "\" height=\"" + std::to_string(canvas.rows) + "\"><image width=\"" +
+         std::to_string(canvas.cols) + "\" height=\"" + std::to_string(canvas.rows) +
+         "\" xlink:href=\"data:image/png;base64," + Base64Encode(png) + "\"/></svg>";
+}
+
+}  // namespace
+
+void AddVisualSection(const RunReportInput& in, HtmlReport* html) {
+  const std::vector<ScanReport>& scans = in.slam->scans;
+  const size_t used =
+      size_t(std::count_if(scans.begin(), scans.end(), [](const ScanReport& r) { return r.visual.image; }));
+  if (used == 0) return;
+  html->BeginSection("camera", "Camera in the window");
+  html->Paragraph(std::to_string(used) + " of " + std::to_string(scans.size()) +
+                  " scans fused a camera frame (docs/visual.md; per scan: scans.csv vis_* columns).");
+  html->Figure(StatisticsSvg(scans), "Per scan: features observed, KLT inliers of the frame used, new landmarks "
+                                     "that took a LiDAR depth, and landmarks held by the window.");
+  std::vector<CameraFrameRef> frames;
+  RigCalib calib;
+  if (in.recording_dir.empty() || !LoadCameraIndex(in.recording_dir, &frames) || frames.empty() ||
+      !LoadCalibYaml(in.recording_dir + "/calib.yaml", &calib)) {
+    html->Note("no sample frames: the recording's camera frames or calib.yaml could not be read");
+    return;
+  }
+  const Seconds t0 = scans.front().t_start_s, t1 = scans.back().t_start_s;
+  for (double share : {0.25, 0.5, 0.75}) {
+    const Seconds t = t0 + share * (t1 - t0);
+    const std::string svg = TrackedFrameSvg(frames, t, calib);
+    if (svg.empty()) continue;
+    html->Figure(svg, Fmt("Frame at %.1f s, tracked over the half second before it (default tracker settings): "
+                          "dots red = new, orange = 2-9 frames, green = 10+; yellow = the last positions.",
+                          t - t0));
+  }
+}
+
+}  // namespace rotolidar::bench::report

@@ -1,7 +1,8 @@
 // Feature depth from the LiDAR (the triangulation fallback: triangulation_test.cpp). Scenes are ray-cast here: a
 // VLP-16-like scan (16 rings at -15..+15 deg every 2 deg, 0.2 deg azimuth steps, 3 cm range noise) from a LiDAR
-// at the origin of its frame (x forward, y left, z up) against axis-aligned boxes (a wall 5 m ahead, a floor, a box); the camera sits 5 cm ahead
-// of and 8 cm below the LiDAR looking along its x axis. Feature rays are cast against the same scene for the truth.
+// at the origin of its frame (x forward, y left, z up) against axis-aligned boxes (a wall 5 m ahead, a floor, a
+// box); the camera sits 5 cm ahead of and 8 cm below the LiDAR looking along its x axis. Feature rays are cast
+// against the same scene for the truth.
 #include <gtest/gtest.h>
 
 #include <algorithm>

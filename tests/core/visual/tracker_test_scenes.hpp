@@ -48,7 +48,9 @@ inline cv::Mat MakeTexture(uint64_t seed, cv::Size size, double contrast = 1.0) 
   return tex;
 }
 
-inline cv::Mat MakeCanvas(uint64_t seed = 7) { return MakeTexture(seed, cv::Size(640 + 2 * kMargin, 480 + 2 * kMargin)); }
+inline cv::Mat MakeCanvas(uint64_t seed = 7) {
+  return MakeTexture(seed, cv::Size(640 + 2 * kMargin, 480 + 2 * kMargin));
+}
 
 // Homography from view-1 pixels to view-k pixels for the plane n^T X1 = d (view-1 camera frame) and the camera
 // motion T_k_1 (X_k = R X_1 + t): H = K (R + t n^T / d) K^-1.

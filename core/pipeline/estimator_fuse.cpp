@@ -298,18 +298,28 @@ void Estimator::HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base)
   loop_closer_->AddKeyframe(std::move(keyframe));
 }
 
+namespace {
+
+/// Whether the loop closer's visual stage 1 keeps a frame at t_s: it has a vocabulary and the last kept frame is
+/// at least max_camera_offset_s older.
+bool LoopClosureWantsFrame(const graph::LoopCloser* closer, const std::deque<CameraFrame>& kept,
+                           double max_camera_offset_s, Seconds t_s) {
+  if (!closer || !closer->has_vocabulary()) return false;
+  return kept.empty() || t_s - kept.back().t_s >= max_camera_offset_s;
+}
+
+}  // namespace
+
 bool Estimator::WantsCameraFrame(Seconds t_s) const {
-  if (visual_ && visual_->WantsFrame(t_s)) return true;
-  if (!loop_closer_ || !loop_closer_->has_vocabulary()) return false;
-  return camera_frames_.empty() || t_s - camera_frames_.back().t_s >= config_.loop_closure.max_camera_offset_s;
+  return (visual_ && visual_->WantsFrame(t_s)) ||
+         LoopClosureWantsFrame(loop_closer_.get(), camera_frames_, config_.loop_closure.max_camera_offset_s, t_s);
 }
 
 void Estimator::Feed(const CameraFrame& frame) {
   if (visual_ && !frame.image.empty()) visual_->Track(frame);
-  const bool for_loops = loop_closer_ && loop_closer_->has_vocabulary() &&
-                         (camera_frames_.empty() ||
-                          frame.t_s - camera_frames_.back().t_s >= config_.loop_closure.max_camera_offset_s);
-  if (!for_loops || frame.image.empty()) return;
+  if (frame.image.empty() || !LoopClosureWantsFrame(loop_closer_.get(), camera_frames_,
+                                                    config_.loop_closure.max_camera_offset_s, frame.t_s))
+    return;
   camera_frames_.push_back(frame);
   constexpr double kKeepS = 1.0;  // keyframes are handed over within a scan (~0.1-0.4 s) of their time
   while (!camera_frames_.empty() && camera_frames_.front().t_s < frame.t_s - kKeepS) camera_frames_.pop_front();

@@ -1,6 +1,5 @@
 #include "core/pipeline/visual_frontend.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -10,6 +9,17 @@
 
 namespace rotolidar {
 namespace {
+
+/// Tangents of the camera's half angles (x, y) widened by margin_rad: the view cone c.z > 0, |c.x| <= x c.z,
+/// |c.y| <= y c.z of a point c in the camera frame.
+Eigen::Vector2f ViewTangents(const CameraIntrinsics& camera, double margin_rad) {
+  return {float(std::tan(std::atan(0.5 * camera.width_px / camera.fx_px) + margin_rad)),
+          float(std::tan(std::atan(0.5 * camera.height_px / camera.fy_px) + margin_rad))};
+}
+
+bool InView(const Eigen::Vector3f& c, const Eigen::Vector2f& tangents, float min_z_m) {
+  return c.z() > min_z_m && std::abs(c.x()) <= tangents.x() * c.z() && std::abs(c.y()) <= tangents.y() * c.z();
+}
 
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -62,18 +72,14 @@ void VisualFrontEnd::Track(const CameraFrame& frame) {
 
 void VisualFrontEnd::AddDepthPoints(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points) {
   if (!(config_.depth_cloud_s > 0.0)) return;
-  // The camera's view cone in the base frame (tangents of its half angles), widened by the margin.
-  const double half_w = std::tan(std::atan(0.5 * calib_.camera.width_px / calib_.camera.fx_px) +
-                                 config_.depth_view_margin_rad);
-  const double half_h = std::tan(std::atan(0.5 * calib_.camera.height_px / calib_.camera.fy_px) +
-                                 config_.depth_view_margin_rad);
+  const Eigen::Vector2f cone = ViewTangents(calib_.camera, config_.depth_view_margin_rad);
   const Eigen::Matrix4f T_cam_base = calib_.T_base_cam.inverse().matrix().cast<float>();
   const Eigen::Matrix4f T_world = T_world_base.matrix().cast<float>();
   DepthScan scan{t_s, {}};
   for (const ScanPoint& p : points) {
     if (p.range_m > config_.depth_cloud_max_range_m) continue;
     const Eigen::Vector3f c = (T_cam_base * p.p_base.homogeneous()).head<3>();
-    if (c.z() <= 0.0f || std::abs(c.x()) > half_w * c.z() || std::abs(c.y()) > half_h * c.z()) continue;
+    if (!InView(c, cone, 0.0f)) continue;
     scan.points_world.push_back((T_world * p.p_base.homogeneous()).head<3>());
   }
   depth_cloud_.push_back(std::move(scan));
@@ -88,15 +94,13 @@ std::vector<double> VisualFrontEnd::LidarDepths(const std::vector<Eigen::Vector2
   *valid = 0;
   if (normalized.empty() || depth_cloud_.empty()) return depths;
   const Eigen::Matrix4f T_cam_world = T_world_cam.inverse().matrix().cast<float>();
-  const double half_w = 0.5 * calib_.camera.width_px / calib_.camera.fx_px + 0.1;  // the view plus a margin
-  const double half_h = 0.5 * calib_.camera.height_px / calib_.camera.fy_px + 0.1;
+  // The view widened by twice the depth search's radius: no point beyond can be a neighbour of a feature's ray.
+  const Eigen::Vector2f cone = ViewTangents(calib_.camera, 2.0 * config_.depth.search_radius_deg * M_PI / 180.0);
   std::vector<Eigen::Vector3d> in_view;
   for (const DepthScan& scan : depth_cloud_)
     for (const Eigen::Vector3f& p : scan.points_world) {
       const Eigen::Vector3f c = (T_cam_world * p.homogeneous()).head<3>();
-      if (c.z() < config_.depth.min_depth_m || std::abs(c.x()) > half_w * c.z() || std::abs(c.y()) > half_h * c.z())
-        continue;
-      in_view.push_back(c.cast<double>());
+      if (InView(c, cone, float(config_.depth.min_depth_m))) in_view.push_back(c.cast<double>());
     }
   visual::LidarDepthMap map(config_.depth);
   if (map.Build(in_view) == 0) return depths;

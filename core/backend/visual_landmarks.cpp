@@ -38,6 +38,11 @@ bool VisualWindowConfig::Validate(std::string* error) const {
   if (!(initial_depth_m >= min_depth_m && initial_depth_m <= max_depth_m))
     return FailValidation(error, "visual.initial_depth_m must lie in [min_depth_m, max_depth_m]");
   if (max_landmarks < 1) return FailValidation(error, "visual.max_landmarks must be >= 1");
+  if (!(max_pixel_sigma_px >= pixel_sigma_px) || !std::isfinite(max_pixel_sigma_px))
+    return FailValidation(error, "visual.max_pixel_sigma_px must be >= pixel_sigma_px");
+  if (!(sigma_smoothing > 0.0 && sigma_smoothing <= 1.0))
+    return FailValidation(error, "visual.sigma_smoothing must lie in (0, 1]");
+  if (min_residuals_for_sigma < 1) return FailValidation(error, "visual.min_residuals_for_sigma must be >= 1");
   return true;
 }
 
@@ -47,13 +52,26 @@ VisualLandmarks::VisualLandmarks(const VisualWindowConfig& config, const Pose3& 
   ROTOLIDAR_CHECK(config.Validate(&error), error);
   ROTOLIDAR_CHECK(focal_px > 0.0 && std::isfinite(focal_px), "VisualLandmarks: focal_px must be > 0");
   sqrt_information_ = ReprojectionSqrtInformation(focal_px, config.pixel_sigma_px);
-  loss_ = std::make_unique<ceres::HuberLoss>(config.huber_sigmas);
+  sigma_px_ = config.pixel_sigma_px;
 }
+
+namespace {
+
+/// Huber(delta) on residuals whitened at sigma instead of nominal_sigma, for residuals whitened at nominal_sigma:
+/// with k = nominal_sigma / sigma, rho(k^2 s) = k^2 Huber_{delta / k}(s) (both branches), i.e. a ScaledLoss.
+std::unique_ptr<ceres::LossFunction> HuberAtSigma(double delta, double nominal_sigma, double sigma) {
+  if (sigma == nominal_sigma) return std::make_unique<ceres::HuberLoss>(delta);
+  const double k = nominal_sigma / sigma;
+  return std::make_unique<ceres::ScaledLoss>(new ceres::HuberLoss(delta / k), k * k, ceres::TAKE_OWNERSHIP);
+}
+
+}  // namespace
 
 VisualLandmarks::~VisualLandmarks() = default;
 
 void VisualLandmarks::Clear() {
   landmarks_.clear();
+  sigma_px_ = config_.pixel_sigma_px;
   stats_.live = stats_.in_problem = stats_.with_lidar_depth = stats_.factors = 0;
 }
 
@@ -91,6 +109,10 @@ void VisualLandmarks::AddObservations(const double* pose, const std::vector<Visu
 }
 
 int VisualLandmarks::AddToProblem(ceres::Problem* problem) {
+  if (!loss_ || loss_sigma_px_ != sigma_px_) {  // the previous problem (its only user) is gone
+    loss_ = HuberAtSigma(config_.huber_sigmas, config_.pixel_sigma_px, sigma_px_);
+    loss_sigma_px_ = sigma_px_;
+  }
   int factors = 0, in_problem = 0;
   for (auto& [id, l] : landmarks_) {
     l->in_problem = int(l->observations.size()) >= config_.min_observations;
@@ -119,23 +141,27 @@ bool VisualLandmarks::InFrontEverywhere(const Landmark& l) const {
   return true;
 }
 
-double VisualLandmarks::MaxReprojectionPx(const Landmark& l) const {
+double VisualLandmarks::ReprojectionErrorsPx(const Landmark& l, std::vector<double>* errors_px) const {
   const Pose3 T_a = UnpackImuPose(l.anchor());
   double worst = 0.0;
   for (const Observation& o : l.observations) {
+    if (!o.factor) continue;  // the anchor's own observation reprojects exactly
     const Eigen::Vector2d u =
         PredictNormalized(T_a, UnpackImuPose(o.pose), T_imu_cam_, l.anchor_normalized(), l.inverse_depth);
-    worst = std::max(worst, focal_px_ * (u - o.normalized).norm());
+    const double e = focal_px_ * (u - o.normalized).norm();
+    errors_px->push_back(e);
+    worst = std::max(worst, e);
   }
   return worst;
 }
 
 int VisualLandmarks::RejectOutliers() {
+  std::vector<double> residuals_px;
   int dropped = 0;
   for (auto it = landmarks_.begin(); it != landmarks_.end();) {
     const Landmark& l = *it->second;
     const bool bad = l.in_problem && (!std::isfinite(l.inverse_depth) || !InFrontEverywhere(l) ||
-                                      MaxReprojectionPx(l) > config_.max_reprojection_px);
+                                      !(ReprojectionErrorsPx(l, &residuals_px) <= config_.max_reprojection_px));
     if (bad) {
       it = landmarks_.erase(it);
       ++dropped;
@@ -144,7 +170,22 @@ int VisualLandmarks::RejectOutliers() {
     }
   }
   stats_.rejected_total += dropped;
+  UpdateSigma(&residuals_px);
   return dropped;
+}
+
+// Residuals of every factor of the last solve (outliers included: the median ignores up to half of them). The
+// median of |r| for a 2-D isotropic Gaussian r (a Rayleigh variable) is sigma sqrt(2 ln 2) = 1.1774 sigma.
+void VisualLandmarks::UpdateSigma(std::vector<double>* residuals_px) {
+  if (residuals_px->empty()) return;
+  auto mid = residuals_px->begin() + residuals_px->size() / 2;
+  std::nth_element(residuals_px->begin(), mid, residuals_px->end());
+  stats_.residual_median_px = *mid;
+  if (!config_.adaptive_sigma || int(residuals_px->size()) < config_.min_residuals_for_sigma) return;
+  const double estimate_px = std::max(*mid / std::sqrt(2.0 * std::log(2.0)), 1e-3);
+  const double a = config_.sigma_smoothing;
+  const double smoothed = std::exp((1.0 - a) * std::log(sigma_px_) + a * std::log(estimate_px));
+  sigma_px_ = std::clamp(smoothed, config_.pixel_sigma_px, config_.max_pixel_sigma_px);
 }
 
 std::vector<MarginalizationTerm> VisualLandmarks::TermsOf(const double* pose, std::vector<const double*>* dropped) {
@@ -200,6 +241,7 @@ void VisualLandmarks::Triangulate(Landmark* l) const {
 
 VisualLandmarkStats VisualLandmarks::stats() const {
   VisualLandmarkStats s = stats_;
+  s.sigma_px = sigma_px_;
   s.live = int(landmarks_.size());
   s.with_lidar_depth = int(std::count_if(landmarks_.begin(), landmarks_.end(),
                                          [](const auto& kv) { return kv.second->lidar_depth; }));

@@ -16,6 +16,15 @@
 //   - when its anchor state is marginalised, its factors and inverse depth are marginalised with it (TermsOf);
 //     a feature still tracked afterwards starts a new landmark at its next observation.
 //
+// The camera's weight (adaptive_sigma): after each solve the pixel sigma is re-estimated from the window's own
+// reprojection residuals (a robust variance-component estimate, Foerstner's reweighting of one observation group:
+// sigma = median |r| / sqrt(2 ln 2), the median of a 2-D Gaussian residual's norm), smoothed, and held in
+// [pixel_sigma_px, max_pixel_sigma_px]; the next solve whitens with it. A blurred, noisy or badly timed camera
+// thus loses weight as a whole while a good one keeps its nominal weight. The outlier gate stays in pixels:
+// widening it with the sigma kept the poor camera's worst tracks and made the corridor test's drift worse than
+// the IMU's alone (tests/core/backend/visual_window_test.cpp). The gate truncates the residuals the estimate
+// sees, so a poor camera's sigma reads low (4 px of noise gives ~3 px): a weight, not a calibration.
+//
 // Frames and units: observations are undistorted normalised coordinates (x/z, y/z) in the camera at the window
 // state's time [1]; pose blocks are T_world_imu (core/imu/imu_factor.hpp); T_imu_cam from RigCalib
 // (CameraExtrinsic); depths along the camera's optical axis [m]; pixel quantities through focal_px.
@@ -61,6 +70,14 @@ struct VisualWindowConfig {
   /// depth would let the camera trade it against the poses.
   bool fix_lidar_depth = true;
   int max_landmarks = 400;  ///< new observations are ignored beyond this many live landmarks
+  /// Re-estimate the pixel sigma from the residuals after each solve (see above); off: pixel_sigma_px always.
+  bool adaptive_sigma = true;
+  /// The largest sigma the camera is given [px]: at 10 px its factors weigh 1/44 of the nominal 1.5 px ones.
+  double max_pixel_sigma_px = 10.0;
+  /// Weight of the newest estimate in the smoothed sigma (exponential smoothing of log sigma), in (0, 1].
+  double sigma_smoothing = 0.3;
+  /// Fewer residuals than this leave the sigma unchanged (a median of a handful is not an estimate).
+  int min_residuals_for_sigma = 30;
   bool Validate(std::string* error) const;
 };
 
@@ -78,6 +95,8 @@ struct VisualLandmarkStats {
   int factors = 0;         ///< reprojection factors in the last problem
   int rejected_total = 0;  ///< landmarks dropped by RejectOutliers so far
   int skipped_total = 0;   ///< non-finite observations and those over max_landmarks
+  double sigma_px = 0.0;   ///< the pixel sigma the next solve whitens with [px]
+  double residual_median_px = 0.0;  ///< median reprojection error of the last solve's factors [px]
 };
 
 class VisualLandmarks {
@@ -94,7 +113,8 @@ class VisualLandmarks {
   /// Adds the inverse-depth blocks and factors of every landmark seen in >= min_observations states. The pose
   /// blocks must already be in `problem` (with their manifold). Returns the number of factors added.
   int AddToProblem(ceres::Problem* problem);
-  /// After a solve: drops landmarks behind a camera, too near, or reprojecting beyond max_reprojection_px.
+  /// After a solve: drops landmarks behind a camera, too near, or reprojecting beyond max_reprojection_px, then
+  /// re-estimates the sigma (adaptive_sigma).
   int RejectOutliers();
   /// Marginalisation terms of the landmarks anchored at `pose` (their factors in the last problem), with their
   /// inverse-depth blocks appended to *dropped. Call before RemoveState(pose).
@@ -113,14 +133,18 @@ class VisualLandmarks {
   struct Observation;
   struct Landmark;
   bool InFrontEverywhere(const Landmark& l) const;
-  double MaxReprojectionPx(const Landmark& l) const;
+  /// Appends the reprojection error [px] of each factor of l; returns the largest (0 without factors).
+  double ReprojectionErrorsPx(const Landmark& l, std::vector<double>* errors_px) const;
   void Triangulate(Landmark* l) const;
+  void UpdateSigma(std::vector<double>* residuals_px);
 
   VisualWindowConfig config_;
   Pose3 T_imu_cam_;
   double focal_px_;
-  Eigen::Matrix2d sqrt_information_;
-  std::unique_ptr<ceres::LossFunction> loss_;
+  Eigen::Matrix2d sqrt_information_;     ///< whitening at the nominal pixel_sigma_px
+  double sigma_px_ = 0.0;                 ///< current pixel sigma (>= pixel_sigma_px)
+  double loss_sigma_px_ = 0.0;            ///< the sigma loss_ was built for
+  std::unique_ptr<ceres::LossFunction> loss_;  ///< Huber at sigma_px_ on residuals whitened at the nominal sigma
   std::map<uint64_t, std::unique_ptr<Landmark>> landmarks_;  ///< by feature id (stable addresses)
   VisualLandmarkStats stats_;
 };

@@ -122,6 +122,7 @@ std::vector<VisualObservation> VisualFrontEnd::ObservationsAt(Seconds t_s, const
   track_ms_since_state_ = 0.0;
   const VisualLandmarkStats stats = landmarks_.stats();
   report->landmarks = stats.live, report->factors = stats.factors, report->rejected_total = stats.rejected_total;
+  report->sigma_px = stats.sigma_px, report->residual_median_px = stats.residual_median_px;
   const visual::FeatureTrackResult* best = nullptr;
   for (const visual::FeatureTrackResult& r : recent_)
     if (!best || std::abs(r.t_s - t_s) < std::abs(best->t_s - t_s)) best = &r;

@@ -66,6 +66,8 @@ struct VisualScanReport {
   int observations = 0;        ///< handed to the window
   int lidar_depths = 0;        ///< of those, features without a landmark that got a LiDAR depth
   int landmarks = 0, factors = 0, rejected_total = 0;  ///< VisualLandmarkStats after the previous solve
+  double sigma_px = 0.0;          ///< the camera's pixel sigma for the next solve (adaptive weight) [px]
+  double residual_median_px = 0.0;  ///< median reprojection error of the previous solve [px]
   double track_ms = 0.0;       ///< tracker time since the previous state [ms]
   double depth_ms = 0.0;       ///< depth-cloud projection and queries [ms]
 };

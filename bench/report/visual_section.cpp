@@ -37,6 +37,31 @@ std::string StatisticsSvg(const std::vector<ScanReport>& scans) {
   return LinePlotSvg(series, options);
 }
 
+/// The camera's weight over time: the pixel sigma the window whitens with (adaptive) and the median
+/// reprojection error of each solve; with td estimated, td in ms too.
+std::string WeightSvg(const std::vector<ScanReport>& scans) {
+  std::vector<PlotSeries> series(3);
+  series[0].label = "sigma [px]", series[1].label = "median reprojection error [px]";
+  series[2].label = "time offset td [ms]";
+  const Seconds t0 = scans.front().t_start_s;
+  bool td = false;
+  for (const ScanReport& r : scans) {
+    if (!r.visual.image) continue;
+    const double t = r.t_start_s - t0;
+    const double values[3] = {r.visual.sigma_px, r.visual.residual_median_px, 1e3 * r.visual.time_offset_s};
+    td = td || r.visual.time_offset_s != 0.0;
+    for (int k = 0; k < 3; ++k) series[k].x.push_back(t), series[k].y.push_back(values[k]);
+  }
+  if (!td) series.pop_back();
+  PlotOptions options;
+  options.title = "Camera weight per scan";
+  options.x_label = "time [s]";
+  options.y_label = "px (ms)";
+  options.y_include_zero = true;
+  options.legend_above = true;
+  return LinePlotSvg(series, options);
+}
+
 /// The frame at t_s with the features tracked over the half second before it: each track's last positions as a
 /// line, its current position as a dot (red: new, orange: 2-9 frames, green: 10 or more). Empty on failure.
 std::string TrackedFrameSvg(const std::vector<CameraFrameRef>& frames, Seconds t_s, const RigCalib& calib) {
@@ -82,6 +107,9 @@ void AddVisualSection(const RunReportInput& in, HtmlReport* html) {
                   " scans fused a camera frame (docs/visual.md; per scan: scans.csv vis_* columns).");
   html->Figure(StatisticsSvg(scans), "Per scan: features observed, KLT inliers of the frame used, new landmarks "
                                      "that took a LiDAR depth, and landmarks held by the window.");
+  html->Figure(WeightSvg(scans), "The camera's weight: the pixel sigma of the next solve (raised from the nominal "
+                                 "when the residuals say the camera is poor) and each solve's median reprojection "
+                                 "error (docs/visual.md, \"A poor camera\").");
   std::vector<CameraFrameRef> frames;
   RigCalib calib;
   if (in.recording_dir.empty() || !LoadCameraIndex(in.recording_dir, &frames) || frames.empty() ||

@@ -12,7 +12,9 @@ namespace rotolidar {
 struct VisualLandmarks::Observation {
   const double* pose = nullptr;  ///< the observing state's pose block (T_world_imu)
   Eigen::Vector2d normalized = Eigen::Vector2d::Zero();
-  std::unique_ptr<ReprojectionFactor> factor;  ///< null for the anchor's own observation
+  Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  ///< [1/s]
+  double td_s = 0.0;                                   ///< the td `normalized` was moved with [s]
+  std::unique_ptr<ceres::CostFunction> factor;  ///< null for the anchor's own observation
 };
 
 struct VisualLandmarks::Landmark {
@@ -23,7 +25,6 @@ struct VisualLandmarks::Landmark {
   bool in_problem = false;     ///< its factors were in the last problem
   std::vector<Observation> observations;  ///< observations[0] is the anchor's
   const double* anchor() const { return observations.front().pose; }
-  const Eigen::Vector2d& anchor_normalized() const { return observations.front().normalized; }
 };
 
 bool VisualWindowConfig::Validate(std::string* error) const {
@@ -43,16 +44,8 @@ bool VisualWindowConfig::Validate(std::string* error) const {
   if (!(sigma_smoothing > 0.0 && sigma_smoothing <= 1.0))
     return FailValidation(error, "visual.sigma_smoothing must lie in (0, 1]");
   if (min_residuals_for_sigma < 1) return FailValidation(error, "visual.min_residuals_for_sigma must be >= 1");
+  if (!positive(time_offset_prior_sigma_s)) return FailValidation(error, "visual.time_offset_prior_sigma_s must be > 0");
   return true;
-}
-
-VisualLandmarks::VisualLandmarks(const VisualWindowConfig& config, const Pose3& T_imu_cam, double focal_px)
-    : config_(config), T_imu_cam_(T_imu_cam), focal_px_(focal_px) {
-  std::string error;
-  ROTOLIDAR_CHECK(config.Validate(&error), error);
-  ROTOLIDAR_CHECK(focal_px > 0.0 && std::isfinite(focal_px), "VisualLandmarks: focal_px must be > 0");
-  sqrt_information_ = ReprojectionSqrtInformation(focal_px, config.pixel_sigma_px);
-  sigma_px_ = config.pixel_sigma_px;
 }
 
 namespace {
@@ -65,7 +58,31 @@ std::unique_ptr<ceres::LossFunction> HuberAtSigma(double delta, double nominal_s
   return std::make_unique<ceres::ScaledLoss>(new ceres::HuberLoss(delta / k), k * k, ceres::TAKE_OWNERSHIP);
 }
 
+/// (td - td0) / sigma: the time offset's prior around the calibrated value.
+class TimeOffsetPrior final : public ceres::SizedCostFunction<1, kTimeOffsetBlockSize> {
+ public:
+  TimeOffsetPrior(double td0_s, double sigma_s) : td0_s_(td0_s), sigma_s_(sigma_s) {}
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    residuals[0] = (parameters[0][0] - td0_s_) / sigma_s_;
+    if (jacobians != nullptr && jacobians[0] != nullptr) jacobians[0][0] = 1.0 / sigma_s_;
+    return true;
+  }
+
+ private:
+  double td0_s_, sigma_s_;
+};
+
 }  // namespace
+
+VisualLandmarks::VisualLandmarks(const VisualWindowConfig& config, const Pose3& T_imu_cam, double focal_px)
+    : config_(config), T_imu_cam_(T_imu_cam), focal_px_(focal_px) {
+  std::string error;
+  ROTOLIDAR_CHECK(config.Validate(&error), error);
+  ROTOLIDAR_CHECK(focal_px > 0.0 && std::isfinite(focal_px), "VisualLandmarks: focal_px must be > 0");
+  sqrt_information_ = ReprojectionSqrtInformation(focal_px, config.pixel_sigma_px);
+  sigma_px_ = config.pixel_sigma_px;
+  td_prior_ = std::make_unique<TimeOffsetPrior>(0.0, config.time_offset_prior_sigma_s);
+}
 
 VisualLandmarks::~VisualLandmarks() = default;
 
@@ -93,17 +110,14 @@ void VisualLandmarks::AddObservations(const double* pose, const std::vector<Visu
                              o.lidar_depth_m <= config_.max_depth_m;
       l->lidar_depth = has_depth;
       l->inverse_depth = 1.0 / (has_depth ? o.lidar_depth_m : config_.initial_depth_m);
-      l->observations.push_back({pose, o.normalized, nullptr});
+      l->observations.push_back({pose, o.normalized, o.velocity_normalized_ps, o.td_s, nullptr});
       landmarks_.emplace(o.feature_id, std::move(l));
       continue;
     }
     Landmark& l = *it->second;
     if (l.observations.back().pose == pose) continue;  // one observation per state
-    ReprojectionMeasurement m;
-    m.anchor_normalized = l.anchor_normalized();
-    m.normalized = o.normalized;
-    m.sqrt_information = sqrt_information_;
-    l.observations.push_back({pose, o.normalized, std::make_unique<ReprojectionFactor>(m, T_imu_cam_)});
+    l.observations.push_back({pose, o.normalized, o.velocity_normalized_ps, o.td_s, nullptr});
+    l.observations.back().factor = MakeFactor(l, l.observations.back());
     if (!l.lidar_depth && !l.triangulated) Triangulate(&l);
   }
 }
@@ -121,34 +135,56 @@ int VisualLandmarks::AddToProblem(ceres::Problem* problem) {
     problem->AddParameterBlock(&l->inverse_depth, kInverseDepthBlockSize);
     for (Observation& o : l->observations) {
       if (!o.factor) continue;
-      problem->AddResidualBlock(o.factor.get(), loss_.get(), const_cast<double*>(l->anchor()),
-                                const_cast<double*>(o.pose), &l->inverse_depth);
+      problem->AddResidualBlock(o.factor.get(), loss_.get(), FactorBlocks(*l, o));
       ++factors;
     }
     if (l->lidar_depth && config_.fix_lidar_depth) problem->SetParameterBlockConstant(&l->inverse_depth);
   }
+  if (config_.estimate_time_offset && factors > 0) problem->AddResidualBlock(td_prior_.get(), nullptr, td_s_);
   stats_.factors = factors;
   stats_.in_problem = in_problem;
   return factors;
 }
 
+Eigen::Vector2d VisualLandmarks::Corrected(const Observation& o) const {
+  if (!config_.estimate_time_offset) return o.normalized;
+  return o.normalized - (td_s_[0] - o.td_s) * o.velocity;
+}
+
+std::unique_ptr<ceres::CostFunction> VisualLandmarks::MakeFactor(const Landmark& l, const Observation& o) const {
+  const Observation& a = l.observations.front();
+  ReprojectionMeasurement m;
+  m.anchor_normalized = a.normalized;
+  m.normalized = o.normalized;
+  m.sqrt_information = sqrt_information_;
+  if (!config_.estimate_time_offset) return std::make_unique<ReprojectionFactor>(m, T_imu_cam_);
+  const FeatureMotion motion{a.velocity, o.velocity, a.td_s, o.td_s};
+  return std::make_unique<ReprojectionTimeOffsetFactor>(m, motion, T_imu_cam_);
+}
+
+std::vector<double*> VisualLandmarks::FactorBlocks(Landmark& l, const Observation& o) {
+  std::vector<double*> blocks = {const_cast<double*>(l.anchor()), const_cast<double*>(o.pose), &l.inverse_depth};
+  if (config_.estimate_time_offset) blocks.push_back(td_s_);
+  return blocks;
+}
+
 bool VisualLandmarks::InFrontEverywhere(const Landmark& l) const {
   const Pose3 T_a = UnpackImuPose(l.anchor());
+  const Eigen::Vector2d u_a = Corrected(l.observations.front());
   for (const Observation& o : l.observations)
-    if (!LandmarkInFront(T_a, UnpackImuPose(o.pose), T_imu_cam_, l.anchor_normalized(), l.inverse_depth,
-                         config_.min_depth_m))
+    if (!LandmarkInFront(T_a, UnpackImuPose(o.pose), T_imu_cam_, u_a, l.inverse_depth, config_.min_depth_m))
       return false;
   return true;
 }
 
 double VisualLandmarks::ReprojectionErrorsPx(const Landmark& l, std::vector<double>* errors_px) const {
   const Pose3 T_a = UnpackImuPose(l.anchor());
+  const Eigen::Vector2d u_a = Corrected(l.observations.front());
   double worst = 0.0;
   for (const Observation& o : l.observations) {
     if (!o.factor) continue;  // the anchor's own observation reprojects exactly
-    const Eigen::Vector2d u =
-        PredictNormalized(T_a, UnpackImuPose(o.pose), T_imu_cam_, l.anchor_normalized(), l.inverse_depth);
-    const double e = focal_px_ * (u - o.normalized).norm();
+    const Eigen::Vector2d u = PredictNormalized(T_a, UnpackImuPose(o.pose), T_imu_cam_, u_a, l.inverse_depth);
+    const double e = focal_px_ * (u - Corrected(o)).norm();
     errors_px->push_back(e);
     worst = std::max(worst, e);
   }
@@ -195,9 +231,11 @@ std::vector<MarginalizationTerm> VisualLandmarks::TermsOf(const double* pose, st
     const BlockRef depth{&l->inverse_depth, BlockKind::kVector, kInverseDepthBlockSize};
     for (Observation& o : l->observations) {
       if (!o.factor) continue;
-      terms.push_back({o.factor.get(), loss_.get(),
-                       {BlockRef{const_cast<double*>(l->anchor()), BlockKind::kPose, kImuPoseBlockSize},
-                        BlockRef{const_cast<double*>(o.pose), BlockKind::kPose, kImuPoseBlockSize}, depth}});
+      std::vector<BlockRef> blocks = {BlockRef{const_cast<double*>(l->anchor()), BlockKind::kPose, kImuPoseBlockSize},
+                                      BlockRef{const_cast<double*>(o.pose), BlockKind::kPose, kImuPoseBlockSize},
+                                      depth};
+      if (config_.estimate_time_offset) blocks.push_back(BlockRef{td_s_, BlockKind::kVector, kTimeOffsetBlockSize});
+      terms.push_back({o.factor.get(), loss_.get(), std::move(blocks)});
     }
     dropped->push_back(&l->inverse_depth);
   }
@@ -226,7 +264,7 @@ void VisualLandmarks::Triangulate(Landmark* l) const {
   std::vector<Eigen::Vector2d> xy;
   std::vector<Pose3> T_world_cam;
   for (const Observation& o : l->observations) {
-    xy.push_back(o.normalized);
+    xy.push_back(Corrected(o));
     T_world_cam.push_back(UnpackImuPose(o.pose) * T_imu_cam_);
   }
   visual::TriangulationConfig config;
@@ -242,6 +280,7 @@ void VisualLandmarks::Triangulate(Landmark* l) const {
 VisualLandmarkStats VisualLandmarks::stats() const {
   VisualLandmarkStats s = stats_;
   s.sigma_px = sigma_px_;
+  s.time_offset_s = td_s_[0];
   s.live = int(landmarks_.size());
   s.with_lidar_depth = int(std::count_if(landmarks_.begin(), landmarks_.end(),
                                          [](const auto& kv) { return kv.second->lidar_depth; }));
@@ -252,8 +291,8 @@ std::vector<std::pair<uint64_t, Eigen::Vector3d>> VisualLandmarks::LandmarkPosit
   std::vector<std::pair<uint64_t, Eigen::Vector3d>> out;
   for (const auto& [id, l] : landmarks_) {
     if (!l->in_problem || !(l->inverse_depth > 0.0)) continue;
-    const Eigen::Vector3d p_cam(l->anchor_normalized().x() / l->inverse_depth,
-                                l->anchor_normalized().y() / l->inverse_depth, 1.0 / l->inverse_depth);
+    const Eigen::Vector2d u_a = Corrected(l->observations.front());
+    const Eigen::Vector3d p_cam(u_a.x() / l->inverse_depth, u_a.y() / l->inverse_depth, 1.0 / l->inverse_depth);
     out.emplace_back(id, UnpackImuPose(l->anchor()) * (T_imu_cam_ * p_cam));
   }
   return out;

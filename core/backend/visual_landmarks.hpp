@@ -25,6 +25,12 @@
 // the IMU's alone (tests/core/backend/visual_window_test.cpp). The gate truncates the residuals the estimate
 // sees, so a poor camera's sigma reads low (4 px of noise gives ~3 px): a weight, not a calibration.
 //
+// The camera's time offset (estimate_time_offset; VINS-Mono's online td): t_imu = t_cam + td. Each observation
+// arrives moved to its state's time with the td estimate of that moment (td_s) along its tracked velocity; the
+// factors (ReprojectionTimeOffsetFactor) correct it by (td - td_s) * velocity, with td one block shared by the
+// window, a Gaussian prior of time_offset_prior_sigma_s around calib's value (0) in every solve, and the
+// information of marginalised landmarks carried in the window's prior.
+//
 // Frames and units: observations are undistorted normalised coordinates (x/z, y/z) in the camera at the window
 // state's time [1]; pose blocks are T_world_imu (core/imu/imu_factor.hpp); T_imu_cam from RigCalib
 // (CameraExtrinsic); depths along the camera's optical axis [m]; pixel quantities through focal_px.
@@ -78,14 +84,20 @@ struct VisualWindowConfig {
   double sigma_smoothing = 0.3;
   /// Fewer residuals than this leave the sigma unchanged (a median of a handful is not an estimate).
   int min_residuals_for_sigma = 30;
+  /// Estimate the camera's time offset td online (see above); off: td = 0 (calib.yaml's clock model).
+  bool estimate_time_offset = false;
+  /// Prior sigma of td around 0 [s]: 20 ms covers an unsynchronised consumer camera's latency.
+  double time_offset_prior_sigma_s = 0.02;
   bool Validate(std::string* error) const;
 };
 
 /// One feature seen in one window state.
 struct VisualObservation {
   uint64_t feature_id = 0;
-  Eigen::Vector2d normalized = Eigen::Vector2d::Zero();  ///< undistorted, at the state's time
+  Eigen::Vector2d normalized = Eigen::Vector2d::Zero();  ///< undistorted, at the state's time (moved with td_s)
   double lidar_depth_m = 0.0;  ///< depth along the optical axis from the LiDAR [m]; <= 0 or NaN: none
+  Eigen::Vector2d velocity_normalized_ps = Eigen::Vector2d::Zero();  ///< tracked velocity [1/s] (for td)
+  double td_s = 0.0;  ///< the time offset `normalized` was moved with [s] (VisualLandmarks::time_offset_s())
 };
 
 struct VisualLandmarkStats {
@@ -97,6 +109,7 @@ struct VisualLandmarkStats {
   int skipped_total = 0;   ///< non-finite observations and those over max_landmarks
   double sigma_px = 0.0;   ///< the pixel sigma the next solve whitens with [px]
   double residual_median_px = 0.0;  ///< median reprojection error of the last solve's factors [px]
+  double time_offset_s = 0.0;       ///< td estimate [s] (0 unless estimate_time_offset)
 };
 
 class VisualLandmarks {
@@ -124,6 +137,8 @@ class VisualLandmarks {
   void Clear();
 
   bool HasLandmark(uint64_t feature_id) const { return landmarks_.count(feature_id) > 0; }
+  /// The camera's time offset td estimate [s] (t_imu = t_cam + td): new observations should be moved with it.
+  double time_offset_s() const { return td_s_[0]; }
   VisualLandmarkStats stats() const;
   /// World positions [m] of the landmarks the last problem estimated (for tests and maps); needs the anchor pose
   /// blocks alive.
@@ -133,6 +148,10 @@ class VisualLandmarks {
   struct Observation;
   struct Landmark;
   bool InFrontEverywhere(const Landmark& l) const;
+  /// An observation corrected to the current td (unchanged without estimate_time_offset).
+  Eigen::Vector2d Corrected(const Observation& o) const;
+  std::unique_ptr<ceres::CostFunction> MakeFactor(const Landmark& l, const Observation& o) const;
+  std::vector<double*> FactorBlocks(Landmark& l, const Observation& o);
   /// Appends the reprojection error [px] of each factor of l; returns the largest (0 without factors).
   double ReprojectionErrorsPx(const Landmark& l, std::vector<double>* errors_px) const;
   void Triangulate(Landmark* l) const;
@@ -146,6 +165,8 @@ class VisualLandmarks {
   double loss_sigma_px_ = 0.0;            ///< the sigma loss_ was built for
   std::unique_ptr<ceres::LossFunction> loss_;  ///< Huber at sigma_px_ on residuals whitened at the nominal sigma
   std::map<uint64_t, std::unique_ptr<Landmark>> landmarks_;  ///< by feature id (stable addresses)
+  double td_s_[kTimeOffsetBlockSize] = {0.0};  ///< the td block (kept across Clear: a property of the rig)
+  std::unique_ptr<ceres::CostFunction> td_prior_;
   VisualLandmarkStats stats_;
 };
 

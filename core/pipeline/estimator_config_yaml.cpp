@@ -174,6 +174,8 @@ void Visit(V& v, VisualWindowConfig& c) {
   v("fix_lidar_depth", &c.fix_lidar_depth), v("max_landmarks", &c.max_landmarks);
   v("adaptive_sigma", &c.adaptive_sigma), v("max_pixel_sigma_px", &c.max_pixel_sigma_px);
   v("sigma_smoothing", &c.sigma_smoothing), v("min_residuals_for_sigma", &c.min_residuals_for_sigma);
+  v("estimate_time_offset", &c.estimate_time_offset);
+  v("time_offset_prior_sigma_s", &c.time_offset_prior_sigma_s);
 }
 
 template <class V>

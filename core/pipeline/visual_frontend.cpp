@@ -123,12 +123,14 @@ std::vector<VisualObservation> VisualFrontEnd::ObservationsAt(Seconds t_s, const
   const VisualLandmarkStats stats = landmarks_.stats();
   report->landmarks = stats.live, report->factors = stats.factors, report->rejected_total = stats.rejected_total;
   report->sigma_px = stats.sigma_px, report->residual_median_px = stats.residual_median_px;
+  const double td_s = landmarks_.time_offset_s();  // t_imu = t_cam + td
+  report->time_offset_s = td_s;
   const visual::FeatureTrackResult* best = nullptr;
   for (const visual::FeatureTrackResult& r : recent_)
-    if (!best || std::abs(r.t_s - t_s) < std::abs(best->t_s - t_s)) best = &r;
-  if (!best || std::abs(best->t_s - t_s) > config_.max_image_offset_s) return {};
+    if (!best || std::abs(r.t_s + td_s - t_s) < std::abs(best->t_s + td_s - t_s)) best = &r;
+  if (!best || std::abs(best->t_s + td_s - t_s) > config_.max_image_offset_s) return {};
   report->image = true;
-  report->image_offset_s = best->t_s - t_s;
+  report->image_offset_s = best->t_s + td_s - t_s;
   report->tracked = best->stats.tracked, report->inliers = best->stats.inliers;
   report->new_features = best->stats.new_features;
   std::vector<VisualObservation> out;
@@ -137,7 +139,9 @@ std::vector<VisualObservation> VisualFrontEnd::ObservationsAt(Seconds t_s, const
   for (const visual::TrackedFeature& f : best->features) {
     VisualObservation o;
     o.feature_id = f.id;
-    o.normalized = f.normalized + f.velocity_normalized_ps * (t_s - best->t_s);  // moved to the state's time
+    o.normalized = f.normalized + f.velocity_normalized_ps * (t_s - best->t_s - td_s);  // to the state's time
+    o.velocity_normalized_ps = f.velocity_normalized_ps;
+    o.td_s = td_s;
     o.lidar_depth_m = std::numeric_limits<double>::quiet_NaN();
     if (!landmarks_.HasLandmark(f.id)) fresh.push_back(o.normalized), fresh_index.push_back(out.size());
     out.push_back(o);

@@ -5,9 +5,9 @@
 // that starts a landmark gets its depth from the LiDAR points of the last depth_cloud_s (one rotor turn of a
 // rotary rig covers the camera's view) when they give one (core/visual/feature_depth.hpp), as LVI-SAM does.
 //
-// Time: the image's mid-exposure time t_img and the state's time t_s differ by up to half a frame period; each
-// observation is moved to t_s along the feature's tracked velocity on the normalised plane (VINS-Mono's
-// time-offset model with a known offset).
+// Time: the image's mid-exposure time t_img (+ the camera's time offset td, 0 unless the landmarks estimate it)
+// and the state's time t_s differ by up to half a frame period; each observation is moved to t_s along the
+// feature's tracked velocity on the normalised plane (VINS-Mono's time-offset model).
 // Frames: T_world_base estimates of the estimator; RigCalib's T_base_cam; observations are undistorted
 // normalised coordinates of the camera at t_s.
 // Ownership: owns the tracker, its recent results, the depth cloud and the landmarks (the window only points at
@@ -60,7 +60,7 @@ struct VisualConfig {
 /// What the camera path did for one window state (ScanReport::visual; scans.csv columns).
 struct VisualScanReport {
   bool image = false;          ///< a tracked frame within max_image_offset_s gave observations
-  double image_offset_s = 0.0; ///< t_img - t_s of that frame [s]
+  double image_offset_s = 0.0; ///< t_img + td - t_s of that frame [s]
   int frames_tracked = 0;      ///< frames tracked since the previous state
   int tracked = 0, inliers = 0, new_features = 0;  ///< FeatureTrackStats of the frame used
   int observations = 0;        ///< handed to the window
@@ -68,6 +68,7 @@ struct VisualScanReport {
   int landmarks = 0, factors = 0, rejected_total = 0;  ///< VisualLandmarkStats after the previous solve
   double sigma_px = 0.0;          ///< the camera's pixel sigma for the next solve (adaptive weight) [px]
   double residual_median_px = 0.0;  ///< median reprojection error of the previous solve [px]
+  double time_offset_s = 0.0;       ///< the camera time offset td the observations were moved with [s]
   double track_ms = 0.0;       ///< tracker time since the previous state [ms]
   double depth_ms = 0.0;       ///< depth-cloud projection and queries [ms]
 };

@@ -121,6 +121,9 @@ class Estimator {
   /// frame), and kept for the loop closer's visual stage 1 when it has a vocabulary (about one frame per
   /// max_camera_offset_s, the last second of them); otherwise dropped unread. The image is shared, not copied.
   void Feed(const CameraFrame& frame);
+  /// The same for a frame on disk: decoded only when kept; the tracker's frames are decoded in its thread
+  /// (VisualConfig::track_in_thread). An unreadable image is reported and skipped.
+  void Feed(const CameraFrameRef& ref);
   /// Whether Feed would keep a frame at t_s (a player can skip decoding the others).
   bool WantsCameraFrame(Seconds t_s) const;
   /// Processes every ready scan; returns their reports (in time order).

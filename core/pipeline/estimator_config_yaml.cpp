@@ -153,6 +153,7 @@ void Visit(V& v, FeatureTrackerConfig& c) {
   v("ransac_threshold_px", &c.ransac_threshold_px), v("ransac_confidence", &c.ransac_confidence);
   v("ransac_max_iterations", &c.ransac_max_iterations), v("ransac_min_matches", &c.ransac_min_matches);
   v("corner_quality", &c.corner_quality), v("corner_block_px", &c.corner_block_px);
+  v("detect_level", &c.detect_level);
   v("grid_rows", &c.grid_rows), v("grid_cols", &c.grid_cols);
 }
 
@@ -182,7 +183,7 @@ template <class V>
 void Visit(V& v, VisualConfig& c) {
   v("enabled", &c.enabled), v("max_image_offset_s", &c.max_image_offset_s), v("depth_cloud_s", &c.depth_cloud_s);
   v("depth_cloud_max_range_m", &c.depth_cloud_max_range_m), v("max_tracking_rate_hz", &c.max_tracking_rate_hz);
-  v("depth_view_margin_rad", &c.depth_view_margin_rad);
+  v("depth_view_margin_rad", &c.depth_view_margin_rad), v("track_in_thread", &c.track_in_thread);
   v("tracker", &c.tracker), v("landmarks", &c.landmarks), v("depth", &c.depth);
 }
 

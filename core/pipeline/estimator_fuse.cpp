@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/backend/pose_factors.hpp"
+#include "core/io/recording.hpp"
 #include "core/pipeline/estimator_internal.hpp"
 #include "core/util/log.hpp"
 
@@ -323,6 +324,21 @@ void Estimator::Feed(const CameraFrame& frame) {
   camera_frames_.push_back(frame);
   constexpr double kKeepS = 1.0;  // keyframes are handed over within a scan (~0.1-0.4 s) of their time
   while (!camera_frames_.empty() && camera_frames_.front().t_s < frame.t_s - kKeepS) camera_frames_.pop_front();
+}
+
+void Estimator::Feed(const CameraFrameRef& ref) {
+  const bool loop = LoopClosureWantsFrame(loop_closer_.get(), camera_frames_,
+                                          config_.loop_closure.max_camera_offset_s, ref.t_s);
+  if (!loop) {
+    if (visual_) visual_->Track(ref);  // decoded where it is tracked (when it wants the frame)
+    return;
+  }
+  CameraFrame frame;
+  if (Status s = LoadCameraFrame(ref, &frame); !s) {
+    LOG_WARN("camera frame at " << ref.t_s << " s: " << s.message);
+    return;
+  }
+  Feed(frame);
 }
 
 FreeSpaceCounts Estimator::FlushMap() {

@@ -48,6 +48,16 @@ VisualFrontEnd::VisualFrontEnd(const VisualConfig& config, const RigCalib& calib
       landmarks_(config.landmarks, CameraExtrinsic(calib), 0.5 * (calib.camera.fx_px + calib.camera.fy_px)) {
   std::string error;
   ROTOLIDAR_CHECK(config.Validate(&error), error);
+  if (config.track_in_thread) worker_ = std::thread([this] { WorkerLoop(); });
+}
+
+VisualFrontEnd::~VisualFrontEnd() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  work_cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
 }
 
 bool VisualFrontEnd::WantsFrame(Seconds t_s) const {
@@ -56,15 +66,63 @@ bool VisualFrontEnd::WantsFrame(Seconds t_s) const {
 }
 
 void VisualFrontEnd::Track(const CameraFrame& frame) {
-  if (!WantsFrame(frame.t_s)) return;
+  if (WantsFrame(frame.t_s)) Enqueue({frame, std::nullopt});
+}
+
+void VisualFrontEnd::Track(const CameraFrameRef& ref) {
+  if (WantsFrame(ref.t_s)) Enqueue({CameraFrame{}, ref});
+}
+
+void VisualFrontEnd::Enqueue(Pending pending) {
+  last_tracked_s_ = pending.ref ? pending.ref->t_s : pending.frame.t_s;
+  if (!worker_.joinable()) return TrackNow(std::move(pending));
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(std::move(pending));
+  }
+  work_cv_.notify_one();
+}
+
+void VisualFrontEnd::WorkerLoop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    work_cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+    if (stop_) return;
+    Pending pending = std::move(queue_.front());
+    queue_.pop_front();
+    busy_ = true;
+    busy_t_s_ = pending.ref ? pending.ref->t_s : pending.frame.t_s;
+    lock.unlock();
+    TrackNow(std::move(pending));
+    lock.lock();
+    busy_ = false;
+    idle_cv_.notify_all();
+  }
+}
+
+void VisualFrontEnd::WaitForTracking(Seconds t_limit_s) {
+  if (!worker_.joinable()) return;
+  auto time_of = [](const Pending& p) { return p.ref ? p.ref->t_s : p.frame.t_s; };
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_cv_.wait(lock, [&] {
+    return !(busy_ && busy_t_s_ <= t_limit_s) && (queue_.empty() || time_of(queue_.front()) > t_limit_s);
+  });
+}
+
+void VisualFrontEnd::TrackNow(Pending pending) {
+  CameraFrame& frame = pending.frame;
+  if (pending.ref) {
+    if (Status s = LoadCameraFrame(*pending.ref, &frame); !s) {
+      LOG_WARN("camera frame at " << pending.ref->t_s << " s: " << s.message);
+      return;
+    }
+  }
   const visual::FeatureTrackResult r = tracker_.Track(frame, calib_.camera);
   if (!r.ok) {
     LOG_WARN("camera frame at " << frame.t_s << " s not tracked: " << r.message);
     return;
   }
-  last_tracked_s_ = frame.t_s;
-  ++frames_since_state_;
-  track_ms_since_state_ += r.stats.time_ms;
+  std::lock_guard<std::mutex> lock(mutex_);
   recent_.push_back(r);
   constexpr double kKeepS = 0.3;  // states come every scan (0.1 s) and look back at most max_image_offset_s
   while (!recent_.empty() && recent_.front().t_s < frame.t_s - kKeepS) recent_.pop_front();
@@ -115,18 +173,28 @@ std::vector<double> VisualFrontEnd::LidarDepths(const std::vector<Eigen::Vector2
 
 std::vector<VisualObservation> VisualFrontEnd::ObservationsAt(Seconds t_s, const Pose3& T_world_base,
                                                              VisualScanReport* report) {
+  const double td_s = landmarks_.time_offset_s();  // t_imu = t_cam + td
+  // Every frame that can be chosen (t_img + td within max_image_offset_s of t_s) is tracked first; frames the
+  // worker finished beyond that are ignored, so the choice does not depend on its timing.
+  const Seconds t_limit_s = t_s - td_s + config_.max_image_offset_s;
+  WaitForTracking(t_limit_s);
+  std::vector<visual::FeatureTrackResult> frames;  // the candidates, copied out of the worker's reach
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const visual::FeatureTrackResult& r : recent_)
+      if (r.t_s <= t_limit_s) frames.push_back(r);
+  }
   *report = VisualScanReport{};
-  report->frames_tracked = frames_since_state_;
-  report->track_ms = track_ms_since_state_;
-  frames_since_state_ = 0;
-  track_ms_since_state_ = 0.0;
+  for (const visual::FeatureTrackResult& r : frames)
+    if (!last_state_s_ || r.t_s > *last_state_s_ - td_s + config_.max_image_offset_s)
+      ++report->frames_tracked, report->track_ms += r.stats.time_ms;
+  last_state_s_ = t_s;
   const VisualLandmarkStats stats = landmarks_.stats();
   report->landmarks = stats.live, report->factors = stats.factors, report->rejected_total = stats.rejected_total;
   report->sigma_px = stats.sigma_px, report->residual_median_px = stats.residual_median_px;
-  const double td_s = landmarks_.time_offset_s();  // t_imu = t_cam + td
   report->time_offset_s = td_s;
   const visual::FeatureTrackResult* best = nullptr;
-  for (const visual::FeatureTrackResult& r : recent_)
+  for (const visual::FeatureTrackResult& r : frames)
     if (!best || std::abs(r.t_s + td_s - t_s) < std::abs(best->t_s + td_s - t_s)) best = &r;
   if (!best || std::abs(best->t_s + td_s - t_s) > config_.max_image_offset_s) return {};
   report->image = true;

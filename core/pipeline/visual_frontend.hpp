@@ -10,17 +10,24 @@
 // feature's tracked velocity on the normalised plane (VINS-Mono's time-offset model).
 // Frames: T_world_base estimates of the estimator; RigCalib's T_base_cam; observations are undistorted
 // normalised coordinates of the camera at t_s.
-// Ownership: owns the tracker, its recent results, the depth cloud and the landmarks (the window only points at
-// them). Thread safety: none (the estimator's thread).
+// Threads (track_in_thread): frames are decoded and tracked in one worker thread while the estimator's thread
+// handles the LiDAR (LVI-SAM runs its feature tracker as a node of its own); ObservationsAt first waits until
+// every frame handed over so far is tracked, so the results do not depend on the threads' timing.
+// Ownership: owns the tracker, its worker, its recent results, the depth cloud and the landmarks (the window only
+// points at them). Thread safety: every public member is for one caller thread (the estimator's).
+#include <condition_variable>
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "core/backend/visual_landmarks.hpp"
+#include "core/io/recording.hpp"
 #include "core/types/calib.hpp"
 #include "core/types/messages.hpp"
 #include "core/types/scan_point.hpp"
@@ -54,6 +61,8 @@ struct VisualConfig {
   /// 0.14 rad/s turn over the cloud's 2.5 s; a rotary scan's ~15 k points over 2.5 s cost ~15 ms per state to
   /// project, the ~20 % in view ~3 ms.
   double depth_view_margin_rad = 0.35;
+  /// Decode and track frames in a worker thread (see above); off: in the caller's thread. Same results.
+  bool track_in_thread = true;
   bool Validate(std::string* error) const;
 };
 
@@ -61,7 +70,7 @@ struct VisualConfig {
 struct VisualScanReport {
   bool image = false;          ///< a tracked frame within max_image_offset_s gave observations
   double image_offset_s = 0.0; ///< t_img + td - t_s of that frame [s]
-  int frames_tracked = 0;      ///< frames tracked since the previous state
+  int frames_tracked = 0;      ///< frames tracked since the previous state's
   int tracked = 0, inliers = 0, new_features = 0;  ///< FeatureTrackStats of the frame used
   int observations = 0;        ///< handed to the window
   int lidar_depths = 0;        ///< of those, features without a landmark that got a LiDAR depth
@@ -77,9 +86,14 @@ class VisualFrontEnd {
  public:
   /// config must Validate and calib's camera intrinsics be usable (ROTOLIDAR_CHECK).
   VisualFrontEnd(const VisualConfig& config, const RigCalib& calib);
+  ~VisualFrontEnd();  ///< stops the worker; frames not yet tracked are dropped
+  VisualFrontEnd(const VisualFrontEnd&) = delete;
+  VisualFrontEnd& operator=(const VisualFrontEnd&) = delete;
 
   /// Tracks one frame (frames in time order). A frame the tracker refuses (bad image) is logged and skipped.
   void Track(const CameraFrame& frame);
+  /// The same for a frame on disk, decoded where it is tracked; an unreadable image is logged and skipped.
+  void Track(const CameraFrameRef& ref);
   /// Whether Track would use a frame at t_s (max_tracking_rate_hz).
   bool WantsFrame(Seconds t_s) const;
   /// One scan's points (base frame at the scan's start, posed by T_world_base) into the depth cloud.
@@ -95,6 +109,14 @@ class VisualFrontEnd {
     Seconds t_s;
     std::vector<Eigen::Vector3f> points_world;
   };
+  struct Pending {  ///< a frame handed over: decoded (frame.image) or on disk (ref)
+    CameraFrame frame;
+    std::optional<CameraFrameRef> ref;
+  };
+  void Enqueue(Pending pending);
+  void TrackNow(Pending pending);  ///< decode, track, keep the result (worker, or caller without one)
+  void WaitForTracking(Seconds t_limit_s);  ///< until every frame handed over up to t_limit_s is tracked
+  void WorkerLoop();
   /// The depth of each feature without a landmark (NaN where the LiDAR gives none).
   std::vector<double> LidarDepths(const std::vector<Eigen::Vector2d>& normalized, const Pose3& T_world_cam,
                                   int* valid);
@@ -105,9 +127,16 @@ class VisualFrontEnd {
   VisualLandmarks landmarks_;
   std::deque<visual::FeatureTrackResult> recent_;  ///< tracked frames of the last ~0.2 s
   std::deque<DepthScan> depth_cloud_;
-  std::optional<Seconds> last_tracked_s_;
-  int frames_since_state_ = 0;
-  double track_ms_since_state_ = 0.0;
+  std::optional<Seconds> last_tracked_s_;  ///< the last frame handed over (caller's thread)
+  std::optional<Seconds> last_state_s_;  ///< the previous ObservationsAt's t_s
+  // recent_ (declared above) is written by TrackNow (the worker) and copied by ObservationsAt, both under mutex_.
+  // The worker and its queue (guarded by mutex_).
+  std::mutex mutex_;
+  std::condition_variable work_cv_, idle_cv_;
+  std::deque<Pending> queue_;
+  bool busy_ = false, stop_ = false;
+  Seconds busy_t_s_ = 0.0;  ///< the time of the frame the worker is tracking
+  std::thread worker_;
 };
 
 }  // namespace rotolidar

@@ -124,6 +124,8 @@ bool FeatureTrackerConfig::Validate(std::string* error) const {
     return FailValidation(error, "corner_quality: must be in (0, 1]");
   if (corner_block_px < 1) return FailValidation(error, "corner_block_px: must be >= 1");
   if (grid_rows < 1 || grid_cols < 1) return FailValidation(error, "grid_rows/grid_cols: must be >= 1");
+  if (detect_level < 0 || detect_level > klt_max_level)
+    return FailValidation(error, "detect_level: must be in [0, klt_max_level]");
   return true;
 }
 
@@ -161,7 +163,7 @@ FeatureTrackResult FeatureTracker::Track(const CameraFrame& frame, const CameraI
   if (!pyramid_.empty() && pyramid_[0].size() == grey.size())
     features = TrackPrevious(pyramid, intrinsics, R_prev_cur, frame.t_s - t_prev_s_, &result.stats);
   Thin(&features, &result.stats);
-  AddNewFeatures(grey, intrinsics, &features, &result.stats);
+  AddNewFeatures(grey, pyramid, intrinsics, &features, &result.stats);
   std::sort(features.begin(), features.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   features_ = features;
   pyramid_ = std::move(pyramid);
@@ -278,33 +280,49 @@ void FeatureTracker::Thin(std::vector<TrackedFeature>* features, FeatureTrackSta
   stats->rejected_crowded = static_cast<int>(sorted.size() - features->size());
 }
 
-void FeatureTracker::AddNewFeatures(const cv::Mat& grey, const CameraIntrinsics& intrinsics,
-                                    std::vector<TrackedFeature>* features, FeatureTrackStats* stats) {
+void FeatureTracker::AddNewFeatures(const cv::Mat& grey, const std::vector<cv::Mat>& pyramid,
+                                    const CameraIntrinsics& intrinsics, std::vector<TrackedFeature>* features,
+                                    FeatureTrackStats* stats) {
   const int budget = config_.max_features - static_cast<int>(features->size());
   if (budget <= 0) return;
+  // Detection runs on pyramid level L (scale 2^-L); the mask and the regions are drawn at that level.
+  const int level = 2 * config_.detect_level < int(pyramid.size()) ? config_.detect_level : 0;
+  const cv::Mat& image = level == 0 ? grey : pyramid[2 * level];
+  const float scale = static_cast<float>(1 << level);
   const double min_d2 = config_.min_distance_px * config_.min_distance_px;
-  const int radius = static_cast<int>(std::ceil(config_.min_distance_px));
-  cv::Mat mask(grey.size(), CV_8UC1, cv::Scalar(255));
+  const int radius = static_cast<int>(std::ceil(config_.min_distance_px / scale));
+  cv::Mat mask(image.size(), CV_8UC1, cv::Scalar(255));
   for (const TrackedFeature& f : *features)
-    cv::circle(mask, cv::Point(cvRound(f.pixel_px.x()), cvRound(f.pixel_px.y())), radius, cv::Scalar(0), cv::FILLED);
+    cv::circle(mask, cv::Point(cvRound(f.pixel_px.x() / scale), cvRound(f.pixel_px.y() / scale)), radius,
+               cv::Scalar(0), cv::FILLED);
   std::vector<cv::Point2f> added;
-  // One detection in `roi` of up to `quota` corners; each must keep min_distance_px from every feature so far
-  // (the mask's discs are rasterised, so the distance is checked exactly as well).
-  auto detect = [&](const cv::Rect& roi, int quota) {
+  // One detection in `roi` (full-image pixels) of up to `quota` corners; each must keep min_distance_px from every
+  // feature so far (the mask's discs are rasterised, so the distance is checked exactly as well).
+  auto detect = [&](const cv::Rect& roi_full, int quota) {
     quota = std::min(quota, budget - static_cast<int>(added.size()));
     if (quota <= 0) return;
-    std::vector<cv::Point2f> corners;
-    cv::goodFeaturesToTrack(grey(roi), corners, quota, config_.corner_quality, config_.min_distance_px, mask(roi),
-                            config_.corner_block_px);
+    const cv::Rect roi = cv::Rect(roi_full.x >> level, roi_full.y >> level, roi_full.width >> level,
+                                  roi_full.height >> level) & cv::Rect(0, 0, image.cols, image.rows);
+    std::vector<cv::Point2f> corners;  // a quarter more than the quota: some fail the exact checks at full scale
+    const int ask = level == 0 ? quota : quota + quota / 4 + 4;
+    cv::goodFeaturesToTrack(image(roi), corners, ask, config_.corner_quality, config_.min_distance_px / scale,
+                            mask(roi), config_.corner_block_px);
+    if (corners.empty()) return;
+    for (cv::Point2f& c : corners) c = (c + cv::Point2f(float(roi.x), float(roi.y))) * scale;
+    if (level > 0)
+      cv::cornerSubPix(grey, corners, cv::Size(2, 2), cv::Size(-1, -1),
+                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.03));
+    const size_t limit = added.size() + size_t(quota);
     for (cv::Point2f c : corners) {
-      c += cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
+      if (added.size() >= limit) break;
+      if (!InBorder(c, grey.size(), config_.border_px)) continue;
       const Eigen::Vector2d p(c.x, c.y);
       auto near = [&](const Eigen::Vector2d& q) { return SquaredDistance(p, q) < min_d2; };
       if (std::any_of(features->begin(), features->end(), [&](const auto& f) { return near(f.pixel_px); }) ||
           std::any_of(added.begin(), added.end(), [&](const auto& a) { return near(Eigen::Vector2d(a.x, a.y)); }))
         continue;
       added.push_back(c);
-      cv::circle(mask, cv::Point(cvRound(c.x), cvRound(c.y)), radius, cv::Scalar(0), cv::FILLED);
+      cv::circle(mask, cv::Point(cvRound(c.x / scale), cvRound(c.y / scale)), radius, cv::Scalar(0), cv::FILLED);
     }
   };
   const int cells = config_.grid_rows * config_.grid_cols;

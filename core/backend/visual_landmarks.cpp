@@ -23,6 +23,7 @@ struct VisualLandmarks::Landmark {
   bool lidar_depth = false;    ///< the depth came from the LiDAR
   bool triangulated = false;
   bool in_problem = false;     ///< its factors were in the last problem
+  std::unique_ptr<ceres::CostFunction> depth_prior;  ///< from the LiDAR depth (null without one)
   std::vector<Observation> observations;  ///< observations[0] is the anchor's
   const double* anchor() const { return observations.front().pose; }
 };
@@ -45,6 +46,9 @@ bool VisualWindowConfig::Validate(std::string* error) const {
     return FailValidation(error, "visual.sigma_smoothing must lie in (0, 1]");
   if (min_residuals_for_sigma < 1) return FailValidation(error, "visual.min_residuals_for_sigma must be >= 1");
   if (!positive(time_offset_prior_sigma_s)) return FailValidation(error, "visual.time_offset_prior_sigma_s must be > 0");
+  if (!positive(lidar_depth_sigma_m)) return FailValidation(error, "visual.lidar_depth_sigma_m must be > 0");
+  if (!(lidar_depth_sigma_per_m >= 0.0) || !std::isfinite(lidar_depth_sigma_per_m))
+    return FailValidation(error, "visual.lidar_depth_sigma_per_m must be >= 0");
   return true;
 }
 
@@ -58,18 +62,19 @@ std::unique_ptr<ceres::LossFunction> HuberAtSigma(double delta, double nominal_s
   return std::make_unique<ceres::ScaledLoss>(new ceres::HuberLoss(delta / k), k * k, ceres::TAKE_OWNERSHIP);
 }
 
-/// (td - td0) / sigma: the time offset's prior around the calibrated value.
-class TimeOffsetPrior final : public ceres::SizedCostFunction<1, kTimeOffsetBlockSize> {
+/// (x - x0) / sigma on one scalar block: the time offset's prior around the calibrated value, a LiDAR depth's
+/// prior on an inverse depth.
+class ScalarPrior final : public ceres::SizedCostFunction<1, 1> {
  public:
-  TimeOffsetPrior(double td0_s, double sigma_s) : td0_s_(td0_s), sigma_s_(sigma_s) {}
+  ScalarPrior(double x0, double sigma) : x0_(x0), sigma_(sigma) {}
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    residuals[0] = (parameters[0][0] - td0_s_) / sigma_s_;
-    if (jacobians != nullptr && jacobians[0] != nullptr) jacobians[0][0] = 1.0 / sigma_s_;
+    residuals[0] = (parameters[0][0] - x0_) / sigma_;
+    if (jacobians != nullptr && jacobians[0] != nullptr) jacobians[0][0] = 1.0 / sigma_;
     return true;
   }
 
  private:
-  double td0_s_, sigma_s_;
+  double x0_, sigma_;
 };
 
 }  // namespace
@@ -81,7 +86,7 @@ VisualLandmarks::VisualLandmarks(const VisualWindowConfig& config, const Pose3& 
   ROTOLIDAR_CHECK(focal_px > 0.0 && std::isfinite(focal_px), "VisualLandmarks: focal_px must be > 0");
   sqrt_information_ = ReprojectionSqrtInformation(focal_px, config.pixel_sigma_px);
   sigma_px_ = config.pixel_sigma_px;
-  td_prior_ = std::make_unique<TimeOffsetPrior>(0.0, config.time_offset_prior_sigma_s);
+  td_prior_ = std::make_unique<ScalarPrior>(0.0, config.time_offset_prior_sigma_s);
 }
 
 VisualLandmarks::~VisualLandmarks() = default;
@@ -110,6 +115,11 @@ void VisualLandmarks::AddObservations(const double* pose, const std::vector<Visu
                              o.lidar_depth_m <= config_.max_depth_m;
       l->lidar_depth = has_depth;
       l->inverse_depth = 1.0 / (has_depth ? o.lidar_depth_m : config_.initial_depth_m);
+      if (has_depth) {
+        const double d = o.lidar_depth_m;
+        const double sigma_d = config_.lidar_depth_sigma_m + config_.lidar_depth_sigma_per_m * d;
+        l->depth_prior = std::make_unique<ScalarPrior>(1.0 / d, sigma_d / (d * d));
+      }
       l->observations.push_back({pose, o.normalized, o.velocity_normalized_ps, o.td_s, nullptr});
       landmarks_.emplace(o.feature_id, std::move(l));
       continue;
@@ -139,6 +149,7 @@ int VisualLandmarks::AddToProblem(ceres::Problem* problem) {
       ++factors;
     }
     if (l->lidar_depth && config_.fix_lidar_depth) problem->SetParameterBlockConstant(&l->inverse_depth);
+    else if (l->depth_prior) problem->AddResidualBlock(l->depth_prior.get(), nullptr, &l->inverse_depth);
   }
   if (config_.estimate_time_offset && factors > 0) problem->AddResidualBlock(td_prior_.get(), nullptr, td_s_);
   stats_.factors = factors;
@@ -237,6 +248,7 @@ std::vector<MarginalizationTerm> VisualLandmarks::TermsOf(const double* pose, st
       if (config_.estimate_time_offset) blocks.push_back(BlockRef{td_s_, BlockKind::kVector, kTimeOffsetBlockSize});
       terms.push_back({o.factor.get(), loss_.get(), std::move(blocks)});
     }
+    if (l->depth_prior && !config_.fix_lidar_depth) terms.push_back({l->depth_prior.get(), nullptr, {depth}});
     dropped->push_back(&l->inverse_depth);
   }
   return terms;

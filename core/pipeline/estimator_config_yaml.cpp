@@ -173,6 +173,7 @@ void Visit(V& v, VisualWindowConfig& c) {
   v("min_observations", &c.min_observations), v("min_depth_m", &c.min_depth_m), v("max_depth_m", &c.max_depth_m);
   v("max_reprojection_px", &c.max_reprojection_px), v("initial_depth_m", &c.initial_depth_m);
   v("fix_lidar_depth", &c.fix_lidar_depth), v("max_landmarks", &c.max_landmarks);
+  v("lidar_depth_sigma_m", &c.lidar_depth_sigma_m), v("lidar_depth_sigma_per_m", &c.lidar_depth_sigma_per_m);
   v("adaptive_sigma", &c.adaptive_sigma), v("max_pixel_sigma_px", &c.max_pixel_sigma_px);
   v("sigma_smoothing", &c.sigma_smoothing), v("min_residuals_for_sigma", &c.min_residuals_for_sigma);
   v("estimate_time_offset", &c.estimate_time_offset);

@@ -50,6 +50,21 @@ Status WriteSummaryJson(const std::string& path, const LoopPrResult& r, const gr
                 {"overlap_radius_m", c.overlap_radius_m},
                 {"max_loop_error_m", c.max_loop_error_m},
                 {"max_loop_error_rad", c.max_loop_error_rad}};
+  j["recall_at_precision_1"] = {{"stage1", RecallAtPrecision1(r.stage1)},
+                                 {"stage2", RecallAtPrecision1(r.stage2)},
+                                 {"both", RecallAtPrecision1(r.both)}};
+  if (r.visual_absent.empty()) {
+    j["recall_at_precision_1"]["visual_stage1"] = RecallAtPrecision1(r.visual);
+    j["visual_stage1"] = {{"keyframes_with_bow", r.visual_keyframes},
+                          {"min_normalised_score", r.visual_operating.threshold},
+                          {"min_raw_score", c.loop.bow.min_raw_score},
+                          {"precision", r.visual_operating.precision},
+                          {"recall", r.visual_operating.recall},
+                          {"true_detections", r.visual_operating.tp},
+                          {"false_detections", r.visual_operating.fp}};
+  } else {
+    j["visual_stage1"] = {{"keyframes_with_bow", 0}, {"absent", r.visual_absent}};
+  }
   j["verify_time_s"] = r.verify_time_s;
   std::ofstream out(path);
   out << j.dump(2) << "\n";
@@ -61,7 +76,8 @@ Status WriteSummaryJson(const std::string& path, const LoopPrResult& r, const gr
 int BenchLoops(int argc, char** argv) {
   OptionParser p("bench loops", "Run the SLAM core with loop closure on a recording with truth, then rate loop "
                                 "detection against the truth revisits: precision/recall curves of stage 1 alone, "
-                                "stage 2 alone and both, the operating point, and the run's own loops (false ones "
+                                "stage 2 alone and both (and the visual stage 1 alone, ORB bag of words, when the "
+                                "config has a vocabulary and the recording a camera), the operating point, and the run's own loops (false ones "
                                 "counted). Writes OUT/loops.html, loop_pr.csv, loop_queries.csv, loop_pr.json and "
                                 "the slam run in OUT/slam.");
   p.AddPositional("RECORDING", "recording folder with truth/ (rotolidar sim)");
@@ -111,6 +127,15 @@ int BenchLoops(int argc, char** argv) {
               "recall %.3f (%d true, %d false)\n",
               r.queries.size(), r.positives, pr.loop.max_descriptor_distance, pr.loop.verification.max_fitness_rmse_m,
               r.operating.precision, r.operating.recall, r.operating.tp, r.operating.fp);
+  std::printf("recall at precision 1: stage 1 alone (Scan Context) %.3f, stage 2 alone %.3f, both %.3f\n",
+              RecallAtPrecision1(r.stage1), RecallAtPrecision1(r.stage2), RecallAtPrecision1(r.both));
+  if (r.visual_absent.empty())
+    std::printf("visual stage 1 alone (%d keyframes with a bag-of-words vector): recall at precision 1 %.3f; at eta "
+                ">= %.2f: precision %.3f, recall %.3f (%d true, %d false)\n", r.visual_keyframes,
+                RecallAtPrecision1(r.visual), r.visual_operating.threshold, r.visual_operating.precision,
+                r.visual_operating.recall, r.visual_operating.tp, r.visual_operating.fp);
+  else
+    std::printf("visual stage 1 alone: not rated, %s\n", r.visual_absent.c_str());
   std::printf("run: %zu loops accepted by stage 2, %d false (relative pose off the truth by > %.2f m or %.1f deg), "
               "%d of them kept by the pose graph; report: %s/loops.html\n", slam.loops.loops.size(), false_loops,
               pr.max_loop_error_m, pr.max_loop_error_rad * 180.0 / M_PI, false_kept, out.c_str());

@@ -191,6 +191,7 @@ int BenchSlam(int argc, char** argv) {
   p.Add("carrier", "handheld", "-", "handheld (the scene's default walk) | scripted_loop");
   p.Add("reps", "2", "-", "estimator runs over the recording (the first scores deskew and ATE; the others are timed)");
   p.Add("threads", "1", "-", "estimator threads (features, Ceres)");
+  p.Add("camera", "off", "-", "on: render the camera and fuse it (LiDAR-visual-inertial)");
   p.Add("recording", "runs/bench_slam/recording", "-", "folder the simulated recording is written to");
   p.Add("json", "", "-", "also write the results to this JSON file");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
@@ -198,6 +199,9 @@ int BenchSlam(int argc, char** argv) {
   o.scene = p.Get("scene");
   o.carrier = p.Get("carrier");
   o.recording_dir = p.Get("recording");
+  if (p.Get("camera") != "on" && p.Get("camera") != "off")
+    return std::cerr << "error: --camera must be on or off (got '" << p.Get("camera") << "')\n", 2;
+  o.camera = p.Get("camera") == "on";
   long seed = 0, reps = 0, threads = 0;
   for (const Status& s : {p.GetDouble("duration", &o.duration_s), p.GetInt("seed", &seed), p.GetInt("reps", &reps),
                           p.GetInt("threads", &threads)}) {

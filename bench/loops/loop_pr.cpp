@@ -11,6 +11,7 @@
 #include "bench/eval/trajectory_lookup.hpp"
 #include "core/graph/loop_gate.hpp"
 #include "core/io/trajectory_io.hpp"
+#include "core/loop/bow_database.hpp"
 
 namespace rotolidar::bench {
 
@@ -178,9 +179,10 @@ int NearestOnOdometry(const Context& c, int query, const std::vector<int>& eligi
 
 }  // namespace
 
-std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives) {
-  std::sort(detections.begin(), detections.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives, bool higher_is_better) {
+  std::sort(detections.begin(), detections.end(), [higher_is_better](const auto& a, const auto& b) {
+    return higher_is_better ? a.first > b.first : a.first < b.first;
+  });
   std::vector<PrPoint> curve;
   PrPoint p;
   for (size_t i = 0; i < detections.size(); ++i) {
@@ -194,7 +196,38 @@ std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, in
   return curve;
 }
 
+double RecallAtPrecision1(const std::vector<PrPoint>& curve) {
+  double best = 0.0;
+  for (const PrPoint& p : curve)
+    if (p.fp == 0) best = std::max(best, p.recall);
+  return best;
+}
+
 namespace {
+
+// The visual stage 1 alone on one query: the eligible keyframe with the best eta in `bow` (the keyframes before
+// the query that have a vector, as the loop closer's database). eta is the raw score over one common divisor, so
+// the best eta is the best raw score; the thresholds are opened to rank every candidate.
+void VisualStage1(const Context& c, const RevisitTruth& truth, const loop::BowDatabase& bow, int query,
+                  LoopQueryOutcome* o) {
+  const graph::KeyframeCloud& q = c.keyframes[query];
+  if (q.bow.empty()) return;
+  loop::LoopQueryConfig open = c.loop.bow;
+  open.exclude_recent_s = c.loop.exclude_recent_s;
+  open.min_normalised_score = 0.0, open.min_raw_score = 0.0;
+  open.max_results = std::max(1, int(bow.size()));
+  for (const loop::BowCandidate& candidate : bow.DetectLoop(q.bow, q.t_s, open).accepted) {
+    const int match = int(candidate.id);
+    if (!Eligible(c, query, match)) continue;
+    o->visual_match = match;
+    o->visual_eta = candidate.normalised_score;
+    o->visual_raw_score = candidate.score;
+    o->visual_true = truth.IsRevisit(query, match);
+    o->visual_truth_distance_m = truth.Distance(query, match);
+    o->visual_truth_overlap = truth.Overlap(query, match);
+    return;
+  }
+}
 
 // One query through the three detectors; `described` are the points of its descriptor d (graph::DescribedPoints).
 LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::LidarPlaceIndex& index,
@@ -250,7 +283,30 @@ LoopQueryOutcome RunQuery(Context* c, const RevisitTruth& truth, const loop::Lid
   return o;
 }
 
+// The visual curve and its operating point (the loop closer's acceptance: eta and the raw-score floor).
+void SweepVisual(const LoopPrConfig& config, LoopPrResult* r) {
+  if (r->visual_keyframes == 0) {
+    r->visual_absent = "no keyframe has a bag-of-words vector (a recording without camera.csv, or no "
+                       "loop_closure.vocabulary in the config)";
+    return;
+  }
+  std::vector<std::pair<double, bool>> detections;
+  PrPoint& op = r->visual_operating;
+  op = PrPoint{};
+  op.threshold = config.loop.bow.min_normalised_score;
+  for (const LoopQueryOutcome& o : r->queries) {
+    if (o.visual_match < 0) continue;
+    detections.push_back({o.visual_eta, o.visual_true});
+    if (o.visual_eta >= op.threshold && o.visual_raw_score >= config.loop.bow.min_raw_score)
+      (o.visual_true ? op.tp : op.fp) += 1;
+  }
+  op.precision = op.tp + op.fp > 0 ? double(op.tp) / double(op.tp + op.fp) : 1.0;
+  op.recall = r->positives > 0 ? double(op.tp) / double(r->positives) : 0.0;
+  r->visual = SweepPr(detections, r->positives, /*higher_is_better=*/true);
+}
+
 void Sweep(const LoopPrConfig& config, LoopPrResult* r) {
+  SweepVisual(config, r);
   std::vector<std::pair<double, bool>> s1, s2, both;
   const double gate_m = config.loop.verification.max_fitness_rmse_m;
   r->operating = PrPoint{};
@@ -292,6 +348,7 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
   loop::LidarPlaceIndexConfig index_config;
   index_config.max_keyframes = std::max<size_t>(1, keyframes.size());
   loop::LidarPlaceIndex index(index_config);
+  loop::BowDatabase bow;  // the keyframes with a vector so far
   for (size_t i = 0; i < keyframes.size(); ++i) {
     const int query = int(i);
     const std::vector<Eigen::Vector3d> described = graph::DescribedPoints(
@@ -304,10 +361,16 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
       if (Eligible(c, query, m)) eligible.push_back(m);
     if (!eligible.empty()) {
       result->queries.push_back(RunQuery(&c, truth, index, described, d, query, eligible));
+      VisualStage1(c, truth, bow, query, &result->queries.back());
       if (result->queries.back().positive) ++result->positives;
     }
     if (Status s = index.Add(query, keyframes[i].t_s, d); !s)
       return Status::Error("keyframe " + std::to_string(i) + ": " + s.message);
+    if (!keyframes[i].bow.empty()) {
+      if (Status s = bow.Add(query, keyframes[i].t_s, keyframes[i].bow); !s)
+        return Status::Error("keyframe " + std::to_string(i) + ": " + s.message);
+      ++result->visual_keyframes;
+    }
     if (progress && (i + 1) % std::max<size_t>(1, keyframes.size() / 10) == 0)
       progress(double(i + 1) / double(keyframes.size()));
   }

@@ -18,6 +18,12 @@
 //   both            the loop closer's own chain: stage 1's keyframe through the descriptor gate and stage 2; when
 //                   that fails, the keyframe nearest on the odometry poses (within max_revisit_distance_m) the
 //                   same way; score: GICP fitness [m] of the pair that passed
+//   visual stage 1  the seed's camera stage 1 alone: each keyframe's bag-of-words vector (KeyframeCloud::bow) in a
+//   alone           loop::BowDatabase fed in keyframe order, as the loop closer's; the eligible keyframe with the
+//                   best normalised score eta = s(v_t, v_j) / s(v_t, v_{t-1}) (v_{t-1}: the previous keyframe with
+//                   a vector; a query with s(v_t, v_{t-1}) < loop.bow.min_previous_score, or without a vector,
+//                   proposes nothing); score: eta, HIGHER is better (a detection at tau: eta >= tau). Only when
+//                   some keyframe has a vector; recall is still over all positives.
 // precision = TP / (TP + FP) (1 when nothing is detected), recall = TP / positives (0 when there are none).
 // Odometry poses are used as they are (no graph correction between queries): the curves rate the detectors, not
 // the back end.
@@ -89,10 +95,17 @@ struct LoopQueryOutcome {
   bool both_verified = false;            ///< the descriptor gate and stage 2 (every gate but fitness) passed
   double both_fitness_m = 0.0;
   bool both_true = false;
+  int visual_match = -1;                 ///< the visual stage 1's proposal (-1: none)
+  double visual_eta = 0.0;               ///< its normalised score eta
+  double visual_raw_score = 0.0;         ///< its raw L1 score s(v_t, v_j)
+  bool visual_true = false;
+  double visual_truth_distance_m = 0.0, visual_truth_overlap = 0.0;
 };
 
 struct PrPoint {
-  double threshold = 0.0;  ///< the swept score's gate (a detection: score <= threshold)
+  /// The swept score's gate: a detection is score <= threshold, or score >= threshold for a higher-is-better score
+  /// (the visual stage 1's eta).
+  double threshold = 0.0;
   double precision = 1.0, recall = 0.0;
   int tp = 0, fp = 0;
 };
@@ -102,6 +115,13 @@ struct LoopPrResult {
   int positives = 0;
   std::vector<PrPoint> stage1, stage2, both;  ///< by ascending threshold
   PrPoint operating;                          ///< both at the loop config's fitness gate
+  /// The visual stage 1 alone, by DESCENDING eta (recall grows along it); empty when no keyframe has a vector.
+  std::vector<PrPoint> visual;
+  /// It at the loop closer's acceptance: eta >= loop.bow.min_normalised_score (the seed's 0.35) and raw score >=
+  /// loop.bow.min_raw_score; threshold = that eta.
+  PrPoint visual_operating;
+  int visual_keyframes = 0;  ///< keyframes with a bag-of-words vector
+  std::string visual_absent;  ///< why there is no visual curve (empty when there is one)
   double verify_time_s = 0.0;                 ///< GICP time, all queries [s]
 };
 
@@ -111,9 +131,14 @@ Status EvaluateLoopPr(const std::vector<graph::KeyframeCloud>& keyframes, const 
                       const LoopPrConfig& config, LoopPrResult* result,
                       const std::function<void(double)>& progress = nullptr);
 
-/// The PR curve of (score, is_true) detections: one point per distinct score (ascending), precision / recall
-/// as above. Exposed for the tests.
-std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives);
+/// The PR curve of (score, is_true) detections: one point per distinct score, precision / recall as above, from
+/// the strictest gate to the widest: ascending scores (detection: score <= threshold), or descending ones when
+/// higher_is_better (detection: score >= threshold). Exposed for the tests.
+std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives,
+                             bool higher_is_better = false);
+
+/// The highest recall of a curve's points without a false detection (0 for an empty curve).
+double RecallAtPrecision1(const std::vector<PrPoint>& curve);
 
 /// The truth pose (recording/truth/base.tum, T_world_base) at every keyframe's time, index-aligned. Errors name
 /// the file, or the keyframe the truth does not cover.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <utility>
 
 #include "bench/report/html_report.hpp"
 #include "bench/report/svg_plot.hpp"
@@ -74,6 +75,14 @@ std::string LoopPrSvg(const LoopPrResult& r) {
   op.color = "#d62728", op.line = false, op.markers = true, op.marker_radius_px = 6;
   op.x = {r.operating.recall}, op.y = {r.operating.precision};
   series.push_back(op);
+  if (!r.visual.empty()) {
+    series.push_back(CurveSeries(r.visual, "visual stage 1 alone (ORB bag of words, eta)", "#2ca02c"));
+    PlotSeries vop = op;
+    vop.label = Fmt("visual stage 1 at eta >= %.2f", r.visual_operating.threshold);
+    vop.color = "#17becf";
+    vop.x = {r.visual_operating.recall}, vop.y = {r.visual_operating.precision};
+    series.push_back(vop);
+  }
   PlotOptions o;
   o.title = "loop detection precision / recall (truth revisits)";
   o.x_label = "recall", o.y_label = "precision";
@@ -96,6 +105,8 @@ Status WriteCurves(const std::string& path, const LoopPrResult& r) {
   rows("stage2", r.stage2);
   rows("both", r.both);
   rows("operating", {r.operating});
+  rows("visual", r.visual);  // descending eta: a detection is eta >= threshold
+  if (r.visual_absent.empty()) rows("visual_operating", {r.visual_operating});
   return out ? Status::Ok() : Status::Error(path + ": write failed");
 }
 
@@ -103,14 +114,17 @@ Status WriteQueries(const std::string& path, const LoopPrResult& r) {
   std::ofstream out(path);
   out << "query_id,t_query_s,positive,stage1_match,stage1_distance,stage1_true,stage1_truth_distance_m,"
          "stage1_truth_overlap,stage2_match,stage2_verified,stage2_fitness_m,stage2_true,stage2_truth_distance_m,"
-         "stage2_truth_overlap,both_verified,both_fitness_m,both_true\n";
+         "stage2_truth_overlap,both_verified,both_fitness_m,both_true,visual_match,visual_eta,visual_raw_score,"
+         "visual_true,visual_truth_distance_m,visual_truth_overlap\n";
   for (const LoopQueryOutcome& q : r.queries)
     out << q.query_id << ',' << Num(q.t_query_s) << ',' << q.positive << ',' << q.stage1_match << ','
         << Num(q.stage1_distance) << ',' << q.stage1_true << ',' << Num(q.stage1_truth_distance_m) << ','
         << Num(q.stage1_truth_overlap) << ',' << q.stage2_match << ',' << q.stage2_verified << ','
         << Num(q.stage2_fitness_m) << ',' << q.stage2_true << ',' << Num(q.stage2_truth_distance_m) << ','
         << Num(q.stage2_truth_overlap) << ',' << q.both_verified << ',' << Num(q.both_fitness_m) << ','
-        << q.both_true << '\n';
+        << q.both_true << ',' << q.visual_match << ',' << Num(q.visual_eta) << ',' << Num(q.visual_raw_score)
+        << ',' << q.visual_true << ',' << Num(q.visual_truth_distance_m) << ',' << Num(q.visual_truth_overlap)
+        << '\n';
   return out ? Status::Ok() : Status::Error(path + ": write failed");
 }
 
@@ -129,11 +143,19 @@ Status WriteLoopChecks(const std::string& path, const graph::LoopClosureState& s
 }
 
 std::vector<std::string> CurveRow(const char* name, const std::vector<PrPoint>& curve) {
-  double best_recall_at_p1 = 0.0;  // the highest recall with no false positive
-  for (const PrPoint& p : curve)
-    if (p.fp == 0) best_recall_at_p1 = std::max(best_recall_at_p1, p.recall);
   const PrPoint last = curve.empty() ? PrPoint{} : curve.back();
-  return {name, Fmt("%.3f", best_recall_at_p1), Fmt("%.3f", last.precision), Fmt("%.3f", last.recall)};
+  return {name, Fmt("%.3f", RecallAtPrecision1(curve)), Fmt("%.3f", last.precision), Fmt("%.3f", last.recall)};
+}
+
+// The visual stage 1's lines of the summary table: its operating point, or why there is no curve.
+std::vector<std::pair<std::string, std::string>> VisualSummary(const LoopPrResult& r) {
+  if (!r.visual_absent.empty()) return {{"visual stage 1 alone", "not rated: " + r.visual_absent}};
+  const PrPoint& v = r.visual_operating;
+  const std::string at = Fmt("visual stage 1 alone at eta >= %.2f (the seed's): ", v.threshold);
+  return {{"keyframes with a bag-of-words vector", std::to_string(r.visual_keyframes)},
+          {at + "precision", Fmt("%.3f", v.precision)},
+          {at + "recall", Fmt("%.3f", v.recall)},
+          {at + "true / false detections", std::to_string(v.tp) + " / " + std::to_string(v.fp)}};
 }
 
 }  // namespace
@@ -155,17 +177,23 @@ Status WriteLoopPrOutputs(const std::string& out_dir, const std::string& title, 
   }
   HtmlReport html("Loop detection: " + title);
   html.BeginSection("pr", "Precision / recall against truth revisits");
-  html.KeyValueTable({{"queries (keyframes with an eligible earlier keyframe)", std::to_string(r.queries.size())},
-                      {"positives (an eligible true revisit exists)", std::to_string(r.positives)},
-                      {"operating point: precision", Fmt("%.3f", r.operating.precision)},
-                      {"operating point: recall", Fmt("%.3f", r.operating.recall)},
-                      {"operating point: true / false detections",
-                       std::to_string(r.operating.tp) + " / " + std::to_string(r.operating.fp)},
-                      {"GICP time, all queries [s]", Fmt("%.1f", r.verify_time_s)}});
+  std::vector<std::pair<std::string, std::string>> summary = {
+      {"queries (keyframes with an eligible earlier keyframe)", std::to_string(r.queries.size())},
+      {"positives (an eligible true revisit exists)", std::to_string(r.positives)},
+      {"operating point: precision", Fmt("%.3f", r.operating.precision)},
+      {"operating point: recall", Fmt("%.3f", r.operating.recall)},
+      {"operating point: true / false detections",
+       std::to_string(r.operating.tp) + " / " + std::to_string(r.operating.fp)},
+      {"GICP time, all queries [s]", Fmt("%.1f", r.verify_time_s)}};
+  for (auto& line : VisualSummary(r)) summary.push_back(std::move(line));
+  html.KeyValueTable(summary);
   html.Figure(LoopPrSvg(r), "Each detector proposes one earlier keyframe per query; sweeping its score's gate traces "
-                            "the curve. The operating point is the loop closer's default gates.");
+                            "the curve (the visual stage 1's from high eta down). The operating point is the loop closer's default gates; "
+                            "the visual stage 1's is the seed's eta >= 0.35 with the raw-score floor.");
   html.Table({"detector", "recall at precision 1", "precision (gate open)", "recall (gate open)"},
-             {CurveRow("stage 1 alone", r.stage1), CurveRow("stage 2 alone", r.stage2), CurveRow("both", r.both)});
+             {CurveRow("stage 1 alone", r.stage1), CurveRow("stage 2 alone", r.stage2), CurveRow("both", r.both),
+              r.visual_absent.empty() ? CurveRow("visual stage 1 alone (eta)", r.visual)
+                                      : std::vector<std::string>{"visual stage 1 alone (eta)", "-", "-", "-"}});
   html.BeginSection("loops", "Loops the run accepted");
   int false_loops = 0, false_kept = 0;
   for (size_t i = 0; i < verdicts.size(); ++i)

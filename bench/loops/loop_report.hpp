@@ -16,10 +16,12 @@ using LoopVerdicts = std::vector<int>;
 /// keyframes' corrected positions: green true (or unknown), red false, grey dashed when the graph rejected it.
 std::string LoopTopViewSvg(const graph::LoopClosureState& state, const LoopVerdicts& verdicts);
 
-/// Precision against recall of the three detectors, the operating point marked.
+/// Precision against recall of the three detectors and, when rated, the visual stage 1 alone; the operating
+/// point (and the visual stage 1's at the seed's eta) marked.
 std::string LoopPrSvg(const LoopPrResult& result);
 
-/// Writes into out_dir: loop_pr.csv (curve, threshold, precision, recall, tp, fp), loop_queries.csv (one row per
+/// Writes into out_dir: loop_pr.csv (curve, threshold, precision, recall, tp, fp; curves stage1, stage2, both,
+/// operating and, when rated, visual (descending eta) and visual_operating), loop_queries.csv (one row per
 /// query: each detector's proposal, score and truth), loops_truth.csv (each accepted loop against the truth; `checks`
 /// in state.loops order) and loops.html (the curves, the top view, the tables).
 Status WriteLoopPrOutputs(const std::string& out_dir, const std::string& title, const LoopPrResult& result,

@@ -3,11 +3,14 @@
 //
 // Simulates `duration_s` of the rig in a scene (sim::RunSimulation, written to `recording_dir`), then runs the
 // estimator over it `repetitions` times, single-threaded (features, registration and window: 1 thread), feeding
-// messages in time order as a live rig would. Reported:
+// messages in time order as a live rig would. With `camera` the sim renders the camera and the estimator fuses it
+// (LiDAR-visual-inertial, docs/visual.md): frames are decoded and tracked in the camera path's own thread, on
+// top of `threads`, and handed over kCameraFrameLeadS ahead of the packets as `rotolidar slam` does. Reported:
 //  - per-scan milliseconds, median and p90, total and per stage (ScanReport::timings: the estimator's own
 //    stopwatches, wall clock on the calling thread);
 //  - the real-time ratio: the LiDAR data's span divided by the process CPU time spent inside the estimator's
-//    Feed/Process/Finish calls (median over repetitions; loading and evaluation excluded);
+//    Feed/Process/Finish calls (median over repetitions; loading and evaluation excluded; the CPU time of every
+//    thread, the camera's PNG decoding included); and the same over wall time;
 //  - ATE: translation APE RMSE of T_world_base against truth/base.tum after SE(3) Umeyama (bench/run/truth_eval);
 //  - the per-point deskew error against truth (bench/metrics/deskew_error.hpp), first repetition only.
 // The first repetition keeps every scan's deskewed points and scores them between scans (copies inside the
@@ -28,6 +31,7 @@ struct SlamBenchOptions {
   std::string carrier = "handheld";     ///< "handheld" (the scene's default walk) | "scripted_loop"
   int repetitions = 2;                  ///< estimator runs over the same recording (the first one scores)
   int threads = 1;                      ///< estimator threads (features, Ceres); 1 = the "one core" figure
+  bool camera = false;                  ///< render the camera and fuse it (visual.enabled)
   std::string recording_dir = "runs/bench_slam/recording";  ///< where the simulated recording is written
   bool Validate(std::string* error) const;  ///< false with the option named in *error
 };
@@ -49,6 +53,7 @@ struct SlamBenchResult {
   std::size_t ate_poses = 0;
   DeskewErrorResult deskew_error;   ///< first repetition
   double RealTimeRatio() const { return cpu_s > 0.0 ? data_s / cpu_s : 0.0; }
+  double WallRealTimeRatio() const { return wall_s > 0.0 ? data_s / wall_s : 0.0; }
 };
 
 /// Simulates, then runs and evaluates the estimator (see the file comment). Errors name the stage that failed.

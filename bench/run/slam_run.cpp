@@ -31,11 +31,7 @@ void Keep(ScanReport report, SlamRunResult* result) {
   result->scans.push_back(std::move(report));
 }
 
-/// Camera frames are handed over this far ahead of the packets [s]: more than VisualConfig::max_image_offset_s
-/// (0.05 s), so every frame a state can choose is in when the state is fused.
-constexpr double kCameraLeadS = 0.1;
-
-/// Feeds every message to the estimator in time order (packets by capture time, camera frames kCameraLeadS
+/// Feeds every message to the estimator in time order (packets by capture time, camera frames kCameraFrameLeadS
 /// early), as a live rig would.
 /// With `snapshots`, polled after each scan (a failed write stops the snapshots and is returned at the end).
 Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
@@ -49,9 +45,9 @@ Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* resul
     while (i_enc < rec.encoder.size() && rec.encoder[i_enc].t_s <= packet.t_capture_s)
       estimator->Feed(rec.encoder[i_enc++]);
     while (i_imu < rec.imu.size() && rec.imu[i_imu].t_s <= packet.t_capture_s) estimator->Feed(rec.imu[i_imu++]);
-    // Camera frames go kCameraLeadS ahead of the packets (as a live camera's frames arrive between the LiDAR's
+    // Camera frames go kCameraFrameLeadS ahead of the packets (as a live camera's frames arrive between the LiDAR's
     // packets, not after a scan), so that the tracker's thread works while the estimator handles the scan.
-    while (i_cam < rec.camera.size() && rec.camera[i_cam].t_s <= packet.t_capture_s + kCameraLeadS)
+    while (i_cam < rec.camera.size() && rec.camera[i_cam].t_s <= packet.t_capture_s + kCameraFrameLeadS)
       estimator->Feed(rec.camera[i_cam++]);  // decoded only when kept (in the tracker's thread)
     if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << i << ": " << s.message);
     for (ScanReport& r : estimator->Process()) Keep(std::move(r), result);

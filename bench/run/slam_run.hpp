@@ -22,6 +22,12 @@
 
 namespace rotolidar::bench {
 
+/// A player hands camera frames to the estimator this far ahead of the LiDAR packets of the same time [s], as a
+/// live camera's frames arrive between the packets: the tracker's thread then works while the estimator handles
+/// the scan. More than VisualConfig::max_image_offset_s (0.05 s), so every frame a state can choose is in when
+/// the state is fused (core/pipeline/visual_frontend.hpp).
+inline constexpr double kCameraFrameLeadS = 0.1;
+
 struct SlamRunResult {
   Trajectory trajectory;            ///< T_world_base (loop-closed when loop closure is on)
   Trajectory odometry_trajectory;   ///< T_world_base as the odometry gave it (before loop closure)

@@ -228,8 +228,8 @@ bool LoopCloser::AddImage(const cv::Mat& image, int id, Seconds t_s) {
   loop::BowVector bow;
   Status s = loop::ExtractOrb(image, config_.orb, &features);
   if (s) s = vocabulary_->Transform(features.descriptors, &bow);
+  std::lock_guard<std::mutex> lock(mutex_);  // KeyframeClouds reads bow_ from other threads
   if (s) s = bow_.Add(id, t_s, bow);
-  std::lock_guard<std::mutex> lock(mutex_);
   if (!s) {
     ++state_.visual_failures;
     state_.last_message = "keyframe " + std::to_string(id) + " image: " + s.message;

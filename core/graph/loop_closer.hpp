@@ -161,6 +161,10 @@ struct KeyframeCloud {
   Pose3 T_world_corrected = Pose3::Identity();
   Eigen::Matrix3d R_level_base = Eigen::Matrix3d::Identity();  ///< base -> the descriptor's gravity-aligned frame
   std::vector<Eigen::Vector3d> cloud_base;  ///< cloud_voxel_m-thinned points within max_range_m, base frame [m]
+  /// The bag-of-words vector of its camera image as the visual stage 1 stored it (L1-normalised TF-IDF,
+  /// loop::BowDatabase::Find; a few hundred words, ~50 B a word); empty when it has none (no vocabulary, no image
+  /// near its time, or ORB / the vocabulary failed on it). No image is kept.
+  loop::BowVector bow;
 };
 
 /// A snapshot of the loop closer's outcome.
@@ -209,7 +213,8 @@ class LoopCloser {
   /// The map rebuilt from the keyframes' stored points at their corrected poses [world], at most
   /// `points_per_voxel` per `voxel_m` voxel.
   std::vector<Eigen::Vector3d> CorrectedMap(double voxel_m, int points_per_voxel) const;
-  /// Copies of the stored keyframes in id order (after Finish: all of them), ~24 B per stored point.
+  /// Copies of the stored keyframes in id order (after Finish: all of them), ~24 B per stored point, with their
+  /// bag-of-words vectors.
   std::vector<KeyframeCloud> KeyframeClouds() const;
 
  private:
@@ -245,7 +250,7 @@ class LoopCloser {
   double last_loop_path_m_ = -1e300;                  // path length at the last accepted loop
   loop::LidarPlaceIndex index_;
   std::unique_ptr<loop::Vocabulary> vocabulary_;  // null: no visual stage 1
-  loop::BowDatabase bow_;
+  loop::BowDatabase bow_;  // written by the worker under mutex_; read by the worker, or by others under mutex_
   PoseGraph graph_;
   LoopClosureState state_;
   std::thread worker_;

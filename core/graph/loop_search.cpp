@@ -258,7 +258,8 @@ std::vector<KeyframeCloud> LoopCloser::KeyframeClouds() const {
   out.reserve(state_.keyframes.size());
   for (const KeyframePose& k : state_.keyframes) {
     const Keyframe& kf = *keyframes_[k.id];
-    out.push_back({k.id, k.t_s, k.T_world_odom, k.T_world_corrected, kf.R_level_base, kf.cloud_base});
+    out.push_back({k.id, k.t_s, k.T_world_odom, k.T_world_corrected, kf.R_level_base, kf.cloud_base, {}});
+    if (kf.has_bow) bow_.Find(k.id, &out.back().bow);  // bow_ grows under mutex_ (AddImage)
   }
   return out;
 }

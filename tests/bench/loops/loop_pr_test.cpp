@@ -1,11 +1,13 @@
-// Loop detection precision/recall (bench/loops/loop_pr.hpp): the sweep's arithmetic, the truth labels, and the
-// three detectors on the synthetic two-lap yard of the loop closer's tests.
+// Loop detection precision/recall (bench/loops/loop_pr.hpp): the sweep's arithmetic (both directions), the truth
+// labels, the visual stage 1 on hand-made word vectors, and the three LiDAR detectors on the synthetic two-lap yard
+// of the loop closer's tests.
 #include <cstdio>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "bench/loops/loop_pr.hpp"
+#include "core/loop/vocabulary.hpp"
 #include "tests/core/graph/synthetic_walk.hpp"
 
 namespace rotolidar::bench {
@@ -66,6 +68,103 @@ TEST(LoopPr, TruthNeedsNearnessAndOverlap) {
   EXPECT_NEAR(off.truth_distance_m, 2.0, 1e-9);
 }
 
+TEST(LoopPr, SweepHigherIsBetterStartsAtTheHighestScore) {
+  // The visual stage 1's eta: a detection is score >= threshold, so the strictest gate is the highest score.
+  const std::vector<PrPoint> curve = SweepPr({{0.2, true}, {0.9, true}, {0.5, false}}, 3, /*higher_is_better=*/true);
+  ASSERT_EQ(curve.size(), 3u);
+  EXPECT_DOUBLE_EQ(curve[0].threshold, 0.9);
+  EXPECT_EQ(curve[0].tp, 1);
+  EXPECT_EQ(curve[0].fp, 0);
+  EXPECT_DOUBLE_EQ(curve[1].threshold, 0.5);
+  EXPECT_DOUBLE_EQ(curve[1].precision, 0.5);
+  EXPECT_DOUBLE_EQ(curve[2].threshold, 0.2);
+  EXPECT_DOUBLE_EQ(curve[2].recall, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(RecallAtPrecision1(curve), 1.0 / 3.0);
+  // The same detections read lower-is-better start at the other end (the false 0.5 comes before the true 0.9).
+  EXPECT_DOUBLE_EQ(SweepPr({{0.2, true}, {0.9, true}, {0.5, false}}, 3)[0].threshold, 0.2);
+  EXPECT_DOUBLE_EQ(RecallAtPrecision1(SweepPr({{0.2, true}, {0.9, true}, {0.5, false}}, 3)), 1.0 / 3.0);
+}
+
+// Three places 40-57 m apart (A, B, C), visited A B C at 0, 5, 10 s, then A B C A at 30, 40, 50, 60 s (eligible:
+// 20 s older, 10 m back on the path; so the queries are keyframes 3-6), each keyframe with a hand-made
+// bag-of-words vector; no simulation, no vocabulary.
+std::vector<graph::KeyframeCloud> VisualYard(std::vector<Pose3>* truth) {
+  const std::vector<Eigen::Vector3d> world = MakeWorld(7);
+  const Eigen::Vector2d place[3] = {{0.0, 0.0}, {40.0, 0.0}, {40.0, 40.0}};
+  // Word 1 is A's, 2 B's, 3 C's; 100 and 50 are shared. Keyframe 3 (at A) looks like keyframe 0; keyframe 4 (at B)
+  // mostly like keyframe 3 (its previous one) and a little like keyframe 1; keyframe 5 (at C) looks like B
+  // (keyframe 1): an aliased place. Keyframe 6 (at A) has no vector.
+  const std::vector<loop::BowVector> bow = {{{1, 1.0}, {100, 1.0}}, {{2, 1.0}, {100, 1.0}}, {{3, 1.0}, {100, 1.0}},
+                                            {{1, 3.0}, {50, 2.0}, {100, 1.0}}, {{2, 0.3}, {50, 3.0}},
+                                            {{2, 1.0}, {50, 1.0}, {100, 2.0}}, {}};
+  std::vector<graph::KeyframeCloud> out;
+  for (int i = 0; i < 7; ++i) {
+    Pose3 T = Pose3::Identity();
+    T.translation() << place[i % 3].x(), place[i % 3].y(), 0.0;
+    graph::KeyframeCloud k;
+    k.id = i, k.t_s = i < 3 ? 5.0 * i : 10.0 * i, k.T_world_odom = k.T_world_corrected = T, k.bow = bow[size_t(i)];
+    const std::vector<Eigen::Vector3f> seen = Observe(world, T);
+    for (size_t j = 0; j < seen.size(); j += 4) k.cloud_base.push_back(seen[j].cast<double>());  // fewer points
+    out.push_back(k);
+    truth->push_back(T);
+  }
+  return out;
+}
+
+TEST(LoopPr, VisualStage1ProposesTheBestEtaAndSweepsItDownwards) {
+  std::vector<Pose3> truth;
+  std::vector<graph::KeyframeCloud> keyframes = VisualYard(&truth);
+  LoopPrResult r;
+  ASSERT_TRUE(EvaluateLoopPr(keyframes, truth, LoopPrConfig{}, &r));
+  ASSERT_EQ(r.queries.size(), 4u);  // keyframes 3-6
+  EXPECT_EQ(r.positives, 4);        // each revisits its place
+  EXPECT_EQ(r.visual_keyframes, 6);
+  EXPECT_TRUE(r.visual_absent.empty());
+  const auto eta = [&](int q, int m) {
+    return loop::Vocabulary::Score(keyframes[q].bow, keyframes[m].bow) /
+           loop::Vocabulary::Score(keyframes[q].bow, keyframes[q - 1].bow);
+  };
+  // Keyframe 3: keyframe 0 (the same place, eta 4) beats keyframes 1 and 2 (eta 1).
+  EXPECT_EQ(r.queries[0].visual_match, 0);
+  EXPECT_TRUE(r.queries[0].visual_true);
+  EXPECT_NEAR(r.queries[0].visual_eta, eta(3, 0), 1e-9);
+  EXPECT_NEAR(r.queries[0].visual_eta, 4.0, 1e-9);
+  // Keyframe 4: keyframe 1, true, but eta 0.27 (below the seed's 0.35).
+  EXPECT_EQ(r.queries[1].visual_match, 1);
+  EXPECT_TRUE(r.queries[1].visual_true);
+  EXPECT_NEAR(r.queries[1].visual_eta, eta(4, 1), 1e-9);
+  EXPECT_LT(r.queries[1].visual_eta, 0.35);
+  // Keyframe 5 at C: the aliased B (keyframe 1, eta 2.2) beats C itself (keyframe 2, eta 1.47): a false detection.
+  EXPECT_EQ(r.queries[2].visual_match, 1);
+  EXPECT_FALSE(r.queries[2].visual_true);
+  EXPECT_NEAR(r.queries[2].visual_eta, eta(5, 1), 1e-9);
+  EXPECT_GT(r.queries[2].visual_eta, eta(5, 2));
+  // Keyframe 6 has no vector: no proposal, but it still counts as a positive.
+  EXPECT_EQ(r.queries[3].visual_match, -1);
+  EXPECT_TRUE(r.queries[3].positive);
+  // The curve from the highest eta down: 4 (true), 2.2 (false), 0.27 (true); recall over all 4 positives.
+  ASSERT_EQ(r.visual.size(), 3u);
+  EXPECT_NEAR(r.visual[0].threshold, 4.0, 1e-9);
+  EXPECT_EQ(r.visual[0].tp, 1);
+  EXPECT_EQ(r.visual[0].fp, 0);
+  EXPECT_DOUBLE_EQ(r.visual[1].precision, 0.5);
+  EXPECT_DOUBLE_EQ(r.visual[2].precision, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(r.visual[2].recall, 0.5);
+  EXPECT_DOUBLE_EQ(RecallAtPrecision1(r.visual), 0.25);
+  // The seed's operating point, eta >= 0.35: keyframes 3 (true) and 5 (false).
+  EXPECT_DOUBLE_EQ(r.visual_operating.threshold, 0.35);
+  EXPECT_EQ(r.visual_operating.tp, 1);
+  EXPECT_EQ(r.visual_operating.fp, 1);
+  EXPECT_DOUBLE_EQ(r.visual_operating.recall, 0.25);
+  // Without vectors the curve is absent and says why.
+  for (graph::KeyframeCloud& k : keyframes) k.bow.clear();
+  ASSERT_TRUE(EvaluateLoopPr(keyframes, truth, LoopPrConfig{}, &r));
+  EXPECT_TRUE(r.visual.empty());
+  EXPECT_EQ(r.visual_keyframes, 0);
+  EXPECT_FALSE(r.visual_absent.empty());
+  for (const LoopQueryOutcome& q : r.queries) EXPECT_EQ(q.visual_match, -1);
+}
+
 TEST(LoopPr, DetectorsOnTheTwoLapYard) {
   const std::vector<Eigen::Vector3d> world = MakeWorld(7);
   graph::test_util::Walk walk = MakeWalk();
@@ -103,6 +202,9 @@ TEST(LoopPr, DetectorsOnTheTwoLapYard) {
     for (size_t i = 1; i < c->size(); ++i) EXPECT_GE((*c)[i].recall, (*c)[i - 1].recall);
   ASSERT_FALSE(r.stage1.empty());
   EXPECT_EQ(size_t(r.stage1.back().tp + r.stage1.back().fp), r.queries.size());
+  // No vocabulary in this loop closer: no word vectors, no visual curve.
+  EXPECT_TRUE(r.visual.empty());
+  EXPECT_FALSE(r.visual_absent.empty());
   // Bad input: sizes that differ.
   truth.pop_back();
   EXPECT_FALSE(EvaluateLoopPr(keyframes, truth, LoopPrConfig{}, &r));

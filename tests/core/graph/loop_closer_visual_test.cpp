@@ -26,7 +26,8 @@ cv::Mat ImageAt(const Pose3& T_truth, int step, bool alias) {
                                    2.0 * std::sin(0.7 * step), 1.0, 0.0, "noise-" + std::to_string(step));
 }
 
-LoopClosureState RunVisualWalk(bool load_vocabulary, bool alias, std::vector<Pose3>* truth_at_keyframes) {
+LoopClosureState RunVisualWalk(bool load_vocabulary, bool alias, std::vector<Pose3>* truth_at_keyframes,
+                               std::vector<KeyframeCloud>* clouds = nullptr) {
   const std::vector<Eigen::Vector3d> world = test_util::MakeWorld(7);
   test_util::Walk walk = test_util::MakeWalk();
   walk.truth.resize(400), walk.odometry.resize(400);  // a lap and a quarter
@@ -47,13 +48,23 @@ LoopClosureState RunVisualWalk(bool load_vocabulary, bool alias, std::vector<Pos
   }
   closer.Finish();
   LoopClosureState s = closer.State();
+  if (clouds) *clouds = closer.KeyframeClouds();
   for (const KeyframePose& k : s.keyframes) truth_at_keyframes->push_back(walk.truth[size_t(std::lround(k.t_s / 0.5))]);
   return s;
 }
 
 TEST(LoopCloserVisual, TheBagOfWordsProposesAndGeometryConfirms) {
   std::vector<Pose3> truth;
-  const LoopClosureState s = RunVisualWalk(true, false, &truth);
+  std::vector<KeyframeCloud> clouds;
+  const LoopClosureState s = RunVisualWalk(true, false, &truth, &clouds);
+  // Each stored keyframe hands out its word vector (what bench loops rates offline), L1-normalised.
+  ASSERT_EQ(clouds.size(), s.keyframes.size());
+  for (const KeyframeCloud& k : clouds) {
+    ASSERT_FALSE(k.bow.empty()) << k.id;
+    double sum = 0.0;
+    for (const auto& word : k.bow) sum += word.second;
+    EXPECT_NEAR(sum, 1.0, 1e-9) << k.id;
+  }
   size_t visual = 0, graph = 0, descriptor_rejected = 0;
   for (const CandidateRecord& c : s.candidates) {
     visual += c.source == CandidateRecord::Source::kVisual;
@@ -91,8 +102,11 @@ TEST(LoopCloserVisual, LookAlikeImagesAreStoppedByTheLidar) {
 
 TEST(LoopCloserVisual, WithoutAVocabularyImagesAreIgnored) {
   std::vector<Pose3> truth;
-  const LoopClosureState s = RunVisualWalk(false, false, &truth);
+  std::vector<KeyframeCloud> clouds;
+  const LoopClosureState s = RunVisualWalk(false, false, &truth, &clouds);
   EXPECT_EQ(s.visual_keyframes, 0u);
+  ASSERT_FALSE(clouds.empty());
+  for (const KeyframeCloud& k : clouds) EXPECT_TRUE(k.bow.empty()) << k.id;
   for (const CandidateRecord& c : s.candidates) EXPECT_NE(c.source, CandidateRecord::Source::kVisual);
   LoopClosureConfig config;
   LoopCloser closer(config);

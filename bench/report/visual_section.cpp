@@ -1,7 +1,9 @@
 #include "bench/report/visual_section.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <map>
+#include <string>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,51 +17,55 @@
 namespace rotolidar::bench::report {
 namespace {
 
-/// Observations, inliers, LiDAR depths and landmarks per scan over time.
-std::string StatisticsSvg(const std::vector<ScanReport>& scans) {
-  std::vector<PlotSeries> series(4);
-  series[0].label = "observations", series[1].label = "KLT inliers", series[2].label = "new LiDAR depths";
-  series[3].label = "landmarks in the window";
+/// One line per label over the scans that fused a frame, against time since the first scan; `values` gives a
+/// scan's values in label order.
+std::string CameraSeriesSvg(const std::vector<ScanReport>& scans, const std::vector<std::string>& labels,
+                            const std::function<std::vector<double>(const VisualScanReport&)>& values,
+                            const std::string& title, const std::string& y_label) {
+  std::vector<PlotSeries> series(labels.size());
+  for (size_t k = 0; k < labels.size(); ++k) series[k].label = labels[k];
   const Seconds t0 = scans.front().t_start_s;
   for (const ScanReport& r : scans) {
     if (!r.visual.image) continue;
-    const double t = r.t_start_s - t0;
-    const double values[4] = {double(r.visual.observations), double(r.visual.inliers),
-                              double(r.visual.lidar_depths), double(r.visual.landmarks)};
-    for (int k = 0; k < 4; ++k) series[k].x.push_back(t), series[k].y.push_back(values[k]);
+    const std::vector<double> v = values(r.visual);
+    for (size_t k = 0; k < series.size(); ++k) series[k].x.push_back(r.t_start_s - t0), series[k].y.push_back(v[k]);
   }
   PlotOptions options;
-  options.title = "Camera path per scan";
+  options.title = title;
   options.x_label = "time [s]";
-  options.y_label = "count";
+  options.y_label = y_label;
   options.y_include_zero = true;
   options.legend_above = true;
   return LinePlotSvg(series, options);
 }
 
+/// Observations, inliers, LiDAR depths and landmarks per scan over time.
+std::string StatisticsSvg(const std::vector<ScanReport>& scans) {
+  return CameraSeriesSvg(
+      scans, {"observations", "KLT inliers", "new LiDAR depths", "landmarks in the window"},
+      [](const VisualScanReport& v) {
+        return std::vector<double>{double(v.observations), double(v.inliers), double(v.lidar_depths),
+                                   double(v.landmarks)};
+      },
+      "Camera path per scan", "count");
+}
+
 /// The camera's weight over time: the pixel sigma the window whitens with (adaptive) and the median
 /// reprojection error of each solve; with td estimated, td in ms too.
 std::string WeightSvg(const std::vector<ScanReport>& scans) {
-  std::vector<PlotSeries> series(3);
-  series[0].label = "sigma [px]", series[1].label = "median reprojection error [px]";
-  series[2].label = "time offset td [ms]";
-  const Seconds t0 = scans.front().t_start_s;
-  bool td = false;
-  for (const ScanReport& r : scans) {
-    if (!r.visual.image) continue;
-    const double t = r.t_start_s - t0;
-    const double values[3] = {r.visual.sigma_px, r.visual.residual_median_px, 1e3 * r.visual.time_offset_s};
-    td = td || r.visual.time_offset_s != 0.0;
-    for (int k = 0; k < 3; ++k) series[k].x.push_back(t), series[k].y.push_back(values[k]);
-  }
-  if (!td) series.pop_back();
-  PlotOptions options;
-  options.title = "Camera weight per scan";
-  options.x_label = "time [s]";
-  options.y_label = "px (ms)";
-  options.y_include_zero = true;
-  options.legend_above = true;
-  return LinePlotSvg(series, options);
+  const bool td = std::any_of(scans.begin(), scans.end(), [](const ScanReport& r) {
+    return r.visual.image && r.visual.time_offset_s != 0.0;
+  });
+  std::vector<std::string> labels = {"sigma [px]", "median reprojection error [px]"};
+  if (td) labels.push_back("time offset td [ms]");
+  return CameraSeriesSvg(
+      scans, labels,
+      [td](const VisualScanReport& v) {
+        std::vector<double> out = {v.sigma_px, v.residual_median_px};
+        if (td) out.push_back(1e3 * v.time_offset_s);
+        return out;
+      },
+      "Camera weight per scan", td ? "px (ms)" : "px");
 }
 
 /// The frame at t_s with the features tracked over the half second before it: each track's last positions as a

@@ -12,7 +12,8 @@
 // normalised coordinates of the camera at t_s.
 // Threads (track_in_thread): frames are decoded and tracked in one worker thread while the estimator's thread
 // handles the LiDAR (LVI-SAM runs its feature tracker as a node of its own); ObservationsAt first waits until
-// every frame handed over so far is tracked, so the results do not depend on the threads' timing.
+// every frame handed over that it may choose (within max_image_offset_s of its time) is tracked and ignores any
+// tracked beyond, so the results do not depend on the threads' timing.
 // Ownership: owns the tracker, its worker, its recent results, the depth cloud and the landmarks (the window only
 // points at them). Thread safety: every public member is for one caller thread (the estimator's).
 #include <condition_variable>

@@ -177,6 +177,12 @@ int NearestOnOdometry(const Context& c, int query, const std::vector<int>& eligi
   return best;
 }
 
+/// Fills p's precision (1 with no detection) and recall (0 without positives) from its tp and fp.
+void SetPrecisionRecall(int positives, PrPoint* p) {
+  p->precision = p->tp + p->fp > 0 ? double(p->tp) / double(p->tp + p->fp) : 1.0;
+  p->recall = positives > 0 ? double(p->tp) / double(positives) : 0.0;
+}
+
 }  // namespace
 
 std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, int positives, bool higher_is_better) {
@@ -189,8 +195,7 @@ std::vector<PrPoint> SweepPr(std::vector<std::pair<double, bool>> detections, in
     (detections[i].second ? p.tp : p.fp) += 1;
     if (i + 1 < detections.size() && detections[i + 1].first == detections[i].first) continue;
     p.threshold = detections[i].first;
-    p.precision = double(p.tp) / double(p.tp + p.fp);
-    p.recall = positives > 0 ? double(p.tp) / double(positives) : 0.0;
+    SetPrecisionRecall(positives, &p);
     curve.push_back(p);
   }
   return curve;
@@ -300,8 +305,7 @@ void SweepVisual(const LoopPrConfig& config, LoopPrResult* r) {
     if (o.visual_eta >= op.threshold && o.visual_raw_score >= config.loop.bow.min_raw_score)
       (o.visual_true ? op.tp : op.fp) += 1;
   }
-  op.precision = op.tp + op.fp > 0 ? double(op.tp) / double(op.tp + op.fp) : 1.0;
-  op.recall = r->positives > 0 ? double(op.tp) / double(r->positives) : 0.0;
+  SetPrecisionRecall(r->positives, &op);
   r->visual = SweepPr(detections, r->positives, /*higher_is_better=*/true);
 }
 
@@ -319,9 +323,7 @@ void Sweep(const LoopPrConfig& config, LoopPrResult* r) {
       if (o.both_fitness_m <= gate_m) (o.both_true ? r->operating.tp : r->operating.fp) += 1;
     }
   }
-  const PrPoint& op = r->operating;
-  r->operating.precision = op.tp + op.fp > 0 ? double(op.tp) / double(op.tp + op.fp) : 1.0;
-  r->operating.recall = r->positives > 0 ? double(op.tp) / double(r->positives) : 0.0;
+  SetPrecisionRecall(r->positives, &r->operating);
   r->stage1 = SweepPr(s1, r->positives);
   r->stage2 = SweepPr(s2, r->positives);
   r->both = SweepPr(both, r->positives);

@@ -74,7 +74,7 @@ void VisualFrontEnd::Track(const CameraFrameRef& ref) {
 }
 
 void VisualFrontEnd::Enqueue(Pending pending) {
-  last_tracked_s_ = pending.ref ? pending.ref->t_s : pending.frame.t_s;
+  last_tracked_s_ = pending.t_s();
   if (!worker_.joinable()) return TrackNow(std::move(pending));
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -91,7 +91,7 @@ void VisualFrontEnd::WorkerLoop() {
     Pending pending = std::move(queue_.front());
     queue_.pop_front();
     busy_ = true;
-    busy_t_s_ = pending.ref ? pending.ref->t_s : pending.frame.t_s;
+    busy_t_s_ = pending.t_s();
     lock.unlock();
     TrackNow(std::move(pending));
     lock.lock();
@@ -102,10 +102,9 @@ void VisualFrontEnd::WorkerLoop() {
 
 void VisualFrontEnd::WaitForTracking(Seconds t_limit_s) {
   if (!worker_.joinable()) return;
-  auto time_of = [](const Pending& p) { return p.ref ? p.ref->t_s : p.frame.t_s; };
   std::unique_lock<std::mutex> lock(mutex_);
   idle_cv_.wait(lock, [&] {
-    return !(busy_ && busy_t_s_ <= t_limit_s) && (queue_.empty() || time_of(queue_.front()) > t_limit_s);
+    return !(busy_ && busy_t_s_ <= t_limit_s) && (queue_.empty() || queue_.front().t_s() > t_limit_s);
   });
 }
 

@@ -113,6 +113,7 @@ class VisualFrontEnd {
   struct Pending {  ///< a frame handed over: decoded (frame.image) or on disk (ref)
     CameraFrame frame;
     std::optional<CameraFrameRef> ref;
+    Seconds t_s() const { return ref ? ref->t_s : frame.t_s; }
   };
   void Enqueue(Pending pending);
   void TrackNow(Pending pending);  ///< decode, track, keep the result (worker, or caller without one)

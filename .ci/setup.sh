@@ -14,6 +14,7 @@ PACKAGES=(
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libpcap-dev libyaml-cpp-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev unzip
   libmujoco-dev libembree-dev libosmesa6-dev libgl-dev
+  librosbag-storage-dev
 )
 
 install_deps() {

@@ -14,6 +14,7 @@ int CmdEval(int argc, char** argv);
 int CmdDecode(int argc, char** argv);
 int CmdBench(int argc, char** argv);
 int CmdReplay(int argc, char** argv);
+int CmdLive(int argc, char** argv);      ///< bench/cli/live_commands.cpp
 int CmdScene(int argc, char** argv);
 int CmdExport(int argc, char** argv);     ///< bench/cli/kitti_commands.cpp
 int CmdSlamKitti(int argc, char** argv);  ///< `slam --kitti DIR` (CmdSlam dispatches to it)
@@ -21,6 +22,8 @@ int CmdKittiTwin(int argc, char** argv);  ///< bench/cli/kitti_twin_commands.cpp
 int CmdMapEval(int argc, char** argv);
 int CmdStudy(int argc, char** argv);
 int CmdVocab(int argc, char** argv);      ///< bench/cli/vocab_commands.cpp: ORB bag-of-words vocabularies
+int CmdImport(int argc, char** argv);     ///< bench/ros/ros_commands.cpp: ROS 1 bag -> recording folder
+int CmdExportBag(int argc, char** argv);  ///< bench/ros/ros_commands.cpp: slam run or recording -> ROS 1 bag
 
 /// One "warning:" line per registration-problem stretch (at most 10, then a count) and a summary line, on
 /// stdout; nothing when every registration converged undegenerate (bench/run/scan_health.hpp).

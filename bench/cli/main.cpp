@@ -20,13 +20,16 @@ const Command kCommands[] = {
     {"eval", rotolidar::bench::CmdEval, "compare trajectories (APE/RPE, evo's definitions)"},
     {"decode", rotolidar::bench::CmdDecode, "decode VLP-16 packets (pcap or raw) to CSV and PLY points"},
     {"bench", rotolidar::bench::CmdBench, "speed benchmarks (ratios to real time) and the IMU Allan check"},
-    {"replay", rotolidar::bench::CmdReplay, "send a recording's VLP-16 packets over UDP at N x real time"},
+    {"replay", rotolidar::bench::CmdReplay, "send a recording over UDP at N x real time, as the rig would"},
+    {"live", rotolidar::bench::CmdLive, "SLAM live from the rig over UDP; records everything it receives"},
     {"scene", rotolidar::bench::CmdScene, "inspect scenes: list, show (top and perspective pictures)"},
     {"export", rotolidar::bench::CmdExport, "write a recording as a KITTI odometry sequence (bins, times, calib, poses)"},
     {"kitti-twin", rotolidar::bench::CmdKittiTwin, "simulate KITTI's HDL-64E car on a KITTI path; write a KITTI sequence"},
     {"mapeval", rotolidar::bench::CmdMapEval, "map metrics vs the scene: coverage, density, distance, elements"},
     {"study", rotolidar::bench::CmdStudy, "trade studies: sweep sim parameters, run each point, table + plots"},
     {"vocab", rotolidar::bench::CmdVocab, "ORB bag-of-words vocabularies for loop closure: train, info"},
+    {"import", rotolidar::bench::CmdImport, "convert a ROS 1 bag (VelodyneScan, Imu, JointState, Image) to a recording"},
+    {"export-bag", rotolidar::bench::CmdExportBag, "write a slam run (or --recording REC) as a ROS 1 bag for RViz"},
 };
 
 void PrintUsage(std::ostream& os) {

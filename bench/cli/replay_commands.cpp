@@ -1,6 +1,7 @@
 // `rotolidar replay`: plays a recording's VLP-16 packets onto UDP at N x real time, as the sensor would send them
-// (data packets to --port, position packets to --position-port), so that a live consumer (UdpPacketSource, the
-// ROS driver, VeloView) can be tested against a recording. Progress on stderr once per wall second.
+// (data packets to --port, position packets to --position-port), so that a live consumer (`rotolidar live`, the
+// ROS driver, VeloView) can be tested against a recording; from a recording folder also its IMU and encoder
+// samples (--rig-port), as the rig's microcontroller would. Progress on stderr once per wall second.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,8 @@
 
 #include "bench/cli/commands.hpp"
 #include "bench/cli/options.hpp"
+#include "bench/live/udp_replay.hpp"
+#include "core/io/recording.hpp"
 #include "core/wire/pcap.hpp"
 #include "core/wire/udp_sender.hpp"
 #include "core/wire/vlp16.hpp"
@@ -73,6 +76,38 @@ void PrintProgress(const ReplayStats& st, const PacketPacer& pacer, std::size_t 
   std::cerr << line << std::flush;
 }
 
+/// A recording folder: packets and (with --rig-port) rig samples, merged in time order (bench/live/udp_replay.hpp).
+int ReplayFolder(const OptionParser& p, const std::string& dir, const UdpSenderConfig& lidar, double rate) {
+  UdpReplayConfig config;
+  config.host = lidar.host;
+  config.data_port = lidar.data_port;
+  config.position_port = lidar.position_port;
+  config.rate = rate;
+  long rig_port = 0, seed = 1;
+  for (const Status& s : {p.GetInt("rig-port", &rig_port), p.GetInt("seed", &seed),
+                          p.GetDouble("drop", &config.drop_fraction)})
+    if (!s) return Usage(s.message);
+  if (rig_port < 0 || rig_port > 65535) return Usage("replay: --rig-port must be 0..65535");
+  config.rig_port = static_cast<uint16_t>(rig_port);
+  config.seed = static_cast<uint64_t>(seed);
+  std::string why;
+  if (!config.Validate(&why)) return Usage("replay: " + why);
+  Recording rec;
+  if (Status s = LoadRecording(dir, &rec); !s) return std::cerr << "error: " << s.message << "\n", 1;
+  auto print = [](const UdpReplayStats& st, bool final) {
+    std::fprintf(stderr, "replay: %zu data + %zu position packets (%zu dropped), %zu rig samples in %zu datagrams; "
+                 "%.2f s of recording in %.2f s wall%s", st.data_sent, st.position_sent, st.data_dropped,
+                 st.samples_sent, st.rig_datagrams, st.span_s, st.wall_s, final ? "\n" : "\r");
+  };
+  UdpReplayStats stats;
+  const Status s = ReplayOverUdp(rec, config, &stats, nullptr, [&](const UdpReplayStats& st) { print(st, false); });
+  print(stats, true);
+  if (!s) return std::cerr << "error: " << s.message << "\n", 1;
+  std::fprintf(stderr, "replay: %.1f x real time, max lateness %.1f ms\n",
+               stats.wall_s > 0 ? stats.span_s / stats.wall_s : 0.0, 1e3 * stats.max_lateness_s);
+  return 0;
+}
+
 }  // namespace
 
 int CmdReplay(int argc, char** argv) {
@@ -84,6 +119,10 @@ int CmdReplay(int argc, char** argv) {
   p.Add("position-port", "8308", "-", "destination port of position packets");
   p.Add("rate", "1", "x", "speed relative to real time; 0 = as fast as possible");
   p.AddFlag("raw", "INPUT is concatenated 1206-byte payloads (paced by their VLP-16 timestamps)");
+  p.Add("rig-port", "0", "-", "a recording folder only: also send its IMU and encoder samples to this port in the "
+                            "rig-sample protocol (docs/live.md; `rotolidar live` listens on 2370); 0 = do not");
+  p.Add("drop", "0", "-", "a recording folder only: share of data packets not sent (simulated loss), [0, 1)");
+  p.Add("seed", "1", "-", "run seed of the random stream that picks the dropped packets");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   UdpSenderConfig config;
   config.host = p.Get("host");
@@ -99,7 +138,8 @@ int CmdReplay(int argc, char** argv) {
   config.data_port = static_cast<uint16_t>(port);
   config.position_port = static_cast<uint16_t>(position_port);
   std::string input = p.Get("INPUT");
-  if (std::filesystem::is_directory(input)) input = (std::filesystem::path(input) / "lidar.pcap").string();
+  if (std::filesystem::is_directory(input)) return ReplayFolder(p, input, config, rate);
+  if (p.IsSet("rig-port") || p.IsSet("drop")) return Usage("replay: --rig-port and --drop need a recording folder");
 
   ReplaySource source;
   if (Status s = source.Open(input, p.Flag("raw")); !s) return std::cerr << "error: " << s.message << "\n", 1;

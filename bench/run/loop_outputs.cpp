@@ -4,26 +4,12 @@
 #include <filesystem>
 #include <fstream>
 
+#include "bench/run/atomic_write.hpp"
 #include "core/io/csv.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/io/trajectory_io.hpp"
 
 namespace rotolidar::bench {
-namespace {
-
-// `write` into a temporary name with the same extension ("NNN_map.part.ply": writers pick the format by it), then
-// rename onto path.
-template <class Write>
-Status WriteAtomically(const std::string& path, Write write) {
-  const std::filesystem::path p(path);
-  const std::string part = (p.parent_path() / (p.stem().string() + ".part" + p.extension().string())).string();
-  if (Status s = write(part); !s) return s;
-  std::error_code ec;
-  std::filesystem::rename(part, path, ec);
-  return ec ? Status::Error(path + ": cannot rename from " + part + ": " + ec.message()) : Status::Ok();
-}
-
-}  // namespace
 
 // One row per accepted stage-2 loop: the two keyframes, GICP's relative pose and scores, the graph's verdict.
 Status WriteLoopTable(const std::string& path, const graph::LoopClosureState& state) {

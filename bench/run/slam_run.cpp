@@ -116,8 +116,9 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
   return csv.Close();
 }
 
-Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
-                    const SlamRunResult& result) {
+}  // namespace
+
+Status WriteSlamOutputs(const std::string& out_dir, const Estimator& estimator, const SlamRunResult& result) {
   const Trajectory& traj = result.trajectory;
   if (Status s = WriteTrajectory(out_dir + "/trajectory.tum", TrajectoryFormat::kTum, traj); !s) return s;
   if (Status s = WriteTrajectory(out_dir + "/trajectory.kitti", TrajectoryFormat::kKitti, traj); !s) return s;
@@ -137,6 +138,8 @@ Status WriteOutputs(const std::string& out_dir, const Estimator& estimator,
   file << "# Resolved estimator configuration of this run (rotolidar slam).\n" << out.c_str() << "\n";
   return file ? Status::Ok() : Status::Error(out_dir + "/slam_config.yaml: write failed");
 }
+
+namespace {
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -210,7 +213,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   for (const auto& r : result->scans) times.push_back(r.timings.total_ms);
   result->median_scan_ms = Median(times);
   if (result->trajectory.empty()) return Status::Error(recording_dir + ": no complete LiDAR revolution in the data");
-  return WriteOutputs(out_dir, estimator, *result);
+  return WriteSlamOutputs(out_dir, estimator, *result);
 }
 
 }  // namespace rotolidar::bench

@@ -67,6 +67,9 @@ struct SlamRunOptions {
 
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
                SlamRunResult* result, const SlamRunOptions& options);
+/// Writes the outputs listed at the top of this file for `estimator` after its last scan (RunSlam's last step;
+/// `rotolidar live` calls it at the end of a session). Fails naming the file that could not be written.
+Status WriteSlamOutputs(const std::string& out_dir, const Estimator& estimator, const SlamRunResult& result);
 /// RunSlam with `progress` only.
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
                SlamRunResult* result, const std::function<void(double)>& progress = nullptr);

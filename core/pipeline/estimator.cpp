@@ -88,6 +88,15 @@ std::vector<ScanReport> Estimator::Process() {
   return reports;
 }
 
+size_t Estimator::DropPendingScans(size_t keep) {
+  size_t dropped = 0;
+  while (pending_scans_.size() > keep) {
+    pending_scans_.pop_front();
+    ++dropped;
+  }
+  return dropped;
+}
+
 std::vector<ScanReport> Estimator::Finish() {
   if (auto last = splitter_.Flush()) pending_scans_.push_back(std::move(*last));
   std::vector<ScanReport> reports;

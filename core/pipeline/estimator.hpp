@@ -128,6 +128,11 @@ class Estimator {
   bool WantsCameraFrame(Seconds t_s) const;
   /// Processes every ready scan; returns their reports (in time order).
   std::vector<ScanReport> Process();
+  /// Complete revolutions waiting for Process (for their encoder / IMU coverage, or for the caller).
+  size_t pending_scans() const { return pending_scans_.size(); }
+  /// A live caller that falls behind drops the oldest waiting revolutions, keeping the newest `keep`: whole scans
+  /// only, never part of one (the IMU keeps bridging the gap). Returns how many were dropped.
+  size_t DropPendingScans(size_t keep);
   /// End of data: flushes the partial last revolution and processes everything left.
   std::vector<ScanReport> Finish();
 

@@ -1,16 +1,8 @@
-// UDP receive/send of VLP-16 packets with POSIX sockets (contract in udp_source.hpp).
+// UDP receive of VLP-16 packets (contract in udp_source.hpp).
 #include "core/wire/udp_source.hpp"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 
 #include "core/wire/vlp16.hpp"
 
@@ -20,15 +12,6 @@ namespace {
 double SteadyNowS() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
-
-bool MakeAddress(const std::string& host, uint16_t port, sockaddr_in* addr) {
-  std::memset(addr, 0, sizeof(*addr));
-  addr->sin_family = AF_INET;
-  addr->sin_port = htons(port);
-  return inet_pton(AF_INET, host.c_str(), &addr->sin_addr) == 1;
-}
-
-std::string Where(const std::string& host, uint16_t port) { return host + ":" + std::to_string(port); }
 
 }  // namespace
 
@@ -49,25 +32,14 @@ UdpPacketSource::~UdpPacketSource() { Stop(); }
 Status UdpPacketSource::Start(const UdpSourceConfig& config) {
   std::string error;
   if (!config.Validate(&error)) return Status::Error(error);
-  if (fd_ >= 0 || running_) return Status::Error("UdpPacketSource: already started");
-  sockaddr_in addr;
-  const std::string where = Where(config.bind_address, config.port);
-  if (!MakeAddress(config.bind_address, config.port, &addr)) {
-    return Status::Error("UdpPacketSource: bad IPv4 address '" + config.bind_address + "'");
-  }
-  fd_ = socket(AF_INET, SOCK_DGRAM, 0);
-  if (fd_ < 0) return Status::Error("UdpPacketSource: socket(): " + std::string(std::strerror(errno)));
-  const int one = 1;
-  setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
-  if (bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0) {
-    const std::string err = std::strerror(errno);
-    close(fd_);
-    fd_ = -1;
-    return Status::Error("UdpPacketSource: bind " + where + ": " + err);
-  }
-  socklen_t len = sizeof(addr);
-  getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-  bound_port_ = ntohs(addr.sin_port);
+  if (socket_.is_open() || running_) return Status::Error("UdpPacketSource: already started");
+  UdpSocketConfig socket_config;
+  socket_config.bind_address = config.bind_address;
+  socket_config.port = config.port;
+  socket_config.rcvbuf_bytes = config.rcvbuf_bytes;
+  if (Status s = socket_.Open(socket_config); !s) return Status::Error("UdpPacketSource: " + s.message);
+  bound_port_ = socket_.port();
+  rcvbuf_granted_ = socket_.rcvbuf_bytes();
   config_ = config;
   start_steady_s_ = SteadyNowS();
   running_ = true;
@@ -78,14 +50,17 @@ Status UdpPacketSource::Start(const UdpSourceConfig& config) {
 void UdpPacketSource::ReceiveLoop() {
   std::vector<uint8_t> buffer(65536);
   while (running_) {
-    pollfd pfd{fd_, POLLIN, 0};
-    if (poll(&pfd, 1, 20) <= 0) continue;  // 20 ms: how long Stop may wait for the thread
-    const ssize_t n = recv(fd_, buffer.data(), buffer.size(), 0);
+    const long n = socket_.Receive(buffer.data(), buffer.size(), 0.02);  // 20 ms: how long Stop may wait
+    kernel_dropped_ = socket_.kernel_dropped();
     if (n < 0) continue;
     LidarPacket packet;
     packet.t_capture_s = config_.rig_time_at_start_s + (SteadyNowS() - start_steady_s_);
     if (static_cast<std::size_t>(n) == kVlp16PacketBytes) {
       packet.udp_port = kVlp16DataPort;
+      uint32_t stamp = 0;
+      for (int b = 3; b >= 0; --b) stamp = (stamp << 8) | buffer[1200 + b];  // little-endian (manual 9.3.1.4)
+      gaps_.Add(stamp, buffer[1204]);
+      lost_ = gaps_.lost();
     } else if (static_cast<std::size_t>(n) == kVlp16PositionPacketBytes) {
       packet.udp_port = kVlp16PositionPort;
     } else {
@@ -119,8 +94,7 @@ bool UdpPacketSource::Pop(LidarPacket* packet, double timeout_s) {
 void UdpPacketSource::Stop() {
   running_ = false;
   if (thread_.joinable()) thread_.join();
-  if (fd_ >= 0) close(fd_);
-  fd_ = -1;
+  socket_.Close();
   cv_.notify_all();
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 // Live VLP-16 packets over UDP: a receiver with a bounded queue (the estimator's input from a real sensor). The
 // sender that plays packets back (a fake sensor) is in udp_sender.hpp, included here for its users. IPv4 only.
+// Loss is counted where it happens: a full queue (dropped), a full kernel buffer (kernel_dropped) and packets
+// that never arrived (lost: gaps in the data packets' timestamps, core/wire/packet_gaps.hpp).
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
@@ -11,7 +13,9 @@
 #include <thread>
 #include <vector>
 
+#include "core/wire/packet_gaps.hpp"
 #include "core/wire/udp_sender.hpp"
+#include "core/wire/udp_socket.hpp"
 #include "core/types/messages.hpp"
 #include "core/util/status.hpp"
 
@@ -22,6 +26,7 @@ struct UdpSourceConfig {
   uint16_t port = 2368;                  ///< 0 = any free port (see UdpPacketSource::port())
   std::size_t queue_capacity = 4096;     ///< packets; ~5 s of single-return data
   double rig_time_at_start_s = 0.0;      ///< t_capture_s of a packet = this + seconds since Start (steady clock)
+  std::size_t rcvbuf_bytes = 8u << 20;   ///< kernel receive buffer [bytes] (UdpSocketConfig::rcvbuf_bytes)
   bool Validate(std::string* error) const;
 };
 
@@ -48,19 +53,26 @@ class UdpPacketSource {
   std::size_t received() const { return received_; }  ///< datagrams accepted into the queue
   std::size_t dropped() const { return dropped_; }    ///< datagrams lost to a full queue
   std::size_t rejected() const { return rejected_; }  ///< datagrams of the wrong size
+  /// Datagrams the kernel dropped before this source could read them (socket buffer full; Linux only).
+  std::size_t kernel_dropped() const { return kernel_dropped_; }
+  /// Data packets that never arrived, from the gaps in their timestamps (network loss, upstream drops).
+  std::size_t lost() const { return lost_; }
+  std::size_t rcvbuf_bytes() const { return rcvbuf_granted_; }  ///< the receive buffer the kernel granted
 
  private:
   void ReceiveLoop();
 
   UdpSourceConfig config_;
-  int fd_ = -1;
+  UdpReceiveSocket socket_;
+  Vlp16GapCounter gaps_;  // receiver thread only
   uint16_t bound_port_ = 0;
+  std::size_t rcvbuf_granted_ = 0;
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<LidarPacket> queue_;
-  std::atomic<std::size_t> received_{0}, dropped_{0}, rejected_{0};
+  std::atomic<std::size_t> received_{0}, dropped_{0}, rejected_{0}, kernel_dropped_{0}, lost_{0};
   double start_steady_s_ = 0.0;
 };
 

@@ -247,7 +247,8 @@ Status MakeCameraStream(const SimConfig& config, SimWorld& world, const RigCalib
 /// vibration when rig_errors configures it); streams the encoder samples the drive produced; feeds the trace that
 /// the LiDAR and truth streams read behind it. `calib` is the TRUE calibration (the rig as it is).
 Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& calib, RecordingWriter* writer,
-                  TruthWriter* truth_writer, SimSummary* summary, const ProgressFn& progress) {
+                  TruthWriter* truth_writer, SimSummary* summary, const ProgressFn& progress,
+                  const std::atomic<bool>* stop) {
   RigState state(*world.rig);
   StepperDrive drive(config.motor, config.seed);
   ImuModel imu(config.imu.noise, calib.T_base_imu, config.seed, config.imu.errors);
@@ -266,6 +267,11 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
   double next_progress_s = 1.0;
   for (long k = 0; k < n_steps; ++k) {
     const Seconds t = state.time_s();
+    if (stop && *stop) {
+      summary->stopped = true;
+      summary->sim_duration_s = t;
+      break;
+    }
     const RotorJointState rotor_t = state.rotor_state();  // the rotor at t, for the IMU's vibration
     if (Status s = state.Step(world.carrier->At(t).T_world_base, &drive); !s) return s;
     trace.Append({state.time_s(), state.T_world_base(), state.rotor_angle_rad()});
@@ -330,7 +336,7 @@ Status PrepareRecordingDir(const std::string& dir, bool force) {
 }
 
 Status RunSimulation(const SimConfig& config, const std::string& recording_dir, SimSummary* summary,
-                     const ProgressFn& progress) {
+                     const ProgressFn& progress, const std::atomic<bool>* stop) {
   const auto wall0 = std::chrono::steady_clock::now();
   std::string why;
   if (!config.Validate(&why)) return Status::Error("sim config: " + why);
@@ -351,10 +357,10 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
     if (Status s = WriteRigErrorTruth(recording_dir, config.rig_errors, calib_errors, calib); !s) return s;
   if (Status s = WriteClockTruth(recording_dir, config.TrueClocks()); !s) return s;
   if (Status s = WriteResolvedConfig(config, world, recording_dir); !s) return s;
-  if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress); !s) return s;
+  if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress, stop); !s) return s;
   if (Status s = writer.Close(); !s) return s;
   if (Status s = truth.Close(); !s) return s;
-  summary->sim_duration_s = config.duration_s;
+  if (!summary->stopped) summary->sim_duration_s = config.duration_s;
   summary->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (progress) progress(1.0);
   return Status::Ok();

@@ -1,6 +1,7 @@
 #pragma once
 // Runs one simulation and writes a recording folder (docs/recording_format.md): the same files a real rig's
 // logger writes (calib.yaml, lidar.pcap, imu.csv, encoder.csv, camera.csv + camera/), plus truth/ on its own channel.
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@ struct SimSummary {
   size_t encoder_samples = 0;
   size_t camera_frames = 0;    ///< images written to camera/ (0 when the camera is off)
   size_t scene_triangles = 0;  ///< static plus dynamic-object triangles (EmbreeScene::num_triangles)
+  bool stopped = false;        ///< `stop` was set: the recording is whole but ends at sim_duration_s
   std::string recording_dir;
 };
 
@@ -38,8 +40,9 @@ Status PrepareRecordingDir(const std::string& dir, bool force);
 /// Simulates `config` into `recording_dir` (created; files overwritten). Fails with a message naming the file
 /// or field on bad config, scene or I/O errors; an unknown scene lists the available ones; a carrier path
 /// that leaves the scene's bounds or crosses its static geometry fails before anything is simulated
-/// (sim/scene_carrier.hpp).
+/// (sim/scene_carrier.hpp). `stop` (optional, e.g. set by a signal handler) is polled every physics step: when
+/// set, the simulation ends there and closes its files (a valid, shorter recording; SimSummary::stopped).
 Status RunSimulation(const SimConfig& config, const std::string& recording_dir, SimSummary* summary,
-                     const ProgressFn& progress = nullptr);
+                     const ProgressFn& progress = nullptr, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace rotolidar::sim

@@ -8,6 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bench/cli/options.hpp"
+#include "bench/cli/signals.hpp"
 #include "bench/demo/demo.hpp"
 #include "bench/report/run_report.hpp"
 #include "bench/run/progress.hpp"
@@ -185,12 +186,19 @@ int CmdSim(int argc, char** argv) {
   if (Status s = LoadSimOverrides(p, &config); !s) return Fail(s);
   if (Status s = sim::PrepareRecordingDir(p.Get("OUT_DIR"), p.Flag("force")); !s) return Fail(s);
   sim::SimSummary summary;
-  if (Status s = sim::RunSimulation(config, p.Get("OUT_DIR"), &summary, MakeProgressPrinter("sim")); !s)
+  StopOnSignals stop;  // Ctrl-C / SIGTERM: end the simulation there and close the files
+  if (Status s = sim::RunSimulation(config, p.Get("OUT_DIR"), &summary, MakeProgressPrinter("sim"), &stop.flag());
+      !s)
     return Fail(s);
   std::printf("wrote %s: %.1f s simulated in %.1f s wall (%.1fx real time), %zu packets, %zu IMU, %zu encoder\n",
               summary.recording_dir.c_str(), summary.sim_duration_s, summary.wall_time_s,
               summary.sim_duration_s / summary.wall_time_s, summary.lidar_packets, summary.imu_samples,
               summary.encoder_samples);
+  if (summary.stopped) {
+    std::fprintf(stderr, "sim: stopped by %s at %.2f s of %.2f s: the recording is valid but ends there\n",
+                 stop.name(), summary.sim_duration_s, config.duration_s);
+    return 128 + stop.signal();
+  }
   return 0;
 }
 
@@ -218,6 +226,8 @@ int CmdSlam(int argc, char** argv) {
   SlamRunOptions run;
   run.progress = MakeProgressPrinter("slam");
   run.save_keyframes = p.Flag("save-keyframes");
+  StopOnSignals stop_on_signals;  // Ctrl-C / SIGTERM: finish what was fed, write the outputs, flag them partial
+  run.stop = &stop_on_signals.flag();
   run.loop_snapshots = p.Flag("loop-snapshots");
   for (const char* flag : {"save-keyframes", "loop-snapshots"})
     if (p.Flag(flag) && !config.loop_closure.enabled)
@@ -247,6 +257,11 @@ int CmdSlam(int argc, char** argv) {
     std::printf("no map metrics: %s\n", ev.map_note.c_str());
   if (ev.has_dynamic && ev.dynamic.returns_seen > 0) std::printf("%s\n", DynamicShareLine(ev.dynamic).c_str());
   std::printf("report: %s/report.html\n", p.Get("out").c_str());
+  if (r.stopped) {
+    std::fprintf(stderr, "slam: stopped by %s after %.1f s of LiDAR data: the outputs are partial (metrics.json: "
+                 "\"complete\": false)\n", stop_on_signals.name(), r.data_fed_s);
+    return 128 + stop_on_signals.signal();
+  }
   return 0;
 }
 

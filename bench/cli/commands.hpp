@@ -24,6 +24,7 @@ int CmdStudy(int argc, char** argv);
 int CmdVocab(int argc, char** argv);      ///< bench/cli/vocab_commands.cpp: ORB bag-of-words vocabularies
 int CmdImport(int argc, char** argv);     ///< bench/ros/ros_commands.cpp: ROS 1 bag -> recording folder
 int CmdExportBag(int argc, char** argv);  ///< bench/ros/ros_commands.cpp: slam run or recording -> ROS 1 bag
+int CmdCalibrate(int argc, char** argv);  ///< bench/cli/calib_commands.cpp: T_rotor_lidar from a static stretch
 
 /// One "warning:" line per registration-problem stretch (at most 10, then a count) and a summary line, on
 /// stdout; nothing when every registration converged undegenerate (bench/run/scan_health.hpp).

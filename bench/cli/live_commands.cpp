@@ -1,27 +1,18 @@
 // `rotolidar live`: SLAM from the rig's sensors over UDP (bench/live/live_session.hpp; protocol in docs/live.md).
 // SIGINT / SIGTERM stop it cleanly: the readers stop, what they hold is fed, the outputs are written.
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 
 #include "bench/cli/commands.hpp"
 #include "bench/cli/options.hpp"
+#include "bench/cli/signals.hpp"
 #include "bench/live/live_session.hpp"
 #include "core/io/calib_yaml.hpp"
 #include "core/io/recording.hpp"
 
 namespace rotolidar::bench {
 namespace {
-
-std::atomic<bool> g_stop{false};
-std::atomic<int> g_signal{0};
-
-void OnSignal(int signal) {
-  g_signal = signal;
-  g_stop = true;
-}
 
 int Fail(const Status& s) {
   std::cerr << "error: " << s.message << "\n";
@@ -88,14 +79,11 @@ int CmdLive(int argc, char** argv) {
   std::fprintf(stderr, "live: listening on %s: data %u, position %u, rig samples %u; recording into %s/recording\n",
                config.bind_address.c_str(), session.data_port(), session.position_port(), session.rig_port(),
                out.c_str());
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  const Status run = session.Run(g_stop, [](const LiveStatus& s) { std::fprintf(stderr, "%s\r", s.Line().c_str()); });
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  StopOnSignals stop;  // Ctrl-C / SIGTERM: stop the readers, feed what they hold, write the outputs
+  const Status run =
+      session.Run(stop.flag(), [](const LiveStatus& s) { std::fprintf(stderr, "%s\r", s.Line().c_str()); });
   std::fprintf(stderr, "\n");
-  if (g_signal != 0)
-    std::fprintf(stderr, "live: stopped by %s; outputs flushed\n", g_signal == SIGINT ? "SIGINT" : "SIGTERM");
+  if (stop.signal() != 0) std::fprintf(stderr, "live: stopped by %s; outputs written\n", stop.name());
   if (!run) return Fail(run);
   const LiveStatus s = session.status();
   std::printf("%zu scans processed, %zu dropped; lost %zu data packets (timestamp gaps), %zu rig datagrams, %zu in "

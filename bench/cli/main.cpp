@@ -20,6 +20,7 @@ const Command kCommands[] = {
     {"eval", rotolidar::bench::CmdEval, "compare trajectories (APE/RPE, evo's definitions)"},
     {"decode", rotolidar::bench::CmdDecode, "decode VLP-16 packets (pcap or raw) to CSV and PLY points"},
     {"bench", rotolidar::bench::CmdBench, "speed benchmarks (ratios to real time) and the IMU Allan check"},
+    {"calibrate", rotolidar::bench::CmdCalibrate, "lever arm and tilt of the lidar on the rotor, from a static stretch"},
     {"replay", rotolidar::bench::CmdReplay, "send a recording over UDP at N x real time, as the rig would"},
     {"live", rotolidar::bench::CmdLive, "SLAM live from the rig over UDP; records everything it receives"},
     {"scene", rotolidar::bench::CmdScene, "inspect scenes: list, show (top and perspective pictures)"},

@@ -159,6 +159,7 @@ void LiveSession::Impl::Worker() {
   result.trajectory = result.odometry_trajectory = estimator.trajectory();
   result.map_points = estimator.map().NumPoints();
   result.bad_packets = estimator.bad_packets();
+  result.packet_order = estimator.packet_order_counts();
   if (!result.scans.empty()) result.data_duration_s = result.scans.back().t_end_s - result.scans.front().t_start_s;
   if (result.trajectory.empty()) {
     if (worker_status) worker_status = Status::Error("live: no complete LiDAR revolution was received");

@@ -9,6 +9,7 @@
 #include "bench/eval/trajectory_lookup.hpp"
 #include "bench/loops/loop_report.hpp"
 #include "bench/report/html_report.hpp"
+#include "bench/run/atomic_write.hpp"
 #include "bench/report/visual_section.hpp"
 #include "bench/report/run_report_sections.hpp"
 #include "bench/run/scan_health.hpp"
@@ -37,6 +38,12 @@ void AddSlamRows(const SlamRunResult& s, Rows* rows) {
   rows->push_back({"scans with the IMU window", std::to_string(imu)});
   rows->push_back({"map points", std::to_string(s.map_points)});
   if (s.bad_packets > 0) rows->push_back({"malformed packets", std::to_string(s.bad_packets)});
+  const PacketOrderCounts& o = s.packet_order;
+  if (o.total() > 0)
+    rows->push_back({"packets out of order (repaired / dropped)",
+                     std::to_string(o.reordered) + " reordered; dropped: " + std::to_string(o.duplicate) +
+                         " duplicate, " + std::to_string(o.late) + " late, " + std::to_string(o.wild) +
+                         " wild timestamp"});
 }
 
 void AddTruthRows(const RunEvaluation& ev, Rows* rows) {
@@ -158,6 +165,8 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
                {"wall_time_s", s.wall_time_s},     {"data_duration_s", s.data_duration_s},
                {"realtime_factor", RealtimeFactor(s)}, {"map_points", s.map_points},
                {"bad_packets", s.bad_packets}};
+  j["slam"]["packet_order"] = {{"reordered", s.packet_order.reordered}, {"duplicate", s.packet_order.duplicate},
+                               {"late", s.packet_order.late}, {"wild", s.packet_order.wild}};
   for (const report::StageTiming& t : report::ComputeStageTimings(s.scans))
     j["slam"]["stage_mean_ms"][t.stage] = t.mean_ms;
   j["health"] = ScanHealthJson(AssessScanHealth(s.scans));
@@ -204,21 +213,33 @@ Status WriteSlamRunReport(const std::string& recording_dir, const std::string& s
   RunEvaluation local;
   RunEvaluation* ev = evaluation ? evaluation : &local;
   if (Status s = EvaluateRun(recording_dir, slam_dir, slam, "", options, ev); !s) return s;
-  nlohmann::json j;
-  j["recording"] = recording_dir;
-  AddRunMetricsJson(slam, *ev, &j);
-  std::ofstream file(slam_dir + "/metrics.json");
-  file << j.dump(2) << "\n";
-  if (!file) return Status::Error(slam_dir + "/metrics.json: write failed");
   RunReportInput in;
   in.title = "rotolidar slam: " + recording_dir;
   in.run_info = {{"recording", recording_dir}, {"outputs", slam_dir}};
+  if (slam.stopped)
+    in.run_info.push_back({"stopped early", "yes: the outputs cover the first " +
+                                                std::to_string(slam.data_fed_s) + " s of LiDAR data"});
   in.slam = &slam;
   in.evaluation = ev;
   in.recording_dir = recording_dir;
   in.config_files = {{"estimator (slam_config.yaml)", slam_dir + "/slam_config.yaml"},
                      {"rig calibration (calib.yaml)", recording_dir + "/calib.yaml"}};
-  return WriteRunReport(slam_dir + "/report.html", in);
+  if (Status s = WriteAtomically(slam_dir + "/report.html",
+                                 [&](const std::string& part) { return WriteRunReport(part, in); });
+      !s)
+    return s;
+  // metrics.json last: it marks a finished run; "complete" says whether the run saw all of its data.
+  nlohmann::json j;
+  j["recording"] = recording_dir;
+  j["complete"] = !slam.stopped;
+  if (slam.stopped) j["data_fed_s"] = slam.data_fed_s;
+  AddRunMetricsJson(slam, *ev, &j);
+  return WriteAtomically(slam_dir + "/metrics.json", [&](const std::string& part) {
+    std::ofstream file(part);
+    file << j.dump(2) << "\n";
+    file.close();
+    return file ? Status::Ok() : Status::Error(part + ": write failed");
+  });
 }
 
 }  // namespace rotolidar::bench

@@ -20,8 +20,7 @@ class StampClock {
  public:
   explicit StampClock(double epoch_unix_s)
       : whole_s_(std::floor(epoch_unix_s)),
-        epoch_ns_(static_cast<int64_t>(whole_s_) * 1000000000LL +
-                  std::llround((epoch_unix_s - whole_s_) * 1e9)) {}
+        epoch_ns_(static_cast<int64_t>(whole_s_) * 1000000000LL + std::llround((epoch_unix_s - whole_s_) * 1e9)) {}
   Status Stamp(Seconds t_s, const std::string& what, RosTime* out) const {
     if (!std::isfinite(t_s)) return Status::Error(what + ": time is not finite");
     return RosTimeFromNs(epoch_ns_ + std::llround(t_s * 1e9), what, out);
@@ -57,11 +56,14 @@ int DriverPacketsPerScan(const Recording& rec, const Scans& scans) {
 Scans GroupPackets(const Recording& rec, int packets_per_scan, BagExportSummary* sum) {
   Scans scans;
   for (const LidarPacket& p : rec.lidar_packets) {
-    if (p.udp_port == kVlp16DataPort && p.payload.size() == kVelodynePacketBytes) scans.data.push_back(&p);
-    else ++sum->dropped_position_packets;
+    if (p.udp_port == kVlp16DataPort && p.payload.size() == kVelodynePacketBytes)
+      scans.data.push_back(&p);
+    else
+      ++sum->dropped_position_packets;
   }
   const std::size_t n = packets_per_scan > 0 ? packets_per_scan : DriverPacketsPerScan(rec, scans);
-  for (std::size_t b = 0; b < scans.data.size(); b += n) scans.ranges.push_back({b, std::min(b + n, scans.data.size())});
+  for (std::size_t b = 0; b < scans.data.size(); b += n)
+    scans.ranges.push_back({b, std::min(b + n, scans.data.size())});
   return scans;
 }
 
@@ -134,13 +136,14 @@ std::vector<Event> TimeOrder(const Recording& rec, const Scans& scans) {
 
 }  // namespace
 
-Status ExportRecordingToBag(const std::string& recording_dir, const std::string& bag_path,
-                            const BagExportOptions& o, BagExportSummary* sum) {
+Status ExportRecordingToBag(const std::string& recording_dir, const std::string& bag_path, const BagExportOptions& o,
+                            BagExportSummary* sum) {
   *sum = BagExportSummary{};
   Recording rec;
   if (Status s = LoadRecording(recording_dir, &rec); !s) return s;
-  sum->epoch_unix_s = o.epoch_unix_s >= 0.0 ? o.epoch_unix_s
-                      : rec.calib.epoch_unix_s > 0.0 ? rec.calib.epoch_unix_s : kDefaultBagEpochUnixS;
+  sum->epoch_unix_s = o.epoch_unix_s >= 0.0          ? o.epoch_unix_s
+                      : rec.calib.epoch_unix_s > 0.0 ? rec.calib.epoch_unix_s
+                                                     : kDefaultBagEpochUnixS;
   const StampClock clock(sum->epoch_unix_s);
   const Scans scans = GroupPackets(rec, o.packets_per_scan, sum);
   BagWriter bag;
@@ -148,10 +151,18 @@ Status ExportRecordingToBag(const std::string& recording_dir, const std::string&
   for (const Event& e : TimeOrder(rec, scans)) {
     Status s;
     switch (e.kind) {
-      case Kind::kScan: s = WriteScan(bag, clock, scans, e.index, o); break;
-      case Kind::kImu: s = WriteImu(bag, clock, rec.imu[e.index], e.index, o); break;
-      case Kind::kEncoder: s = WriteEncoder(bag, clock, rec.calib, rec.encoder[e.index], e.index, o); break;
-      case Kind::kImage: s = WriteImage(bag, clock, rec.camera[e.index], e.index, o); break;
+      case Kind::kScan:
+        s = WriteScan(bag, clock, scans, e.index, o);
+        break;
+      case Kind::kImu:
+        s = WriteImu(bag, clock, rec.imu[e.index], e.index, o);
+        break;
+      case Kind::kEncoder:
+        s = WriteEncoder(bag, clock, rec.calib, rec.encoder[e.index], e.index, o);
+        break;
+      case Kind::kImage:
+        s = WriteImage(bag, clock, rec.camera[e.index], e.index, o);
+        break;
     }
     if (!s) return s;
   }

@@ -84,10 +84,18 @@ class Converter {
   Status Convert(Stream stream, const BagMessage& m, BagImportSummary* sum) {
     Status s;
     switch (stream) {
-      case Stream::kLidar: s = Lidar(m, sum); break;
-      case Stream::kImu: s = Imu(m, sum); break;
-      case Stream::kImage: s = Image(m, sum); break;
-      case Stream::kEncoder: s = Encoder(m, sum); break;
+      case Stream::kLidar:
+        s = Lidar(m, sum);
+        break;
+      case Stream::kImu:
+        s = Imu(m, sum);
+        break;
+      case Stream::kImage:
+        s = Image(m, sum);
+        break;
+      case Stream::kEncoder:
+        s = Encoder(m, sum);
+        break;
     }
     return s;
   }
@@ -152,12 +160,12 @@ class Converter {
     if (Status s = Parse(m.body, &joint); !s) return Status::Error(Where(bag_, m) + s.message);
     if (joint.position.empty())
       return Status::Error(Where(bag_, m) + "field 'position': empty (position[0] must hold the motor angle)");
-    if (!std::isfinite(joint.position[0]))
-      return Status::Error(Where(bag_, m) + "field 'position[0]': not finite");
+    if (!std::isfinite(joint.position[0])) return Status::Error(Where(bag_, m) + "field 'position[0]': not finite");
     if (Status s = Increasing(m, joint.header.stamp); !s) return s;
     EncoderSample sample;
     sample.t_s = RigTime(joint.header.stamp, sum);
-    sample.count = EncoderCountFromAngle(joint.position[0], calib_.encoder.counts_per_rev, calib_.encoder.zero_offset_rad);
+    sample.count =
+        EncoderCountFromAngle(joint.position[0], calib_.encoder.counts_per_rev, calib_.encoder.zero_offset_rad);
     ++sum->encoder;
     return writer_->Write(sample);
   }
@@ -178,15 +186,18 @@ class Converter {
       return Status::Error(Where(bag_, m) + "field 'step': " + std::to_string(image.step) + " < width x " +
                            std::to_string(channels) + " bytes");
     if (image.data.size() < static_cast<uint64_t>(image.step) * image.height)
-      return Status::Error(Where(bag_, m) + "field 'data': " + std::to_string(image.data.size()) +
-                           " bytes, step x height = " + std::to_string(static_cast<uint64_t>(image.step) * image.height));
+      return Status::Error(
+          Where(bag_, m) + "field 'data': " + std::to_string(image.data.size()) +
+          " bytes, step x height = " + std::to_string(static_cast<uint64_t>(image.step) * image.height));
     if (Status s = Increasing(m, image.header.stamp); !s) return s;
     const cv::Mat view(static_cast<int>(image.height), static_cast<int>(image.width), CV_8UC(channels),
                        image.data.data(), image.step);
     CameraFrame frame;
     frame.t_s = RigTime(image.header.stamp, sum);
-    if (code < 0) frame.image = view.clone();
-    else cv::cvtColor(view, frame.image, code);
+    if (code < 0)
+      frame.image = view.clone();
+    else
+      cv::cvtColor(view, frame.image, code);
     if (Status s = writer_->Write(frame); !s) return Status::Error(Where(bag_, m) + s.message);
     ++sum->images;
     return Status::Ok();
@@ -255,9 +266,8 @@ Status ImportBag(const std::string& bag_path, const std::string& out_dir, const 
   RecordingWriter writer;
   if (Status s = writer.Open(out_dir, calib); !s) return s;
   Converter converter(bag.path(), calib, epoch_ns, &writer);
-  Status s = bag.ForEach(plan.topics, [&](const BagMessage& m) {
-    return converter.Convert(plan.streams.at(m.topic), m, summary);
-  });
+  Status s = bag.ForEach(plan.topics,
+                         [&](const BagMessage& m) { return converter.Convert(plan.streams.at(m.topic), m, summary); });
   if (Status c = writer.Close(); s && !c) s = c;
   if (!s) return s;
   if (summary->packets == 0) return Status::Error(bag_path + ": topic " + summary->lidar_topic + " holds no packets");

@@ -28,19 +28,19 @@ enum class LidarClock {
 };
 
 struct BagImportOptions {
-  std::string calib_path;     ///< calib.yaml of the rig (required)
+  std::string calib_path;  ///< calib.yaml of the rig (required)
   /// Topics; "" = the only topic of the right type in the bag (an error when there are none or several).
   /// image_topic "none" imports no camera (the camera stream is optional: no Image topic at all is not an error).
   std::string lidar_topic, imu_topic, image_topic, encoder_topic;
   LidarClock lidar_clock = LidarClock::kCalib;
-  bool force = false;         ///< allow a non-empty output folder
+  bool force = false;  ///< allow a non-empty output folder
 };
 
 struct BagImportSummary {
   std::string lidar_topic, imu_topic, image_topic, encoder_topic;  ///< as chosen ("" = no camera)
   std::size_t scans = 0, packets = 0, imu = 0, encoder = 0, images = 0;
-  double epoch_unix_s = 0.0;          ///< written into calib.yaml
-  double lidar_clock_offset_s = 0.0;  ///< written into calib.yaml
+  double epoch_unix_s = 0.0;               ///< written into calib.yaml
+  double lidar_clock_offset_s = 0.0;       ///< written into calib.yaml
   double first_t_s = 0.0, last_t_s = 0.0;  ///< rig-clock span of the imported stamps
 };
 

@@ -1,14 +1,14 @@
 // rosbag glue: raw message bodies in and out of librosbag_storage (Debian's ROS 1 bag library).
 #include "bench/ros/bag_io.hpp"
 
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
 #include <algorithm>
+#include <boost/make_shared.hpp>
 #include <cstring>
 #include <exception>
 #include <map>
-
-#include <boost/make_shared.hpp>
-#include <rosbag/bag.h>
-#include <rosbag/view.h>
 
 namespace rotolidar::bench::rosmsg {
 namespace {
@@ -43,7 +43,8 @@ template <>
 struct Serializer<rotolidar::bench::rosmsg::RawMessage> {
   template <typename Stream>
   static void write(Stream& stream, const rotolidar::bench::rosmsg::RawMessage& m) {
-    if (!m.body->empty()) std::memcpy(stream.advance(static_cast<uint32_t>(m.body->size())), m.body->data(), m.body->size());
+    if (!m.body->empty())
+      std::memcpy(stream.advance(static_cast<uint32_t>(m.body->size())), m.body->data(), m.body->size());
   }
   static uint32_t serializedLength(const rotolidar::bench::rosmsg::RawMessage& m) {
     return static_cast<uint32_t>(m.body->size());
@@ -162,8 +163,9 @@ Status BagReader::ForEach(const std::vector<std::string>& topics,
       if (Status s = visit(msg); !s) return s;
     }
   } catch (const std::exception& e) {
-    return Status::Error(path_ + ": cannot read message " + std::to_string(msg.index) + " of topic " + msg.topic +
-                         ": " + e.what());
+    if (msg.topic.empty()) return Status::Error(path_ + ": cannot read messages: " + e.what());
+    return Status::Error(path_ + ": topic " + msg.topic + ", after message " + std::to_string(msg.index) +
+                         ": cannot read the next message: " + e.what());
   }
   return Status::Ok();
 }

@@ -8,7 +8,8 @@ constexpr const char* kPointCloud2 = "sensor_msgs/PointCloud2";
 std::string Flag(const TopicRole& role) { return std::string("--") + role.role + "-topic"; }
 
 Status PointCloudNotSupported(const BagReader& bag, const std::string& topic) {
-  return Status::Error(bag.path() + ": topic " + topic + " is a sensor_msgs/PointCloud2: LiDAR import from point "
+  return Status::Error(bag.path() + ": topic " + topic +
+                       " is a sensor_msgs/PointCloud2: LiDAR import from point "
                        "clouds is not supported yet; it needs velodyne_msgs/VelodyneScan (the raw VLP-16 packets, "
                        "as the velodyne driver records them; docs/ros.md)");
 }

@@ -9,9 +9,9 @@ namespace rotolidar::bench::rosmsg {
 
 /// What one input stream of the import needs.
 struct TopicRole {
-  const char* role;      ///< "lidar", "imu", "image", "encoder" (names the flag: --<role>-topic)
+  const char* role;  ///< "lidar", "imu", "image", "encoder" (names the flag: --<role>-topic)
   const RosMsgType* type;
-  bool required;         ///< false: no topic of the type is fine (returns "")
+  bool required;  ///< false: no topic of the type is fine (returns "")
 };
 
 /// Picks the topic for `role`: `requested` when given (it must exist with the role's type and md5sum), else the

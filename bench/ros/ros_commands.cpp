@@ -19,18 +19,22 @@ int Fail(const Status& s) {
 }  // namespace
 
 int CmdImport(int argc, char** argv) {
-  OptionParser p("import", "Convert a ROS 1 bag (velodyne_msgs/VelodyneScan, sensor_msgs/Imu, JointState, Image) "
-                           "into a recording folder. Rig time = stamp - epoch_unix_s, the epoch being the whole "
-                           "second of the earliest stamp (written into calib.yaml). See docs/ros.md.");
+  OptionParser p("import",
+                 "Convert a ROS 1 bag (velodyne_msgs/VelodyneScan, sensor_msgs/Imu, JointState, Image) "
+                 "into a recording folder. Rig time = stamp - epoch_unix_s, the epoch being the whole "
+                 "second of the earliest stamp (written into calib.yaml). See docs/ros.md.");
   p.AddPositional("BAG", "the ROS 1 bag (.bag)");
   p.AddPositional("OUT_DIR", "the recording folder to write");
   p.Add("calib", "", "-", "the rig's calib.yaml (required): geometry, encoder counts_per_rev and zero offset");
   p.Add("lidar-topic", "", "-", "velodyne_msgs/VelodyneScan topic; empty = the only one in the bag");
   p.Add("imu-topic", "", "-", "sensor_msgs/Imu topic (its frame = the rig's imu frame); empty = the only one");
-  p.Add("encoder-topic", "", "-", "sensor_msgs/JointState topic, position[0] = motor angle [rad]; empty = the only one");
-  p.Add("image-topic", "", "-", "sensor_msgs/Image topic (rgb8, bgr8, mono8); empty = the only one if any; none = no camera");
-  p.Add("lidar-clock", "calib", "-", "VLP-16 clock: calib (calib.yaml's lidar_clock_offset_s, moved to the new "
-                                     "epoch) or pps (head PPS-locked to UTC, stamps are UTC)");
+  p.Add("encoder-topic", "", "-",
+        "sensor_msgs/JointState topic, position[0] = motor angle [rad]; empty = the only one");
+  p.Add("image-topic", "", "-",
+        "sensor_msgs/Image topic (rgb8, bgr8, mono8); empty = the only one if any; none = no camera");
+  p.Add("lidar-clock", "calib", "-",
+        "VLP-16 clock: calib (calib.yaml's lidar_clock_offset_s, moved to the new "
+        "epoch) or pps (head PPS-locked to UTC, stamps are UTC)");
   p.AddFlag("force", "write into a non-empty OUT_DIR");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   rosmsg::BagImportOptions o;
@@ -57,14 +61,16 @@ int CmdImport(int argc, char** argv) {
 }
 
 int CmdExportBag(int argc, char** argv) {
-  OptionParser p("export-bag", "Write a slam run (trajectory.tum as nav_msgs/Odometry + /tf, map.ply as one "
-                               "PointCloud2) or, with --recording, a recording folder (VelodyneScan, Imu, JointState, "
-                               "Image) as a ROS 1 bag. See docs/ros.md.");
+  OptionParser p("export-bag",
+                 "Write a slam run (trajectory.tum as nav_msgs/Odometry + /tf, map.ply as one "
+                 "PointCloud2) or, with --recording, a recording folder (VelodyneScan, Imu, JointState, "
+                 "Image) as a ROS 1 bag. See docs/ros.md.");
   p.AddPositional("INPUT", "a slam run folder (slam --out), or a recording folder with --recording");
   p.AddPositional("OUT_BAG", "the bag to write (overwritten)");
   p.AddFlag("recording", "INPUT is a recording folder: write its sensor streams");
-  p.Add("epoch-unix-s", "auto", "s", "Unix time of rig time 0; auto = the recording's calib epoch_unix_s, or "
-                                     "1700000000 when it is 0 (sim recordings) and for runs");
+  p.Add("epoch-unix-s", "auto", "s",
+        "Unix time of rig time 0; auto = the recording's calib epoch_unix_s, or "
+        "1700000000 when it is 0 (sim recordings) and for runs");
   p.Add("packets-per-scan", "0", "-", "VLP-16 packets per VelodyneScan; 0 = as the driver: ceil(754 / (rpm/60))");
   p.Add("lidar-topic", "/velodyne_packets", "-", "VelodyneScan topic (--recording)");
   p.Add("imu-topic", "/imu/data", "-", "Imu topic (--recording)");
@@ -75,7 +81,8 @@ int CmdExportBag(int argc, char** argv) {
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   rosmsg::BagExportOptions o;
   if (p.Get("epoch-unix-s") != "auto") {
-    if (Status s = p.GetDouble("epoch-unix-s", &o.epoch_unix_s); !s) return std::cerr << "error: " << s.message << "\n", 2;
+    if (Status s = p.GetDouble("epoch-unix-s", &o.epoch_unix_s); !s)
+      return std::cerr << "error: " << s.message << "\n", 2;
     if (!(o.epoch_unix_s > 0.0)) return std::cerr << "error: export-bag: --epoch-unix-s must be > 0\n", 2;
   }
   long packets = 0;

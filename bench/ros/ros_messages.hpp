@@ -48,7 +48,7 @@ struct ImuMsg {
   std::array<double, 9> orientation_covariance{};  ///< element 0 = -1: no orientation estimate (REP-145)
   std::array<double, 3> angular_velocity{};        ///< [rad/s]
   std::array<double, 9> angular_velocity_covariance{};
-  std::array<double, 3> linear_acceleration{};     ///< [m/s^2]
+  std::array<double, 3> linear_acceleration{};  ///< [m/s^2]
   std::array<double, 9> linear_acceleration_covariance{};
   static const RosMsgType& Type();
 };
@@ -58,7 +58,7 @@ struct ImageMsg {
   uint32_t height = 0, width = 0;
   std::string encoding;  ///< "rgb8", "bgr8", "mono8", ... (sensor_msgs/image_encodings.h)
   uint8_t is_bigendian = 0;
-  uint32_t step = 0;     ///< bytes per row
+  uint32_t step = 0;  ///< bytes per row
   std::vector<uint8_t> data;
   static const RosMsgType& Type();
 };

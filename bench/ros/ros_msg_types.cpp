@@ -2,9 +2,9 @@
 // The texts are the .msg files of ROS Noetic (std_msgs, geometry_msgs, sensor_msgs, nav_msgs, tf2_msgs) and
 // velodyne_msgs with comments and blank lines stripped; the md5sums are genmsg's over these texts (each nested
 // type replaced by its own md5sum) and equal the ones in the generated headers of the same messages.
-#include "bench/ros/ros_messages.hpp"
-
 #include <utility>
+
+#include "bench/ros/ros_messages.hpp"
 
 namespace rotolidar::bench::rosmsg {
 namespace {
@@ -28,10 +28,10 @@ std::string FullDefinition(const char* text, const std::vector<std::pair<const c
 }  // namespace
 
 const RosMsgType& VelodyneScanMsg::Type() {
-  static const RosMsgType type{
-      "velodyne_msgs/VelodyneScan", "50804fc9533a0e579e6322c04ae70566",
-      FullDefinition("Header header\nVelodynePacket[] packets\n",
-                     {{"std_msgs/Header", kHeader}, {"velodyne_msgs/VelodynePacket", "time stamp\nuint8[1206] data\n"}})};
+  static const RosMsgType type{"velodyne_msgs/VelodyneScan", "50804fc9533a0e579e6322c04ae70566",
+                               FullDefinition("Header header\nVelodynePacket[] packets\n",
+                                              {{"std_msgs/Header", kHeader},
+                                               {"velodyne_msgs/VelodynePacket", "time stamp\nuint8[1206] data\n"}})};
   return type;
 }
 

@@ -37,8 +37,9 @@ void RosWriter::String(const std::string& s) {
 bool RosReader::Need(const char* field, std::size_t n) {
   if (!status_.ok) return false;
   if (n <= size_ - pos_) return true;
-  status_ = Status::Error("field '" + std::string(field) + "' at byte " + std::to_string(pos_) + ": message ends (needs " +
-                          std::to_string(n) + " bytes, " + std::to_string(size_ - pos_) + " left)");
+  status_ =
+      Status::Error("field '" + std::string(field) + "' at byte " + std::to_string(pos_) + ": message ends (needs " +
+                    std::to_string(n) + " bytes, " + std::to_string(size_ - pos_) + " left)");
   return false;
 }
 
@@ -77,8 +78,8 @@ RosTime RosReader::Time(const char* field) {
   t.sec = U32(field);
   t.nsec = U32(field);
   if (status_.ok && t.nsec >= 1000000000u) {
-    status_ = Status::Error("field '" + std::string(field) + "' at byte " + std::to_string(pos_ - 4) +
-                            ": nsec " + std::to_string(t.nsec) + " is not below 1e9");
+    status_ = Status::Error("field '" + std::string(field) + "' at byte " + std::to_string(pos_ - 4) + ": nsec " +
+                            std::to_string(t.nsec) + " is not below 1e9");
   }
   return t;
 }
@@ -97,8 +98,7 @@ uint32_t RosReader::Count(const char* field, std::size_t min_element_bytes) {
   if (!status_.ok) return 0;
   if (min_element_bytes > 0 && n > (size_ - pos_) / min_element_bytes) {
     status_ = Status::Error("field '" + std::string(field) + "' at byte " + std::to_string(at) + ": length " +
-                            std::to_string(n) + " cannot fit in the " + std::to_string(size_ - pos_) +
-                            " bytes left");
+                            std::to_string(n) + " cannot fit in the " + std::to_string(size_ - pos_) + " bytes left");
     return 0;
   }
   return n;

@@ -1,6 +1,7 @@
 #include "bench/run/slam_run.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -8,6 +9,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "bench/run/atomic_write.hpp"
 #include "bench/run/keyframe_db.hpp"
 #include "bench/run/loop_outputs.hpp"
 #include "core/pipeline/estimator_config_yaml.hpp"
@@ -35,12 +37,18 @@ void Keep(ScanReport report, SlamRunResult* result) {
 /// early), as a live rig would.
 /// With `snapshots`, polled after each scan (a failed write stops the snapshots and is returned at the end).
 Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
-                const std::function<void(double)>& progress, LoopSnapshotWriter* snapshots) {
+                const std::function<void(double)>& progress, LoopSnapshotWriter* snapshots,
+                const std::atomic<bool>* stop) {
   Status snapshot_status = Status::Ok();
   size_t i_imu = 0, i_enc = 0, i_cam = 0;
   const size_t n = rec.lidar_packets.size();
   size_t next_report = n / 10;
   for (size_t i = 0; i < n; ++i) {
+    if (stop && *stop) {  // asked to stop: finish what was fed, mark the outputs partial
+      result->stopped = true;
+      result->data_fed_s = rec.lidar_packets[i].t_capture_s - rec.lidar_packets.front().t_capture_s;
+      break;
+    }
     const LidarPacket& packet = rec.lidar_packets[i];
     while (i_enc < rec.encoder.size() && rec.encoder[i_enc].t_s <= packet.t_capture_s)
       estimator->Feed(rec.encoder[i_enc++]);
@@ -57,8 +65,8 @@ Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* resul
       next_report += n / 10;
     }
   }
-  while (i_enc < rec.encoder.size()) estimator->Feed(rec.encoder[i_enc++]);
-  while (i_imu < rec.imu.size()) estimator->Feed(rec.imu[i_imu++]);
+  while (!result->stopped && i_enc < rec.encoder.size()) estimator->Feed(rec.encoder[i_enc++]);
+  while (!result->stopped && i_imu < rec.imu.size()) estimator->Feed(rec.imu[i_imu++]);
   for (ScanReport& r : estimator->Finish()) Keep(std::move(r), result);
   if (snapshots && snapshot_status) snapshot_status = snapshots->Poll(*estimator);  // Finish waited for the closer
   return snapshot_status;
@@ -120,13 +128,26 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
 
 Status WriteSlamOutputs(const std::string& out_dir, const Estimator& estimator, const SlamRunResult& result) {
   const Trajectory& traj = result.trajectory;
-  if (Status s = WriteTrajectory(out_dir + "/trajectory.tum", TrajectoryFormat::kTum, traj); !s) return s;
-  if (Status s = WriteTrajectory(out_dir + "/trajectory.kitti", TrajectoryFormat::kKitti, traj); !s) return s;
-  if (Status s = WriteKittiTimes(out_dir + "/trajectory_times.txt", traj); !s) return s;
+  auto atomically = [](const std::string& path, auto write) { return WriteAtomically(path, write); };
+  for (const auto& [name, format] : {std::pair{"trajectory.tum", TrajectoryFormat::kTum},
+                                     std::pair{"trajectory.kitti", TrajectoryFormat::kKitti}})
+    if (Status s = atomically(out_dir + "/" + name,
+                              [&](const std::string& part) { return WriteTrajectory(part, format, traj); });
+        !s)
+      return s;
+  if (Status s = atomically(out_dir + "/trajectory_times.txt",
+                            [&](const std::string& part) { return WriteKittiTimes(part, traj); });
+      !s)
+    return s;
   const std::vector<Eigen::Vector3d> map = estimator.map().Points();
-  if (Status s = SavePointCloud(out_dir + "/map.ply", map); !s) return s;
-  if (Status s = SavePointCloud(out_dir + "/map.pcd", map); !s) return s;
-  if (Status s = WriteScanTable(out_dir + "/scans.csv", result.scans); !s) return s;
+  for (const char* name : {"map.ply", "map.pcd"})
+    if (Status s = atomically(out_dir + "/" + name, [&](const std::string& part) { return SavePointCloud(part, map); });
+        !s)
+      return s;
+  if (Status s = atomically(out_dir + "/scans.csv",
+                            [&](const std::string& part) { return WriteScanTable(part, result.scans); });
+      !s)
+    return s;
   if (const graph::LoopCloser* loops = estimator.loop_closer()) {
     if (Status s = WriteLoopOutputs(out_dir, *loops, result.loops, result.odometry_trajectory, estimator.config());
         !s)
@@ -134,9 +155,26 @@ Status WriteSlamOutputs(const std::string& out_dir, const Estimator& estimator, 
   }
   YAML::Emitter out;
   EmitEstimatorConfig(out, estimator.config());  // resolved against calib.yaml
-  std::ofstream file(out_dir + "/slam_config.yaml");
-  file << "# Resolved estimator configuration of this run (rotolidar slam).\n" << out.c_str() << "\n";
-  return file ? Status::Ok() : Status::Error(out_dir + "/slam_config.yaml: write failed");
+  return atomically(out_dir + "/slam_config.yaml", [&](const std::string& part) {
+    std::ofstream file(part);
+    file << "# Resolved estimator configuration of this run (rotolidar slam).\n" << out.c_str() << "\n";
+    file.close();
+    return file ? Status::Ok() : Status::Error(part + ": write failed");
+  });
+}
+
+Status ClearSlamOutputs(const std::string& out_dir) {
+  static const char* kFiles[] = {"trajectory.tum", "trajectory.kitti", "trajectory_times.txt", "map.ply", "map.pcd",
+                                 "scans.csv", "slam_config.yaml", "metrics.json", "report.html",
+                                 "trajectory_odometry.tum", "loops.csv", "loop_candidates.csv", "map_corrected.ply"};
+  static const char* kFolders[] = {"keyframes", "loop_snapshots"};
+  std::error_code ec;
+  for (const char* f : kFiles)
+    if (std::filesystem::remove(out_dir + "/" + f, ec); ec) return Status::Error(out_dir + "/" + f + ": " + ec.message());
+  for (const char* d : kFolders)
+    if (std::filesystem::remove_all(out_dir + "/" + d, ec); ec)
+      return Status::Error(out_dir + "/" + d + ": " + ec.message());
+  return Status::Ok();
 }
 
 namespace {
@@ -178,6 +216,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) return Status::Error(out_dir + ": cannot create folder: " + ec.message());
+  if (Status s = ClearSlamOutputs(out_dir); !s) return s;  // a folder never mixes two runs
 
   *result = SlamRunResult{};
   if (config.keep_deskewed && !rec.lidar_packets.empty())
@@ -192,7 +231,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   const auto t0 = std::chrono::steady_clock::now();
   LoopSnapshotWriter snapshots(out_dir);
   const Status playback = Playback(rec, &estimator, result, options.progress,
-                                   options.loop_snapshots ? &snapshots : nullptr);
+                                   options.loop_snapshots ? &snapshots : nullptr, options.stop);
   if (!playback) return playback;
   result->loop_snapshots = snapshots.written();
   result->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -208,6 +247,11 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   }
   result->map_points = estimator.map().NumPoints();
   result->bad_packets = estimator.bad_packets();
+  result->packet_order = estimator.packet_order_counts();
+  if (const PacketOrderCounts& o = result->packet_order; o.total() > 0)
+    LOG_WARN(recording_dir << "/lidar.pcap: data packets out of timestamp order: " << o.reordered
+                           << " reordered; dropped " << o.duplicate << " duplicate, " << o.late << " late, " << o.wild
+                           << " with a wild timestamp");
   if (!result->scans.empty()) result->data_duration_s = result->scans.back().t_end_s - result->scans.front().t_start_s;
   std::vector<double> times;
   for (const auto& r : result->scans) times.push_back(r.timings.total_ms);

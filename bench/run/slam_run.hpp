@@ -4,6 +4,9 @@
 //   map.ply, map.pcd                                            the dense map [world, m]
 //   scans.csv          per scan: stage timings [ms], feature counts, registration, degeneracy (eigenvalues, axes)
 //   slam_config.yaml                                            the resolved estimator config
+// Each file is written under a temporary name and renamed (a reader never sees half of one); a run first removes
+// the outputs of an earlier run in the same folder. `rotolidar slam` writes metrics.json last: its presence marks
+// a finished run, and its "complete" says whether the run saw all of its data.
 // With loop closure on, also trajectory_odometry.tum, loops.csv, loop_candidates.csv, map_corrected.ply and, when
 // asked (SlamRunOptions::save_keyframes), the keyframe database in keyframes/ (bench/run/keyframe_db.hpp).
 //
@@ -11,6 +14,7 @@
 // positions (the deskew error's input, bench/metrics/deskew_error.hpp): ~30 k points x 44 B per scan, so a 20 s
 // run holds ~5.7 M points (~250 MB), which is fine. Longer runs keep them for every k-th scan only
 // (DeskewScanStride), so the kept points stay at about 20 s worth whatever the run's length.
+#include <atomic>
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -38,9 +42,13 @@ struct SlamRunResult {
   std::vector<ScanReport> scans;
   size_t map_points = 0;
   size_t bad_packets = 0;
+  PacketOrderCounts packet_order;   ///< data packets put back in order or dropped (Estimator::packet_order_counts)
   double data_duration_s = 0.0;     ///< span of the LiDAR data [s]
   double wall_time_s = 0.0;         ///< estimator time only (excludes loading) [s]
   double median_scan_ms = 0.0;      ///< median Process time per scan [ms]
+  /// SlamRunOptions::stop was set: the outputs cover the data fed until then (data_fed_s of LiDAR data).
+  bool stopped = false;
+  double data_fed_s = 0.0;
   /// 0: no scan kept its deskew data (keep_deskewed off, or ReleaseDeskewData). k >= 1: scans[i] with
   /// i % k == 0 hold deskew_source / deskewed_base, the others hold none.
   size_t deskew_scan_stride = 0;
@@ -63,6 +71,9 @@ struct SlamRunOptions {
   /// Loop closure on: after each pose-graph correction write the corrected map and trajectory so far into
   /// <out_dir>/loop_snapshots/ (bench/run/loop_outputs.hpp).
   bool loop_snapshots = false;
+  /// Polled before each packet: when set, the run stops feeding, finishes what it has and writes its outputs
+  /// (SlamRunResult::stopped; metrics.json says complete: false). A signal handler sets it.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
@@ -70,6 +81,9 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
 /// Writes the outputs listed at the top of this file for `estimator` after its last scan (RunSlam's last step;
 /// `rotolidar live` calls it at the end of a session). Fails naming the file that could not be written.
 Status WriteSlamOutputs(const std::string& out_dir, const Estimator& estimator, const SlamRunResult& result);
+/// Removes the outputs an earlier run wrote into out_dir (the files above, keyframes/, loop_snapshots/, and
+/// metrics.json and report.html), so that a folder never mixes two runs; other files are left alone.
+Status ClearSlamOutputs(const std::string& out_dir);
 /// RunSlam with `progress` only.
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,
                SlamRunResult* result, const std::function<void(double)>& progress = nullptr);

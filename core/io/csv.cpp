@@ -2,6 +2,7 @@
 #include "core/util/log.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -68,9 +69,9 @@ bool CsvReader::Next(std::vector<double>* values) {
       char* end = nullptr;
       errno = 0;
       (*values)[i] = std::strtod(cell.c_str(), &end);
-      if (cell.empty() || *end != '\0' || errno == ERANGE) {
+      if (cell.empty() || *end != '\0' || errno == ERANGE || !std::isfinite((*values)[i])) {
         status_ = Status::Error(where + "column " + std::to_string(i + 1) + " ('" + columns_[i] +
-                                "'): not a number: '" + cell + "'");
+                                "'): not a finite number: '" + cell + "'");
         return false;
       }
     }

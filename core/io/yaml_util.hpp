@@ -2,8 +2,11 @@
 // Helpers for parsing YAML at the edges: strict key checking and messages that name file:line and the key. The
 // field-list idiom every config uses (core/io/yaml_fields.hpp) is built on them. Only .cpp files at the YAML
 // edges (core/io, sim's parsers, bench) include this: yaml-cpp stays out of the estimator's headers.
+#include <cmath>
 #include <set>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -33,6 +36,13 @@ void ReadAs(const std::string& file, const YAML::Node& node, const std::string& 
     throw ParseError(Where(file, node) + "field '" + field + "': cannot read value '" +
                      (node.IsScalar() ? node.Scalar() : std::string("<non-scalar>")) + "'");
   }
+  // YAML spells NaN and infinity (.nan, .inf); no field of rotolidar takes them.
+  auto finite = [&](double x) {
+    if (!std::isfinite(x)) throw ParseError(Where(file, node) + "field '" + field + "': not a finite number");
+  };
+  if constexpr (std::is_floating_point_v<T>) finite(*value);
+  if constexpr (std::is_same_v<T, std::vector<double>>)
+    for (double x : *value) finite(x);
 }
 
 /// Reads node[key] into *value when present (keeps the default otherwise); wrong types name the key and line.

@@ -34,6 +34,7 @@ Eigen::Vector3d SensorOrigin(const RigCalib& calib) {
 Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
     : calib_(calib),
       config_(ResolveFromCalib(config, calib)),
+      orderer_(config.packet_order),
       decoder_(calib_.lidar, DecoderConfigFor(calib_)),
       splitter_(config.cut_azimuth_deg),
       rotor_(calib_),
@@ -64,15 +65,27 @@ void Estimator::Feed(const ImuSample& sample) {
 }
 
 Status Estimator::Feed(const LidarPacket& packet) {
-  packet_points_.clear();
-  if (Status s = decoder_.Decode(packet, &packet_points_); !s) {
-    ++bad_packets_;
-    return s;
+  ordered_.clear();
+  orderer_.Push(packet, &ordered_);
+  return DecodeOrdered();
+}
+
+// Decodes the packets the orderer released and cuts revolutions; returns the first decode error.
+Status Estimator::DecodeOrdered() {
+  Status first = Status::Ok();
+  for (const LidarPacket& p : ordered_) {
+    packet_points_.clear();
+    if (Status s = decoder_.Decode(p, &packet_points_); !s) {
+      ++bad_packets_;
+      if (first) first = s;
+      continue;
+    }
+    std::vector<LidarScan> completed;
+    splitter_.Add(packet_points_, &completed);
+    for (auto& scan : completed) pending_scans_.push_back(std::move(scan));
   }
-  std::vector<LidarScan> completed;
-  splitter_.Add(packet_points_, &completed);
-  for (auto& scan : completed) pending_scans_.push_back(std::move(scan));
-  return Status::Ok();
+  ordered_.clear();
+  return first;
 }
 
 std::vector<ScanReport> Estimator::Process() {
@@ -98,6 +111,8 @@ size_t Estimator::DropPendingScans(size_t keep) {
 }
 
 std::vector<ScanReport> Estimator::Finish() {
+  orderer_.Flush(&ordered_);
+  if (Status s = DecodeOrdered(); !s) LOG_WARN("last packets: " << s.message);
   if (auto last = splitter_.Flush()) pending_scans_.push_back(std::move(*last));
   std::vector<ScanReport> reports;
   while (!pending_scans_.empty()) {

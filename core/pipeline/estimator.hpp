@@ -114,8 +114,10 @@ class Estimator {
 
   void Feed(const EncoderSample& sample);
   void Feed(const ImuSample& sample);
-  /// Decodes a data or position packet; a malformed packet is reported and skipped (no points lost silently:
-  /// the Status says which field at which offset).
+  /// Takes a data or position packet. Data packets pass a short reorder window first (config.packet_order:
+  /// ~50 ms of data is held; duplicates, late and wild-stamped packets are dropped and counted), then are decoded.
+  /// A malformed packet is reported and skipped (no points lost silently: the Status says which field at which
+  /// offset; with reordering the packet reported may be an earlier one that this call released).
   Status Feed(const LidarPacket& packet);
   /// A camera frame (frames in time order, the recording's clock): tracked when config.visual.enabled (every
   /// frame), and kept for the loop closer's visual stage 1 when it has a vocabulary (about one frame per
@@ -162,10 +164,13 @@ class Estimator {
   /// ProcessDeskewedScan / ProcessTimedScan call it after their last scan). No-op without loop closure.
   void FinishLoopClosure();
   size_t bad_packets() const { return bad_packets_; }
+  /// What putting the data packets into timestamp order repaired or dropped (config.packet_order).
+  const PacketOrderCounts& packet_order_counts() const { return orderer_.counts(); }
   bool imu_initialized() const;
 
  private:
   struct Prediction;
+  Status DecodeOrdered();
 
   ScanReport ProcessScan(const LidarScan& scan);
   ScanReport ProcessBaseFrameScan(Seconds t_s, std::vector<ScanPoint> points, bool deskew);
@@ -198,6 +203,8 @@ class Estimator {
 
   RigCalib calib_;
   EstimatorConfig config_;
+  PacketOrderer orderer_;
+  std::vector<LidarPacket> ordered_;  // released by orderer_, waiting to be decoded
   Vlp16Decoder decoder_;
   RevolutionSplitter splitter_;
   RotorAngleInterpolator rotor_;

@@ -30,6 +30,7 @@ bool EstimatorConfig::Validate(std::string* error) const {
     return false;
   };
   if (!(cut_azimuth_deg >= 0 && cut_azimuth_deg < 360)) return fail("cut_azimuth_deg must be in [0, 360)");
+  if (std::string why; !packet_order.Validate(&why)) return fail("packet_order." + why);
   FeatureConfig features_resolved = features;  // kRangeSigmaFromCalib is resolved by the Estimator
   if (features_resolved.range_sigma_m == kRangeSigmaFromCalib) features_resolved.range_sigma_m = 0.0;
   if (!preprocess.Validate(error) || !features_resolved.Validate(error) || !registration.Validate(error) ||

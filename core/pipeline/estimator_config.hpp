@@ -13,6 +13,7 @@
 #include "core/preprocess/filters.hpp"
 #include "core/registration/local_map.hpp"
 #include "core/registration/scan_to_map.hpp"
+#include "core/wire/packet_orderer.hpp"
 #include "core/types/calib.hpp"
 
 namespace rotolidar {
@@ -39,6 +40,9 @@ KeyframePolicy RotaryKeyframePolicy(const RigCalib& calib, const LocalMapConfig&
 
 struct EstimatorConfig {
   double cut_azimuth_deg = 0.0;  ///< VLP-16 head azimuth where one revolution ends and the next begins [deg]
+  /// Data packets are put back into timestamp order before decoding; duplicates, late and wild-stamped packets
+  /// are dropped and counted (core/wire/packet_orderer.hpp).
+  PacketOrderConfig packet_order;
 
   PreprocessConfig preprocess;   ///< range gate, SOR, optional voxel (core/preprocess/filters.hpp)
   /// Curvature features (core/features/curvature_features.hpp); the noise gate's sigma from calib.yaml.

@@ -28,6 +28,11 @@ const yaml::EnumWordList<MarginalizationScheme>& EnumWords(MarginalizationScheme
 // ---- the field lists ----
 
 template <class V>
+void Visit(V& v, PacketOrderConfig& c) {
+  v("window_s", &c.window_s), v("max_jump_s", &c.max_jump_s), v("confirm_packets", &c.confirm_packets);
+}
+
+template <class V>
 void Visit(V& v, PreprocessConfig& c) {
   v("enable_range", &c.enable_range), v("min_range_m", &c.min_range_m), v("max_range_m", &c.max_range_m);
   v("enable_sor", &c.enable_sor), v("sor_k", &c.sor_k), v("sor_std_mul", &c.sor_std_mul);
@@ -190,7 +195,8 @@ void Visit(V& v, VisualConfig& c) {
 
 template <class V>
 void Visit(V& v, EstimatorConfig& c) {
-  v("cut_azimuth_deg", &c.cut_azimuth_deg), v("keyframe_every_scans", &c.keyframe_every_scans);
+  v("cut_azimuth_deg", &c.cut_azimuth_deg), v("packet_order", &c.packet_order);
+  v("keyframe_every_scans", &c.keyframe_every_scans);
   v("initial_keyframes", &c.initial_keyframes);
   v("use_imu", &c.use_imu), v("lidar_point_sigma_m", &c.lidar_point_sigma_m);
   v("hold_static_start", &c.hold_static_start);

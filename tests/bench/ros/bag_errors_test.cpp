@@ -1,11 +1,10 @@
 // ImportBag on small hand-made bags: a minimal valid bag (epoch, rig times, encoder counts, image conversion), and
 // every kind of bad input giving a clear message that names the bag, the topic, the message index and the field.
-#include <filesystem>
-#include <fstream>
-
+#include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
+#include <filesystem>
+#include <fstream>
 
 #include "bench/ros/bag_import.hpp"
 #include "bench/ros/bag_io.hpp"
@@ -34,9 +33,9 @@ class BagImportErrors : public ::testing::Test {
     std::vector<std::string> imu_topics{"/imu"};
     std::string lidar_type = "velodyne";  ///< "velodyne", "cloud", "none"
     int encoder_messages = 5;
-    std::string image_encoding;           ///< "" = no camera topic
+    std::string image_encoding;  ///< "" = no camera topic
     bool empty_joint_position = false;
-    int truncated_imu_message = -1;       ///< index of an Imu message cut short
+    int truncated_imu_message = -1;  ///< index of an Imu message cut short
   };
 
   static RosTime At(int k) { return RosTime{1700000123, static_cast<uint32_t>(250000000 + 10000000 * k)}; }
@@ -96,7 +95,8 @@ class BagImportErrors : public ::testing::Test {
 
   static void ExpectMessage(const Status& s, const std::vector<std::string>& parts) {
     ASSERT_FALSE(s.ok);
-    for (const std::string& p : parts) EXPECT_NE(s.message.find(p), std::string::npos) << "'" << p << "' not in: " << s.message;
+    for (const std::string& p : parts)
+      EXPECT_NE(s.message.find(p), std::string::npos) << "'" << p << "' not in: " << s.message;
   }
 
   std::string dir_;
@@ -145,8 +145,8 @@ TEST_F(BagImportErrors, AmbiguousAndMissingTopics) {
   Content c;
   c.imu_topics = {"/imu_a", "/imu_b"};
   const std::string bag = WriteBag(c);
-  ExpectMessage(Import(bag), {"several sensor_msgs/Imu topics", "/imu_a (sensor_msgs/Imu, 5 messages)", "/imu_b",
-                              "--imu-topic"});
+  ExpectMessage(Import(bag),
+                {"several sensor_msgs/Imu topics", "/imu_a (sensor_msgs/Imu, 5 messages)", "/imu_b", "--imu-topic"});
   BagImportOptions pick;
   pick.imu_topic = "/imu_b";
   EXPECT_TRUE(Import(bag, pick).ok);
@@ -161,7 +161,8 @@ TEST_F(BagImportErrors, WrongMessageType) {
   const std::string bag = WriteBag(Content{});
   BagImportOptions o;
   o.imu_topic = "/joint_states";
-  ExpectMessage(Import(bag, o), {"topic /joint_states (--imu-topic) has type sensor_msgs/JointState, expected sensor_msgs/Imu"});
+  ExpectMessage(Import(bag, o),
+                {"topic /joint_states (--imu-topic) has type sensor_msgs/JointState, expected sensor_msgs/Imu"});
   // Same type name, another definition (md5sum).
   BagWriter w;
   ASSERT_TRUE(w.Open(dir_ + "/md5.bag"));
@@ -176,8 +177,8 @@ TEST_F(BagImportErrors, PointCloudLidarIsNotSupportedYet) {
   Content c;
   c.lidar_type = "cloud";
   const std::string bag = WriteBag(c);
-  ExpectMessage(Import(bag), {"/velodyne_points is a sensor_msgs/PointCloud2", "not supported yet",
-                              "velodyne_msgs/VelodyneScan"});
+  ExpectMessage(Import(bag),
+                {"/velodyne_points is a sensor_msgs/PointCloud2", "not supported yet", "velodyne_msgs/VelodyneScan"});
   BagImportOptions o;
   o.lidar_topic = "/velodyne_points";
   ExpectMessage(Import(bag, o), {"not supported yet"});

@@ -3,13 +3,13 @@
 // data packets (payload bytes and capture times), IMU samples, encoder counts, camera times and pixels are
 // identical (only the position packets, which VelodyneScan cannot carry, are gone). SLAM on both recordings gives
 // the same trajectory. A slam run exported as a bag reads back as Odometry + /tf + one map cloud.
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <map>
-
-#include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include "bench/ros/bag_export.hpp"
 #include "bench/ros/bag_import.hpp"
@@ -128,7 +128,8 @@ TEST(BagRoundTrip, SlamOnTheImportedRecordingGivesTheSameTrajectory) {
     const StampedPose &pa = ra.trajectory[i], &pb = rb.trajectory[i];
     max_dt = std::max(max_dt, std::abs(pa.t_s - pb.t_s));
     max_dp = std::max(max_dp, (pa.T_ref_body.translation() - pb.T_ref_body.translation()).norm());
-    max_dr = std::max(max_dr, Eigen::AngleAxisd(pa.T_ref_body.rotation().transpose() * pb.T_ref_body.rotation()).angle());
+    max_dr =
+        std::max(max_dr, Eigen::AngleAxisd(pa.T_ref_body.rotation().transpose() * pb.T_ref_body.rotation()).angle());
   }
   std::printf("slam original vs imported: %zu poses, max |dt| %.3g s, max |dp| %.3g m, max angle %.3g rad\n",
               ra.trajectory.size(), max_dt, max_dp, max_dr);

@@ -1,16 +1,16 @@
 // Hand-written ROS 1 messages (bench/ros/ros_messages.hpp): serialise -> parse round trips field by field, the
 // wire layout of a known message, errors that name the field and the byte offset, the encoder angle <-> count
 // inverse, and raw messages through a bag file (BagWriter / BagReader).
+#include "bench/ros/ros_messages.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 
-#include <unistd.h>
-
-#include <gtest/gtest.h>
-
 #include "bench/ros/bag_import.hpp"
 #include "bench/ros/bag_io.hpp"
-#include "bench/ros/ros_messages.hpp"
 #include "core/types/calib.hpp"
 
 namespace rotolidar::bench::rosmsg {
@@ -168,7 +168,7 @@ TEST(EncoderCountFromAngle, InvertsEncoderAngleForEveryCount) {
       for (uint32_t c = 0; c < cpr; ++c) {
         const double theta = calib.EncoderAngle(c);
         ASSERT_EQ(EncoderCountFromAngle(theta, cpr, zero), c) << "cpr " << cpr << " zero " << zero;
-        ASSERT_EQ(EncoderCountFromAngle(theta + 2.0 * M_PI * 3, cpr, zero), c);   // multi-turn positions wrap
+        ASSERT_EQ(EncoderCountFromAngle(theta + 2.0 * M_PI * 3, cpr, zero), c);  // multi-turn positions wrap
         ASSERT_EQ(EncoderCountFromAngle(theta - 2.0 * M_PI * 5, cpr, zero), c);
       }
     }
@@ -176,8 +176,8 @@ TEST(EncoderCountFromAngle, InvertsEncoderAngleForEveryCount) {
 }
 
 TEST(Bag, RawMessagesThroughABagFile) {
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("rotolidar_bag_raw_" + std::to_string(getpid()) + ".bag")).string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("rotolidar_bag_raw_" + std::to_string(getpid()) + ".bag")).string();
   {
     BagWriter w;
     ASSERT_TRUE(w.Open(path));

@@ -105,6 +105,19 @@ TEST(Recording, BrokenImuLineIsNamed) {
   EXPECT_NE(s.message.find("gyro_z_radps"), std::string::npos) << s.message;
 }
 
+TEST(Recording, NanAndInfinityAreRejectedWithFileLineAndColumn) {
+  for (const char* bad : {"nan", "inf", "-INF", "NaN"}) {
+    const std::string dir = TempDir(std::string("nan_imu_") + bad);
+    WriteSmallRecording(dir, TestCalib());
+    std::ofstream(dir + "/imu.csv", std::ios::app) << "0.5,1,2,3,4," << bad << ",6\n";
+    Recording rec;
+    const Status s = LoadRecording(dir, &rec);
+    ASSERT_FALSE(s.ok) << bad;
+    EXPECT_NE(s.message.find("imu.csv:7: column 6 ('accel_y_mps2'): not a finite number"), std::string::npos)
+        << s.message;
+  }
+}
+
 TEST(Recording, EncoderCountOutOfRangeIsNamed) {
   const std::string dir = TempDir("broken_encoder");
   WriteSmallRecording(dir, TestCalib());
@@ -175,6 +188,21 @@ TEST(CalibYaml, WrongTypeNamesFieldAndLine) {
   ASSERT_FALSE(s.ok);
   EXPECT_NE(s.message.find("calib.yaml:3:"), std::string::npos) << s.message;
   EXPECT_NE(s.message.find("rate_hz"), std::string::npos) << s.message;
+}
+
+TEST(CalibYaml, NanOrInfinityInAnyNumberIsNamed) {
+  const std::string dir = TempDir("calib_nan");
+  fs::create_directories(dir);
+  const std::string path = dir + "/calib.yaml";
+  for (const std::string& text : {std::string("format_version: 1\nmotor_speed_radps: .nan\n"),
+                                  std::string("format_version: 1\nT_base_imu:\n  translation_m: [0, .inf, 0]\n")}) {
+    std::ofstream(path) << text;
+    RigCalib calib;
+    const Status s = LoadCalibYaml(path, &calib);
+    ASSERT_FALSE(s.ok) << text;
+    EXPECT_NE(s.message.find("calib.yaml:"), std::string::npos) << s.message;
+    EXPECT_NE(s.message.find("not a finite number"), std::string::npos) << s.message;
+  }
 }
 
 TEST(CalibYaml, MissingFormatVersionIsAnError) {

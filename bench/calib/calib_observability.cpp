@@ -1,0 +1,93 @@
+// Observability of the rotor calibration from the Gauss-Newton Hessian at the estimate (rotor_calib.hpp).
+// The Jacobian comes from central differences of residuals whose plane normal is refitted (PCA) to the
+// transformed neighbours, so a rigid motion of the whole static cloud (the gauge: a rotation about the motor axis,
+// a shift along it) leaves every residual unchanged and shows as a direction without information.
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "bench/calib/rotor_calib.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+using Matrix7 = Eigen::Matrix<double, kCalibParamCount, kCalibParamCount>;
+
+/// The residual of `a` with its normal refitted to the neighbours under `d` (sign of the stored normal).
+double RefittedResidual(const std::vector<ResidualPoint>& table, const double* t0, const PlaneAssociation& a,
+                        const RotorCalibParams& d) {
+  const double cz = std::cos(d.encoder_zero_rad), sz = std::sin(d.encoder_zero_rad);
+  Eigen::Vector3d q, mean = Eigen::Vector3d::Zero();
+  MotorPoint(table[a.query], t0, d.lever_m.data(), d.tilt_rad.data(), cz, sz, q.data());
+  std::vector<Eigen::Vector3d> p(a.neighbours.size());
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    MotorPoint(table[a.neighbours[j]], t0, d.lever_m.data(), d.tilt_rad.data(), cz, sz, p[j].data());
+    mean += p[j];
+  }
+  mean /= double(p.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& v : p) cov += (v - mean) * (v - mean).transpose();
+  Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  if (n.dot(a.normal_motor) < 0) n = -n;
+  return n.dot(q - mean);
+}
+
+/// Central-difference step of every parameter [m or rad]: residuals move ~1e-5 m, far above double rounding.
+constexpr double kStep = 1e-4;
+
+/// Conditional information of `p` given the estimated parameters other than p (Schur complement) [1/unit^2].
+double ConditionalInformation(const Matrix7& H, int p, const std::array<bool, kCalibParamCount>& estimate) {
+  std::vector<int> others;
+  for (int k = 0; k < kCalibParamCount; ++k)
+    if (estimate[k] && k != p) others.push_back(k);
+  if (others.empty()) return H(p, p);
+  const int m = int(others.size());
+  Eigen::MatrixXd Hoo(m, m);
+  Eigen::VectorXd Hop(m);
+  for (int i = 0; i < m; ++i) {
+    Hop[i] = H(others[i], p);
+    for (int j = 0; j < m; ++j) Hoo(i, j) = H(others[i], others[j]);
+  }
+  return H(p, p) - Hop.dot(Hoo.ldlt().solve(Hop));
+}
+
+}  // namespace
+
+void ComputeObservability(const std::vector<ResidualPoint>& table, const double* t0,
+                          const std::vector<PlaneAssociation>& associations, const RotorCalibOptions& options,
+                          RotorCalibResult* result) {
+  const RotorCalibParams& x = result->correction;
+  Matrix7 H = Matrix7::Zero();
+  double weighted_sq = 0.0;
+  for (const PlaneAssociation& a : associations) {
+    const double r = RefittedResidual(table, t0, a, x);
+    const double w = std::abs(r) <= options.huber_m ? 1.0 : options.huber_m / std::abs(r);
+    Eigen::Matrix<double, kCalibParamCount, 1> J;
+    for (int p = 0; p < kCalibParamCount; ++p) {
+      RotorCalibParams plus = x, minus = x;
+      plus.Set(p, x.Get(p) + kStep);
+      minus.Set(p, x.Get(p) - kStep);
+      J[p] = (RefittedResidual(table, t0, a, plus) - RefittedResidual(table, t0, a, minus)) / (2.0 * kStep);
+    }
+    H += w * J * J.transpose();
+    weighted_sq += w * r * r;
+  }
+  int free = 0;
+  for (bool e : options.estimate) free += e ? 1 : 0;
+  const double dof = std::max(1.0, double(associations.size()) - free);
+  const double s2 = weighted_sq / dof;
+  result->hessian = H;
+  result->residual_sigma_m = std::sqrt(s2);
+  for (int p = 0; p < kCalibParamCount; ++p) {
+    ParamObservability& o = result->observability[p];
+    o.estimated = options.estimate[p];
+    const double info = ConditionalInformation(H, p, options.estimate);
+    o.independence = H(p, p) > 0.0 ? std::max(0.0, info / H(p, p)) : 0.0;
+    o.sigma = info > 0.0 ? std::sqrt(s2 / info) : std::numeric_limits<double>::infinity();
+    o.observable = o.independence > 1e-3 && std::isfinite(o.sigma);
+  }
+}
+
+}  // namespace rotolidar::bench

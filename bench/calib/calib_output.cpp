@@ -1,0 +1,124 @@
+#include "bench/calib/calib_output.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/report/svg_raster.hpp"
+#include "core/types/geometry.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+nlohmann::json Vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json ComparisonJson(const CalibComparison& c) {
+  return {{"lever_m", Vec(c.lever_m)}, {"tilt_deg", Vec(c.tilt_rad * 180.0 / M_PI)},
+          {"encoder_zero_rad", c.encoder_zero_rad}};
+}
+
+nlohmann::json PoseJson(const Pose3& T) {
+  const Eigen::Quaterniond q(T.linear());
+  return {{"translation_m", Vec(T.translation())}, {"rotation_wxyz", {q.w(), q.x(), q.y(), q.z()}}};
+}
+
+/// Per parameter: estimate (correction), sigma, independence, observable; inf sigma as null.
+nlohmann::json ParametersJson(const RotorCalibResult& r) {
+  nlohmann::json out = nlohmann::json::object();
+  for (int p = 0; p < kCalibParamCount; ++p) {
+    const ParamObservability& o = r.observability[p];
+    out[CalibParamName(p)] = {{"estimated", o.estimated}, {"change", r.correction.Get(p)},
+                              {"sigma", std::isfinite(o.sigma) ? nlohmann::json(o.sigma) : nlohmann::json(nullptr)},
+                              {"independence", o.independence}, {"observable", o.observable}};
+  }
+  return out;
+}
+
+nlohmann::json IterationsJson(const RotorCalibResult& r) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const CalibIteration& it : r.iterations)
+    out.push_back({{"associations", it.associations}, {"initial_cost", it.initial_cost},
+                   {"final_cost", it.final_cost}, {"median_abs_residual_m", it.median_abs_residual_m},
+                   {"solver_iterations", it.solver_iterations}});
+  return out;
+}
+
+}  // namespace
+
+CalibComparison CompareCalib(const RigCalib& est, const RigCalib& ref) {
+  CalibComparison c;
+  c.lever_m = est.T_rotor_lidar.translation() - ref.T_rotor_lidar.translation();
+  c.tilt_rad = LogSO3(est.T_rotor_lidar.linear() * ref.T_rotor_lidar.linear().transpose());
+  c.encoder_zero_rad = est.encoder.zero_offset_rad - ref.encoder.zero_offset_rad;
+  return c;
+}
+
+Status WriteCalibrationJson(const std::string& path, const CalibrationReport& rep) {
+  const RotorCalibResult& r = rep.result;
+  nlohmann::json j;
+  j["recording"] = rep.recording;
+  j["static_span_s"] = {rep.span.t_start_s, rep.span.t_end_s};
+  j["static_span_detected"] = rep.span_detected;
+  j["points"] = rep.points;
+  j["input"] = {{"T_rotor_lidar", PoseJson(rep.input.T_rotor_lidar)},
+                {"encoder_zero_rad", rep.input.encoder.zero_offset_rad}};
+  j["output"] = {{"T_rotor_lidar", PoseJson(rep.output.T_rotor_lidar)},
+                 {"encoder_zero_rad", rep.output.encoder.zero_offset_rad}};
+  j["change"] = ComparisonJson(CompareCalib(rep.output, rep.input));
+  j["parameters"] = ParametersJson(r);
+  j["final_cost"] = r.iterations.empty() ? 0.0 : r.iterations.back().final_cost;
+  j["initial_cost"] = r.iterations.empty() ? 0.0 : r.iterations.front().initial_cost;
+  j["outer_iterations"] = r.iterations.size();
+  j["solver_iterations"] = r.solver_iterations;
+  j["converged"] = r.converged;
+  j["residual_sigma_m"] = r.residual_sigma_m;
+  j["median_abs_residual_m"] = {{"before", rep.median_abs_before_m}, {"after", rep.median_abs_after_m}};
+  j["iterations"] = IterationsJson(r);
+  std::vector<std::vector<double>> H(kCalibParamCount, std::vector<double>(kCalibParamCount));
+  for (int a = 0; a < kCalibParamCount; ++a)
+    for (int b = 0; b < kCalibParamCount; ++b) H[a][b] = r.hessian(a, b);
+  j["hessian"] = H;
+  if (rep.has_truth)
+    j["truth_error"] = {{"before", ComparisonJson(rep.truth_before)}, {"after", ComparisonJson(rep.truth_after)}};
+  std::ofstream f(path);
+  f << j.dump(2) << "\n";
+  return f ? Status::Ok() : Status::Error(path + ": cannot write");
+}
+
+Status WriteCrispnessPicture(const std::string& path, const std::string& title, const std::vector<RotorPoint>& points,
+                             const RigCalib& calib, const RotorCalibOptions& options,
+                             const RotorCalibParams& correction, double* median_abs_m) {
+  const std::vector<ResidualPoint> table = PrepareResidualPoints(points, calib);
+  const Eigen::Vector3d t = calib.T_rotor_lidar.translation();
+  const double t0[3] = {t.x(), t.y(), t.z()};
+  std::vector<float> xyz;
+  MotorFramePoints(table, t0, correction, &xyz);
+  const std::vector<PlaneAssociation> a = AssociatePlanes(xyz, RotorSectors(points, correction, options.sectors),
+                                                          options);
+  const std::vector<double> r = PlaneResiduals(table, t0, a, correction);
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<double> values, all;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Eigen::Vector3d p_base = calib.T_base_motor * Eigen::Vector3f(&xyz[3 * a[i].query]).cast<double>();
+    all.push_back(std::abs(r[i]));
+    if (std::abs(p_base.z()) > 0.4) continue;
+    xy.emplace_back(p_base.x(), p_base.y());
+    values.push_back(std::abs(r[i]));
+  }
+  std::sort(all.begin(), all.end());
+  *median_abs_m = all.empty() ? 0.0 : all[all.size() / 2];
+  TopViewOptions tv;
+  tv.value_min = 0.0, tv.value_max = 0.03;
+  tv.colorbar_label = "|point-to-plane| to the opposite rotor half [m]";
+  PlotOptions po;
+  po.title = title;
+  po.x_label = "base x [m]", po.y_label = "base y [m]";
+  po.width_px = 760, po.height_px = 640;
+  std::ofstream f(path);
+  f << PointTopViewSvg(xy, values, tv, po);
+  return f ? Status::Ok() : Status::Error(path + ": cannot write");
+}
+
+}  // namespace rotolidar::bench

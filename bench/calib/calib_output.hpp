@@ -1,0 +1,49 @@
+#pragma once
+// What `rotolidar calibrate` writes (docs/calibration.md): calibration.json, the corrected calib.yaml and the
+// before / after pictures of the static map, plus the comparison with a twin recording's true calibration.
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "bench/calib/calib_data.hpp"
+#include "bench/calib/rotor_calib.hpp"
+#include "core/types/calib.hpp"
+#include "core/util/status.hpp"
+
+namespace rotolidar::bench {
+
+/// A calibration against a reference (the twin's truth/calib_true.yaml): est - ref per component.
+struct CalibComparison {
+  Eigen::Vector3d lever_m = Eigen::Vector3d::Zero();   ///< translation difference, rotor frame [m]
+  Eigen::Vector3d tilt_rad = Eigen::Vector3d::Zero();  ///< LogSO3(R_est * R_ref^T), rotor frame [rad]
+  double encoder_zero_rad = 0.0;                       ///< zero offset difference [rad]
+};
+CalibComparison CompareCalib(const RigCalib& estimate, const RigCalib& reference);
+
+/// Everything calibration.json records about one run.
+struct CalibrationReport {
+  std::string recording;
+  TimeSpan span;
+  bool span_detected = false;      ///< from the IMU (else given)
+  std::size_t points = 0;          ///< points used (after thinning)
+  RigCalib input, output;
+  RotorCalibOptions options;
+  RotorCalibResult result;
+  double median_abs_before_m = 0.0, median_abs_after_m = 0.0;  ///< |point-to-plane| of each picture's queries
+  bool has_truth = false;
+  CalibComparison truth_before, truth_after;  ///< input - truth, output - truth
+};
+
+/// calibration.json: the estimates, their change from the input, cost, iterations, convergence, and per
+/// parameter the observability (ParamObservability). Fails naming the file.
+Status WriteCalibrationJson(const std::string& path, const CalibrationReport& report);
+
+/// The static map under `correction`: a top view (base frame) of the query points within +-0.4 m of the base
+/// origin's height, coloured by |point-to-plane residual| on a fixed 0..3 cm scale. *median_abs_m: the median
+/// |residual| over all queries. Fails naming the file.
+Status WriteCrispnessPicture(const std::string& path, const std::string& title, const std::vector<RotorPoint>& points,
+                             const RigCalib& calib, const RotorCalibOptions& options,
+                             const RotorCalibParams& correction, double* median_abs_m);
+
+}  // namespace rotolidar::bench

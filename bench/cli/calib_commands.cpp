@@ -1,0 +1,186 @@
+// `rotolidar calibrate REC --out DIR`: the VLP-16's lever arm and tilt on the rotor (T_rotor_lidar) from a stretch
+// where the base stands still while the rotor turns, by making the points seen from opposite rotor angles agree
+// (bench/calib/, docs/calibration.md). Writes the corrected calib.yaml, calibration.json and before / after
+// pictures; with a twin recording's truth/calib_true.yaml also the errors against the true calibration.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "bench/calib/calib_data.hpp"
+#include "bench/calib/calib_output.hpp"
+#include "bench/calib/rotor_calib.hpp"
+#include "bench/cli/commands.hpp"
+#include "bench/cli/options.hpp"
+#include "core/io/calib_yaml.hpp"
+#include "core/io/recording.hpp"
+
+namespace rotolidar::bench {
+namespace {
+
+int Fail(const Status& s) {
+  std::cerr << "error: " << s.message << "\n";
+  return 1;
+}
+
+int Usage(const std::string& message) {
+  std::cerr << "error: calibrate: " << message << "\n";
+  return 2;
+}
+
+/// "lever_x,lever_y,..." (CalibParamName without the unit suffix) into the estimate mask.
+Status ParseEstimate(const std::string& text, std::array<bool, kCalibParamCount>* estimate) {
+  estimate->fill(false);
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    bool found = false;
+    for (int p = 0; p < kCalibParamCount; ++p) {
+      const std::string name = CalibParamName(p);
+      if (name.substr(0, name.rfind('_')) == item) (*estimate)[p] = found = true;
+    }
+    if (!found)
+      return Status::Error("--estimate: unknown parameter '" + item + "' (lever_x, lever_y, lever_z, tilt_x, "
+                           "tilt_y, tilt_z, encoder_zero)");
+  }
+  return Status::Ok();
+}
+
+void AddOptions(OptionParser* p) {
+  const RotorCalibOptions c;
+  const RotorPointOptions d;
+  p->AddPositional("RECORDING", "recording folder (docs/recording_format.md) starting with the base still and the "
+                                "rotor turning");
+  p->Add("out", "runs/calibrate", "-", "output folder: calib.yaml, calibration.json, map_before.svg, map_after.svg");
+  p->Add("static-span", "", "s", "A:B, the stretch of rig time where the base stands still; empty = detect it "
+                                 "from the IMU (the first seconds without motion)");
+  p->Add("min-range", std::to_string(d.min_range_m), "m", "closer returns are not used");
+  p->Add("max-range", std::to_string(d.max_range_m), "m", "farther returns are not used");
+  p->Add("max-points", std::to_string(d.max_points), "-", "points used at most (evenly thinned)");
+  p->Add("queries", std::to_string(c.max_queries), "-", "query points (point-to-plane residuals) at most");
+  p->Add("neighbours", std::to_string(c.neighbours), "-", "neighbours that define a query's plane (3..32)");
+  p->Add("radius", std::to_string(c.neighbour_radius_m), "m", "neighbours farther than this are not used");
+  p->Add("sectors", std::to_string(c.sectors), "-", "rotor-angle sectors (even); queries meet the opposite one");
+  p->Add("huber", std::to_string(c.huber_m), "m", "Huber loss scale of the point-to-plane residual");
+  p->Add("iterations", std::to_string(c.max_outer_iterations), "-", "re-associations at most");
+  p->Add("threads", std::to_string(c.threads), "-", "Ceres threads");
+  p->Add("estimate", "lever_x,lever_y,tilt_x,tilt_y", "-",
+         "parameters to estimate (rotor frame): lever_x|y|z, tilt_x|y|z, encoder_zero; a static stretch observes "
+         "only the default four (docs/calibration.md, Observability)");
+}
+
+Status ReadOptions(const OptionParser& p, RotorPointOptions* po, RotorCalibOptions* co) {
+  long max_points = 0, queries = 0, neighbours = 0, sectors = 0, iterations = 0, threads = 0;
+  for (const Status& s : {p.GetDouble("min-range", &po->min_range_m), p.GetDouble("max-range", &po->max_range_m),
+                          p.GetInt("max-points", &max_points), p.GetInt("queries", &queries),
+                          p.GetInt("neighbours", &neighbours), p.GetDouble("radius", &co->neighbour_radius_m),
+                          p.GetInt("sectors", &sectors), p.GetDouble("huber", &co->huber_m),
+                          p.GetInt("iterations", &iterations), p.GetInt("threads", &threads),
+                          ParseEstimate(p.Get("estimate"), &co->estimate)})
+    if (!s) return s;
+  if (max_points < 1000 || queries < 10 || queries > 10000000)
+    return Status::Error("--max-points must be >= 1000 and --queries 10..1e7");
+  po->max_points = std::size_t(max_points);
+  co->max_queries = int(queries), co->neighbours = int(neighbours), co->sectors = int(sectors);
+  co->max_outer_iterations = int(iterations), co->threads = int(threads);
+  std::string why;
+  if (!po->Validate(&why) || !co->Validate(&why)) return Status::Error(why);
+  return Status::Ok();
+}
+
+/// The static span: --static-span, else detected from the IMU.
+Status FindSpan(const OptionParser& p, const Recording& rec, CalibrationReport* report) {
+  if (!p.Get("static-span").empty()) return ParseTimeSpan(p.Get("static-span"), &report->span);
+  report->span_detected = true;
+  const Status s = DetectStaticSpan(rec.imu, StaticSpanOptions{}, &report->span);
+  return s ? s : Status::Error(rec.dir + "/imu.csv: " + s.message);
+}
+
+void PrintComparison(const char* label, const CalibComparison& c) {
+  std::printf("  %s: lever [%+.2f %+.2f %+.2f] mm, tilt [%+.3f %+.3f %+.3f] deg, encoder zero %+.3f deg\n", label,
+              1e3 * c.lever_m.x(), 1e3 * c.lever_m.y(), 1e3 * c.lever_m.z(), c.tilt_rad.x() * 180 / M_PI,
+              c.tilt_rad.y() * 180 / M_PI, c.tilt_rad.z() * 180 / M_PI, c.encoder_zero_rad * 180 / M_PI);
+}
+
+void PrintResult(const CalibrationReport& rep) {
+  const RotorCalibResult& r = rep.result;
+  std::printf("rotolidar calibrate: %s, static %.2f..%.2f s (%s), %zu points\n", rep.recording.c_str(),
+              rep.span.t_start_s, rep.span.t_end_s, rep.span_detected ? "from the IMU" : "given", rep.points);
+  std::printf("  solve : %zu outer iterations, %d solver iterations, %s, %d planes, cost %.4g -> %.4g\n",
+              r.iterations.size(), r.solver_iterations, r.converged ? "converged" : "NOT converged",
+              r.iterations.empty() ? 0 : r.iterations.back().associations,
+              r.iterations.empty() ? 0.0 : r.iterations.front().initial_cost,
+              r.iterations.empty() ? 0.0 : r.iterations.back().final_cost);
+  std::printf("  map   : median |point-to-plane| %.4f m before, %.4f m after; residual sigma %.4f m\n",
+              rep.median_abs_before_m, rep.median_abs_after_m, r.residual_sigma_m);
+  for (int p = 0; p < kCalibParamCount; ++p) {
+    const ParamObservability& o = r.observability[p];
+    const bool deg = p >= kTiltX;
+    const double scale = deg ? 180.0 / M_PI : 1e3;
+    std::printf("  %-17s %s change %+9.4f %s, sigma %s, independence %.2e%s\n", CalibParamName(p),
+                o.estimated ? "estimated" : "held     ", scale * r.correction.Get(p), deg ? "deg" : "mm ",
+                std::isfinite(o.sigma) ? (std::to_string(scale * o.sigma) + (deg ? " deg" : " mm")).c_str() : "inf",
+                o.independence, o.observable ? "" : " (unobservable here)");
+  }
+  if (!rep.has_truth) return;
+  std::printf("  truth (truth/calib_true.yaml), estimate - true:\n");
+  PrintComparison("before", rep.truth_before);
+  PrintComparison("after ", rep.truth_after);
+}
+
+/// Writes the outputs of a finished calibration into `out`.
+Status WriteOutputs(const std::string& out, const std::vector<RotorPoint>& points, CalibrationReport* rep) {
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) return Status::Error(out + ": cannot create: " + ec.message());
+  if (Status s = SaveCalibYaml(out + "/calib.yaml", rep->output); !s) return s;
+  if (Status s = WriteCrispnessPicture(out + "/map_before.svg", "static map, input calibration", points, rep->input,
+                                       rep->options, RotorCalibParams{}, &rep->median_abs_before_m);
+      !s)
+    return s;
+  if (Status s = WriteCrispnessPicture(out + "/map_after.svg", "static map, estimated calibration", points,
+                                       rep->input, rep->options, rep->result.correction, &rep->median_abs_after_m);
+      !s)
+    return s;
+  return WriteCalibrationJson(out + "/calibration.json", *rep);
+}
+
+}  // namespace
+
+int CmdCalibrate(int argc, char** argv) {
+  OptionParser p("calibrate", "Estimate the VLP-16's lever arm and tilt on the rotor (T_rotor_lidar) from a stretch "
+                              "where the base stands still while the rotor turns; writes a corrected calib.yaml, "
+                              "calibration.json and before/after pictures (docs/calibration.md).");
+  AddOptions(&p);
+  if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
+  CalibrationReport rep;
+  RotorPointOptions point_options;
+  if (Status s = ReadOptions(p, &point_options, &rep.options); !s) return Usage(s.message);
+  Recording rec;
+  if (Status s = LoadRecording(p.Get("RECORDING"), &rec); !s) return Fail(s);
+  rep.recording = rec.dir;
+  rep.input = rec.calib;
+  if (Status s = FindSpan(p, rec, &rep); !s) return Fail(s);
+  std::vector<RotorPoint> points;
+  if (Status s = LoadRotorPoints(rec, rec.calib, rep.span, point_options, &points); !s) return Fail(s);
+  rec.lidar_packets.clear();
+  rec.lidar_packets.shrink_to_fit();
+  rep.points = points.size();
+  if (Status s = CalibrateRotor(points, rec.calib, rep.options, &rep.result); !s) return Fail(s);
+  rep.output = ApplyCorrection(rec.calib, rep.result.correction);
+  const std::string truth_path = rec.dir + "/truth/calib_true.yaml";
+  RigCalib truth;
+  if (std::filesystem::exists(truth_path)) {
+    if (Status s = LoadCalibYaml(truth_path, &truth); !s) return Fail(s);
+    rep.has_truth = true;
+    rep.truth_before = CompareCalib(rep.input, truth);
+    rep.truth_after = CompareCalib(rep.output, truth);
+  }
+  if (Status s = WriteOutputs(p.Get("out"), points, &rep); !s) return Fail(s);
+  PrintResult(rep);
+  std::printf("  output: %s (calib.yaml, calibration.json, map_before.svg, map_after.svg)\n", p.Get("out").c_str());
+  return 0;
+}
+
+}  // namespace rotolidar::bench

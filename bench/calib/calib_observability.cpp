@@ -36,6 +36,9 @@ double RefittedResidual(const std::vector<ResidualPoint>& table, const double* t
 
 /// Central-difference step of every parameter [m or rad]: residuals move ~1e-5 m, far above double rounding.
 constexpr double kStep = 1e-4;
+/// A parameter is observable when its sigma is below these (the size of the errors the calibration corrects):
+/// the gauge directions come out many orders of magnitude larger (sigmas of 1e3..1e8 m or rad on the twin).
+constexpr double kObservableSigmaM = 0.01, kObservableSigmaRad = 0.01;
 
 /// Conditional information of `p` given the estimated parameters other than p (Schur complement) [1/unit^2].
 double ConditionalInformation(const Matrix7& H, int p, const std::array<bool, kCalibParamCount>& estimate) {
@@ -86,7 +89,7 @@ void ComputeObservability(const std::vector<ResidualPoint>& table, const double*
     const double info = ConditionalInformation(H, p, options.estimate);
     o.independence = H(p, p) > 0.0 ? std::max(0.0, info / H(p, p)) : 0.0;
     o.sigma = info > 0.0 ? std::sqrt(s2 / info) : std::numeric_limits<double>::infinity();
-    o.observable = o.independence > 1e-3 && std::isfinite(o.sigma);
+    o.observable = o.independence > 1e-3 && o.sigma < (p < kTiltX ? kObservableSigmaM : kObservableSigmaRad);
   }
 }
 

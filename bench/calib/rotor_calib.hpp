@@ -63,7 +63,7 @@ struct ParamObservability {
   double sigma = 0.0;
   /// Share of its information not explained by the estimated parameters: 1 = independent, 0 = none of its own.
   double independence = 0.0;
-  bool observable = false;  ///< independence > 1e-3 and a finite sigma
+  bool observable = false;  ///< independence > 1e-3 and sigma below 0.01 m or 0.01 rad
 };
 
 struct RotorCalibResult {

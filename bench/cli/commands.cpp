@@ -217,6 +217,8 @@ int CmdSlam(int argc, char** argv) {
                      "elements; minutes on long runs, as `rotolidar mapeval`)");
   p.AddFlag("save-keyframes", "with loop closure on: write the keyframe database (poses, thinned points) into "
                               "OUT/keyframes/ (~100 kB per keyframe)");
+  p.AddFlag("strict", "fail on a degraded input (no IMU, IMU or encoder gaps, an encoder resolution that "
+                      "disagrees with calib.yaml, a missing calibration pose, lost packets) instead of warning");
   p.AddFlag("loop-snapshots", "with loop closure on: after each loop correction write the corrected map and "
                               "trajectory so far into OUT/loop_snapshots/ (one dense map per loop)");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
@@ -229,6 +231,7 @@ int CmdSlam(int argc, char** argv) {
   StopOnSignals stop_on_signals;  // Ctrl-C / SIGTERM: finish what was fed, write the outputs, flag them partial
   run.stop = &stop_on_signals.flag();
   run.loop_snapshots = p.Flag("loop-snapshots");
+  run.strict = p.Flag("strict");
   for (const char* flag : {"save-keyframes", "loop-snapshots"})
     if (p.Flag(flag) && !config.loop_closure.enabled)
       return Fail(Status::Error(std::string("--") + flag +

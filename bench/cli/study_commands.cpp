@@ -6,6 +6,7 @@
 
 #include "bench/cli/commands.hpp"
 #include "bench/cli/options.hpp"
+#include "bench/cli/signals.hpp"
 #include "bench/study/study_config.hpp"
 #include "bench/study/study_report.hpp"
 #include "bench/study/study_runner.hpp"
@@ -52,6 +53,8 @@ int CmdStudy(int argc, char** argv) {
   options.out_dir = out;
   options.jobs = int(jobs);
   options.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()), std::fflush(stdout); };
+  StopOnSignals stop;  // Ctrl-C / SIGTERM: start no new point, write what is done
+  options.stop = &stop.flag();
   StudyResult result;
   if (Status s = RunStudy(config, options, MakeDemoProcessRunner("", config.slam_config_path), &result); !s) {
     std::cerr << "error: " << s.message << "\n";
@@ -64,6 +67,11 @@ int CmdStudy(int argc, char** argv) {
   std::printf("[study] %s: %zu points (%zu run, %zu finished earlier, %zu failed)\n  table: %s/study.csv\n  page : %s\n",
               config.name.c_str(), result.points.size(), result.ran, result.resumed, result.failed, out.c_str(),
               std::filesystem::absolute(out + "/study.html").c_str());
+  if (stop.signal() != 0) {
+    std::fprintf(stderr, "[study] stopped by %s: %zu points not run; the same command resumes the study\n",
+                 stop.name(), result.not_run);
+    return 128 + stop.signal();
+  }
   return result.failed > 0 ? 1 : 0;
 }
 

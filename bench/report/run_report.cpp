@@ -38,6 +38,7 @@ void AddSlamRows(const SlamRunResult& s, Rows* rows) {
   rows->push_back({"scans with the IMU window", std::to_string(imu)});
   rows->push_back({"map points", std::to_string(s.map_points)});
   if (s.bad_packets > 0) rows->push_back({"malformed packets", std::to_string(s.bad_packets)});
+  for (const InputWarning& w : s.input_warnings) rows->push_back({"input warning: " + w.code, w.message});
   const PacketOrderCounts& o = s.packet_order;
   if (o.total() > 0)
     rows->push_back({"packets out of order (repaired / dropped)",
@@ -165,6 +166,9 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
                {"wall_time_s", s.wall_time_s},     {"data_duration_s", s.data_duration_s},
                {"realtime_factor", RealtimeFactor(s)}, {"map_points", s.map_points},
                {"bad_packets", s.bad_packets}};
+  j["input_warnings"] = nlohmann::json::array();
+  for (const InputWarning& w : s.input_warnings)
+    j["input_warnings"].push_back({{"code", w.code}, {"count", w.count}, {"message", w.message}});
   j["slam"]["packet_order"] = {{"reordered", s.packet_order.reordered}, {"duplicate", s.packet_order.duplicate},
                                {"late", s.packet_order.late}, {"wild", s.packet_order.wild}};
   for (const report::StageTiming& t : report::ComputeStageTimings(s.scans))

@@ -213,12 +213,18 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   if (!config.Validate(&why)) return Status::Error("slam config: " + why);
   Recording rec;
   if (Status s = LoadRecording(recording_dir, &rec); !s) return s;
+  std::vector<InputWarning> warnings = CheckRecording(rec);
+  for (const InputWarning& w : warnings) LOG_WARN("[" << w.code << "] " << w.message);
+  if (options.strict && !warnings.empty())
+    return Status::Error("--strict: the recording has " + std::to_string(warnings.size()) + " problem(s):\n" +
+                         InputWarningsText(warnings));
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) return Status::Error(out_dir + ": cannot create folder: " + ec.message());
   if (Status s = ClearSlamOutputs(out_dir); !s) return s;  // a folder never mixes two runs
 
   *result = SlamRunResult{};
+  result->input_warnings = std::move(warnings);
   if (config.keep_deskewed && !rec.lidar_packets.empty())
     result->deskew_scan_stride =
         DeskewScanStride(rec.lidar_packets.back().t_capture_s - rec.lidar_packets.front().t_capture_s);

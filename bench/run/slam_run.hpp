@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/run/input_check.hpp"
 #include "core/pipeline/estimator.hpp"
 #include "core/types/trajectory.hpp"
 #include "core/util/status.hpp"
@@ -42,7 +43,8 @@ struct SlamRunResult {
   std::vector<ScanReport> scans;
   size_t map_points = 0;
   size_t bad_packets = 0;
-  PacketOrderCounts packet_order;   ///< data packets put back in order or dropped (Estimator::packet_order_counts)
+  PacketOrderCounts packet_order;
+  std::vector<InputWarning> input_warnings;  ///< what CheckRecording found in the recording (bench/run/input_check.hpp)   ///< data packets put back in order or dropped (Estimator::packet_order_counts)
   double data_duration_s = 0.0;     ///< span of the LiDAR data [s]
   double wall_time_s = 0.0;         ///< estimator time only (excludes loading) [s]
   double median_scan_ms = 0.0;      ///< median Process time per scan [ms]
@@ -74,6 +76,8 @@ struct SlamRunOptions {
   /// Polled before each packet: when set, the run stops feeding, finishes what it has and writes its outputs
   /// (SlamRunResult::stopped; metrics.json says complete: false). A signal handler sets it.
   const std::atomic<bool>* stop = nullptr;
+  /// A finding of CheckRecording (a degraded input) fails the run instead of being a warning.
+  bool strict = false;
 };
 
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,

@@ -246,6 +246,10 @@ Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const
   auto worker = [&]() {
     for (size_t k = next++; k < pending.size(); k = next++) {
       StudyPointResult& r = res.points[pending[k]];
+      if (options.stop && *options.stop) {
+        r.message = "not run: the study was stopped";
+        continue;
+      }
       const std::string dir = options.out_dir + "/points/" + r.point.id;
       RunOne(runner, dir, &r);
       std::lock_guard<std::mutex> lock(mutex);
@@ -266,6 +270,7 @@ Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const
     res.ran += r.state == PointState::kRan;
     res.resumed += r.state == PointState::kResumed;
     res.failed += r.state == PointState::kFailed;
+    res.not_run += r.state == PointState::kFailed && r.message == "not run: the study was stopped";
   }
   *result = std::move(res);
   return Status::Ok();

@@ -11,6 +11,7 @@
 //   points/<point id>/recording/, slam/ demo's outputs
 // A point is finished when its metrics.json exists, parses as JSON and its sim_config.yaml is the one the study
 // would write now (a changed study reruns the points whose config changed).
+#include <atomic>
 #include <functional>
 #include <limits>
 #include <string>
@@ -74,6 +75,7 @@ struct StudyPointResult {
 struct StudyResult {
   std::vector<StudyPointResult> points;  ///< in expansion order
   size_t ran = 0, resumed = 0, failed = 0;
+  size_t not_run = 0;  ///< of `failed`: never started because StudyRunOptions::stop was set
 };
 
 struct StudyRunOptions {
@@ -81,6 +83,10 @@ struct StudyRunOptions {
   int jobs = 0;  ///< parallel points; <= 0 = the hardware's thread count
   /// Called (serialized) with one line per event: "[study] k/N points done", failures. Null = silent.
   std::function<void(const std::string&)> progress;
+  /// Polled before each point starts: when set, no new point starts; running ones finish (a terminal's Ctrl-C
+  /// also reaches the children, which then fail with their signal). Points never started are failed rows
+  /// ("not run: the study was stopped") that the next invocation runs (resume).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Expands the sweep, writes each pending point's sim_config.yaml, runs the pending points with `runner` on

@@ -1,0 +1,41 @@
+#pragma once
+// What a careful user would check before trusting a run: the recording's streams and calibration, inspected once
+// before the estimator starts. Each finding is a warning with counts (printed, written into metrics.json and the
+// report); with `strict` a warning fails the run. The estimator still copes with each (it falls back to
+// LiDAR-only without IMU, bridges gaps, ...), but the result is worse, and the user must know why.
+//   imu.missing              imu.csv has no samples: the run is LiDAR-only
+//   imu.gaps                 steps between IMU samples over gap_factor / imu.rate_hz (count, longest)
+//   encoder.gaps             steps between encoder samples over max_encoder_gap_s (count, longest): the rotor
+//                            angle across such a gap is a guess (the unwrap may pick the wrong turn)
+//   encoder.resolution       the largest count seen is below counts_per_rev / 4 over more than a few turns of
+//                            data: calib.yaml's counts_per_rev (e.g. 16384 for a 14-bit chip) disagrees with
+//                            the data (e.g. a 12-bit encoder's 0..4095)
+//   calib.pose_missing       T_base_motor / T_rotor_lidar / T_base_imu not in calib.yaml: identity assumed
+//   lidar.lost_packets       data packets missing from the timestamp sequence (core/wire/packet_gaps.hpp)
+#include <string>
+#include <vector>
+
+#include "core/io/recording.hpp"
+#include "core/util/status.hpp"
+
+namespace rotolidar::bench {
+
+struct InputCheckConfig {
+  double gap_factor = 3.0;           ///< an IMU step over gap_factor nominal periods is a gap
+  double max_encoder_gap_s = 0.05;   ///< an encoder step over this is a gap [s]
+};
+
+struct InputWarning {
+  std::string code;     ///< e.g. "imu.gaps" (the list above)
+  std::string message;  ///< names the file and what was found, with counts
+  std::size_t count = 0;
+};
+
+/// Inspects a loaded recording (and its calib.yaml's text for the keys it gives). Never fails: findings come
+/// back as warnings.
+std::vector<InputWarning> CheckRecording(const Recording& recording, const InputCheckConfig& config = {});
+
+/// "N warnings" summary lines for a terminal, one per warning.
+std::string InputWarningsText(const std::vector<InputWarning>& warnings);
+
+}  // namespace rotolidar::bench

@@ -9,6 +9,7 @@
 #include "core/wire/vlp16.hpp"
 #include "core/types/calib.hpp"
 #include "sim/camera/camera_model.hpp"
+#include "sim/faults/faults.hpp"
 #include "sim/lidar/vlp16_caster.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/rig/rig_errors.hpp"
@@ -69,6 +70,9 @@ struct SimConfig {
   /// Rig imperfections (sim/rig/rig_errors.hpp): calibration errors in calib.yaml, axis wobble, rotor
   /// vibration at the IMU. All off by default; YAML `rig_errors:` (emitted only when enabled).
   RigErrorConfig rig_errors;
+  /// Injected faults (sim/faults/faults.hpp): lost, duplicated, reordered or blinded LiDAR packets, a frozen
+  /// encoder, IMU dropouts and saturation. All off by default; YAML `faults:` (emitted only when any is on).
+  FaultConfig faults;
   /// true: the run takes the scene's default carrier (sim/scene_carrier.hpp ChooseSceneCarrier: its handheld
   /// path, else its first path, else the scripted loop if that fits) and carrier.type is ignored. The CLI sets
   /// it unless --carrier or a config file's carrier.type names one; a config file with carrier.type clears it.

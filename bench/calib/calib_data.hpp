@@ -23,10 +23,10 @@
 namespace rotolidar::bench {
 
 struct StaticSpanOptions {
-  double window_s = 0.2;             ///< IMU averaging window [s]
+  double window_s = 0.5;             ///< IMU averaging window [s] (beats of the rotor's vibration lines)
   double gyro_threshold_radps = 0.01;  ///< |mean rate - first window's| that ends the span [rad/s]
-  double accel_threshold_mps2 = 0.1;   ///< |mean specific force - first window's| that ends the span [m/s^2]
-  double margin_s = 0.2;             ///< cut off the end of the detected span [s]
+  double accel_threshold_mps2 = 0.2;  ///< |mean specific force - first window's| that ends the span [m/s^2]
+  double margin_s = 0.3;             ///< cut off the end of the detected span [s]
   bool Validate(std::string* error) const;
 };
 

@@ -95,23 +95,31 @@ Status WriteCrispnessPicture(const std::string& path, const std::string& title, 
   const double t0[3] = {t.x(), t.y(), t.z()};
   std::vector<float> xyz;
   MotorFramePoints(table, t0, correction, &xyz);
-  const std::vector<PlaneAssociation> a = AssociatePlanes(xyz, RotorSectors(points, correction, options.sectors),
-                                                          options);
+  RotorCalibOptions dense = options;  // more queries than the solve: the picture averages them per cell
+  dense.max_queries = 4 * options.max_queries;
+  const std::vector<int> sector = RotorSectors(points, correction, options.sectors);
+  const std::vector<PlaneAssociation> a = AssociatePlanes(table, xyz, sector, dense);
   const std::vector<double> r = PlaneResiduals(table, t0, a, correction);
   std::vector<Eigen::Vector2d> xy;
   std::vector<double> values, all;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    const Eigen::Vector3d p_base = calib.T_base_motor * Eigen::Vector3f(&xyz[3 * a[i].query]).cast<double>();
     all.push_back(std::abs(r[i]));
+    const Eigen::Vector3d p_base = calib.T_base_motor * Eigen::Vector3f(&xyz[3 * a[i].query]).cast<double>();
     if (std::abs(p_base.z()) > 0.4) continue;
+    // Positive: a point of the first rotor half lies in front of (nearer the sensor than) the second half's
+    // surface, or a second-half point behind the first half's; a calibration error paints walls one colour.
+    const bool facing = a[i].normal_motor.dot(RayDirectionMotor(table[a[i].query])) < 0.0;
+    const bool first_half = sector[a[i].query] < options.sectors / 2;
     xy.emplace_back(p_base.x(), p_base.y());
-    values.push_back(std::abs(r[i]));
+    values.push_back(facing == first_half ? r[i] : -r[i]);
   }
   std::sort(all.begin(), all.end());
   *median_abs_m = all.empty() ? 0.0 : all[all.size() / 2];
   TopViewOptions tv;
-  tv.value_min = 0.0, tv.value_max = 0.03;
-  tv.colorbar_label = "|point-to-plane| to the opposite rotor half [m]";
+  tv.cell_m = 0.1;
+  tv.colormap = Colormap::kTurbo;
+  tv.value_min = -0.01, tv.value_max = 0.01;
+  tv.colorbar_label = "first rotor half ahead of the second [m], cell mean";
   PlotOptions po;
   po.title = title;
   po.x_label = "base x [m]", po.y_label = "base y [m]";

@@ -102,6 +102,7 @@ bool RotorCalibOptions::Validate(std::string* error) const {
   if (!(max_plane_sigma_m > 0.0)) return Fail(error, "max_plane_sigma_m must be > 0");
   if (!(min_planarity >= 1.0)) return Fail(error, "min_planarity must be >= 1");
   if (!(huber_m > 0.0)) return Fail(error, "huber_m must be > 0");
+  if (!(max_incidence_deg > 0.0 && max_incidence_deg <= 90.0)) return Fail(error, "max_incidence_deg must be in (0, 90]");
   if (max_outer_iterations < 1 || max_solver_iterations < 1) return Fail(error, "iterations must be >= 1");
   if (!(tolerance_m > 0.0 && tolerance_rad > 0.0)) return Fail(error, "tolerances must be > 0");
   if (threads < 1) return Fail(error, "threads must be >= 1");
@@ -120,6 +121,12 @@ std::vector<ResidualPoint> PrepareResidualPoints(const std::vector<RotorPoint>& 
     table[i].sin_theta = std::sin(points[i].theta_rad);
   }
   return table;
+}
+
+Eigen::Vector3d RayDirectionMotor(const ResidualPoint& p) {
+  const Eigen::Vector3d u(p.u[0], p.u[1], p.u[2]);
+  return Eigen::Vector3d(p.cos_theta * u.x() - p.sin_theta * u.y(), p.sin_theta * u.x() + p.cos_theta * u.y(), u.z())
+      .normalized();
 }
 
 void MotorFramePoints(const std::vector<ResidualPoint>& table, const double* t0, const RotorCalibParams& d,
@@ -144,13 +151,14 @@ std::vector<int> RotorSectors(const std::vector<RotorPoint>& points, const Rotor
   return sector;
 }
 
-std::vector<PlaneAssociation> AssociatePlanes(const std::vector<float>& xyz, const std::vector<int>& sector,
-                                              const RotorCalibOptions& o) {
+std::vector<PlaneAssociation> AssociatePlanes(const std::vector<ResidualPoint>& table, const std::vector<float>& xyz,
+                                              const std::vector<int>& sector, const RotorCalibOptions& o) {
   std::vector<KdTree3f> trees;
   std::vector<std::vector<int>> members;
   BuildSectorTrees(xyz, sector, o.sectors, &trees, &members);
   const std::size_t n = sector.size(), stride = std::max<std::size_t>(1, n / std::size_t(o.max_queries));
   const float max_sq = float(o.neighbour_radius_m * o.neighbour_radius_m);
+  const double min_cos = std::cos(o.max_incidence_deg * M_PI / 180.0);
   std::vector<PlaneAssociation> out;
   int idx[KdTree3f::kMaxK], global[KdTree3f::kMaxK];
   float sq[KdTree3f::kMaxK];
@@ -162,6 +170,7 @@ std::vector<PlaneAssociation> AssociatePlanes(const std::vector<float>& xyz, con
     Eigen::Vector3d normal, eig;
     FitPlane(xyz, global, o.neighbours, &normal, &eig);
     if (!(eig[0] <= o.max_plane_sigma_m * o.max_plane_sigma_m && eig[1] >= o.min_planarity * eig[0])) continue;
+    if (std::abs(normal.dot(RayDirectionMotor(table[q]))) < min_cos) continue;
     out.push_back({int(q), std::vector<int>(global, global + o.neighbours), normal});
   }
   return out;
@@ -190,7 +199,7 @@ Status CalibrateRotor(const std::vector<RotorPoint>& points, const RigCalib& cal
   RotorCalibParams params;
   for (int it = 0; it < options.max_outer_iterations && !result->converged; ++it) {
     MotorFramePoints(table, t0, params, &xyz);
-    associations = AssociatePlanes(xyz, RotorSectors(points, params, options.sectors), options);
+    associations = AssociatePlanes(table, xyz, RotorSectors(points, params, options.sectors), options);
     if (associations.empty()) return Status::Error("calibration: no flat neighbourhood seen from opposite rotor "
                                                    "angles (too few points, or no planes in the scene)");
     CalibIteration step;

@@ -34,6 +34,9 @@ struct RotorCalibOptions {
   double neighbour_radius_m = 0.4;   ///< neighbours farther than this from the query are not used [m]
   double max_plane_sigma_m = 0.04;   ///< the plane's thickness (sqrt of its smallest eigenvalue) at most [m]
   double min_planarity = 6.0;        ///< middle / smallest eigenvalue at least (a plane, not a line or a blob)
+  /// Queries whose ray meets the plane more obliquely than this are not used [deg]: grazing returns are the
+  /// noisiest and the most biased (beam footprint, mixed edge points).
+  double max_incidence_deg = 75.0;
   double huber_m = 0.05;             ///< Huber loss scale of the point-to-plane residual [m]
   int max_outer_iterations = 8;      ///< re-associations
   int max_solver_iterations = 25;    ///< Ceres iterations per association
@@ -80,6 +83,10 @@ struct RotorCalibResult {
 /// The residual table of `points` under the input calibration (rotor_residual.hpp).
 std::vector<ResidualPoint> PrepareResidualPoints(const std::vector<RotorPoint>& points, const RigCalib& calib);
 
+/// The unit direction of a point's ray in the motor frame under the input rotation (corrections are far below a
+/// degree; used for incidence tests and to orient normals towards the sensor).
+Eigen::Vector3d RayDirectionMotor(const ResidualPoint& p);
+
 /// Every point in the motor frame under `correction` (3 floats a point).
 void MotorFramePoints(const std::vector<ResidualPoint>& table, const double* t0, const RotorCalibParams& correction,
                       std::vector<float>* xyz);
@@ -87,9 +94,9 @@ void MotorFramePoints(const std::vector<ResidualPoint>& table, const double* t0,
 /// Sector of each point (rotor angle under `correction`, wrapped into [0, 2 pi)).
 std::vector<int> RotorSectors(const std::vector<RotorPoint>& points, const RotorCalibParams& correction, int sectors);
 
-/// The query / plane associations described in the file comment.
-std::vector<PlaneAssociation> AssociatePlanes(const std::vector<float>& xyz, const std::vector<int>& sector,
-                                              const RotorCalibOptions& options);
+/// The query / plane associations described in the file comment (`table` for the queries' ray directions).
+std::vector<PlaneAssociation> AssociatePlanes(const std::vector<ResidualPoint>& table, const std::vector<float>& xyz,
+                                              const std::vector<int>& sector, const RotorCalibOptions& options);
 
 /// Signed residuals of `associations` under `correction` (normals as stored) [m].
 std::vector<double> PlaneResiduals(const std::vector<ResidualPoint>& table, const double* t0,

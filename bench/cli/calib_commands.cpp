@@ -62,6 +62,8 @@ void AddOptions(OptionParser* p) {
   p->Add("neighbours", std::to_string(c.neighbours), "-", "neighbours that define a query's plane (3..32)");
   p->Add("radius", std::to_string(c.neighbour_radius_m), "m", "neighbours farther than this are not used");
   p->Add("sectors", std::to_string(c.sectors), "-", "rotor-angle sectors (even); queries meet the opposite one");
+  p->Add("max-incidence", std::to_string(c.max_incidence_deg), "deg",
+         "queries whose ray meets their plane more obliquely than this are not used (grazing returns)");
   p->Add("huber", std::to_string(c.huber_m), "m", "Huber loss scale of the point-to-plane residual");
   p->Add("iterations", std::to_string(c.max_outer_iterations), "-", "re-associations at most");
   p->Add("threads", std::to_string(c.threads), "-", "Ceres threads");
@@ -76,6 +78,7 @@ Status ReadOptions(const OptionParser& p, RotorPointOptions* po, RotorCalibOptio
                           p.GetInt("max-points", &max_points), p.GetInt("queries", &queries),
                           p.GetInt("neighbours", &neighbours), p.GetDouble("radius", &co->neighbour_radius_m),
                           p.GetInt("sectors", &sectors), p.GetDouble("huber", &co->huber_m),
+                          p.GetDouble("max-incidence", &co->max_incidence_deg),
                           p.GetInt("iterations", &iterations), p.GetInt("threads", &threads),
                           ParseEstimate(p.Get("estimate"), &co->estimate)})
     if (!s) return s;

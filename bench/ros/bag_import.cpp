@@ -82,22 +82,17 @@ class Converter {
       : bag_(std::move(bag)), calib_(calib), epoch_ns_(epoch_ns), writer_(writer) {}
 
   Status Convert(Stream stream, const BagMessage& m, BagImportSummary* sum) {
-    Status s;
     switch (stream) {
       case Stream::kLidar:
-        s = Lidar(m, sum);
-        break;
+        return Lidar(m, sum);
       case Stream::kImu:
-        s = Imu(m, sum);
-        break;
+        return Imu(m, sum);
       case Stream::kImage:
-        s = Image(m, sum);
-        break;
+        return Image(m, sum);
       case Stream::kEncoder:
-        s = Encoder(m, sum);
-        break;
+        return Encoder(m, sum);
     }
-    return s;
+    return Status::Ok();
   }
 
  private:

@@ -23,12 +23,13 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-/// Typical realism, the box room, handheld at rest for 4 s at (0.5, -0.5) while the rotor turns, then walking.
+/// Typical realism, the box room, handheld at rest for 4 s at (0.5, -0.5) while the rotor turns, then walking
+/// (so that the static-span detector has an end to find).
 sim::SimConfig StaticStart(uint64_t seed) {
   sim::SimConfig config = sim::PresetSimConfig(sim::Realism::kTypical);
   config.seed = seed;
   config.scene = "box_room";
-  config.duration_s = 4.5;
+  config.duration_s = 5.5;
   config.camera.enabled = false;
   config.carrier_from_scene = false;
   config.carrier.type = sim::CarrierType::kHandheld;
@@ -38,15 +39,16 @@ sim::SimConfig StaticStart(uint64_t seed) {
 
 void CalibrateSeed(uint64_t seed) {
   const sim::SimConfig config = StaticStart(seed);
-  const std::string dir = test_util::SimulateFresh(config, "rotolidar_calibration_scenario");
+  const std::string dir =
+      test_util::SimulateFresh(config, "rotolidar_calibration_scenario_" + std::to_string(seed));
   ASSERT_FALSE(::testing::Test::HasFailure());
   Recording rec;
   ASSERT_TRUE(LoadRecording(dir + "/recording", &rec).ok);
   TimeSpan span;
   const Status detected = DetectStaticSpan(rec.imu, StaticSpanOptions{}, &span);
   ASSERT_TRUE(detected.ok) << detected.message;
-  EXPECT_GT(span.t_end_s, 3.0);  // still for 4 s: the detector keeps most of it
-  EXPECT_LT(span.t_end_s, 4.3);
+  EXPECT_GT(span.t_end_s, 3.5);  // still for 4 s; the walk starts slowly (a 2 s kernel) and is seen within 0.5 s
+  EXPECT_LE(span.t_end_s, 4.3);
   std::vector<RotorPoint> points;
   ASSERT_TRUE(LoadRotorPoints(rec, rec.calib, span, RotorPointOptions{}, &points).ok);
   RotorCalibResult result;
@@ -69,6 +71,9 @@ void CalibrateSeed(uint64_t seed) {
 
 TEST(CalibrationScenario, RecoversLeverArmAndTiltSeed1) { CalibrateSeed(1); }
 TEST(CalibrationScenario, RecoversLeverArmAndTiltSeed2) { CalibrateSeed(2); }
+TEST(CalibrationScenario, RecoversLeverArmAndTiltSeed3) { CalibrateSeed(3); }
+TEST(CalibrationScenario, RecoversLeverArmAndTiltSeed4) { CalibrateSeed(4); }
+TEST(CalibrationScenario, RecoversLeverArmAndTiltSeed5) { CalibrateSeed(5); }
 
 }  // namespace
 }  // namespace rotolidar::bench

@@ -116,9 +116,9 @@ Status WriteCrispnessPicture(const std::string& path, const std::string& title, 
   std::sort(all.begin(), all.end());
   *median_abs_m = all.empty() ? 0.0 : all[all.size() / 2];
   TopViewOptions tv;
-  tv.cell_m = 0.1;
+  tv.cell_m = 0.15;
   tv.colormap = Colormap::kTurbo;
-  tv.value_min = -0.01, tv.value_max = 0.01;
+  tv.value_min = -0.006, tv.value_max = 0.006;
   tv.colorbar_label = "first rotor half ahead of the second [m], cell mean";
   PlotOptions po;
   po.title = title;

@@ -45,9 +45,9 @@ std::string LiveStatus::Line() const {
   char line[400];
   std::snprintf(line, sizeof(line),
                 "live %6.1f s | rig t %7.2f s | lidar %4.0f/s imu %4.0f/s enc %4.0f/s | inbox %zu | lost: net %zu "
-                "rig %zu kernel %zu queue %zu bad %zu | scans %zu (%.1f/s, %.0f ms) dropped %zu | ATE n/a%s%s",
+                "rig %zu kernel %zu queue %zu bad %zu | scans %zu (%.1f/s, %.0f ms) dropped %zu | rss %.0f MB | ATE n/a%s%s",
                 wall_s, rig_time_s, data_rate_hz, imu_rate_hz, encoder_rate_hz, queue_depth, packets_lost, rig_lost,
-                kernel_dropped, queue_dropped, malformed, scans, scans_per_s, last_scan_ms, scans_dropped,
+                kernel_dropped, queue_dropped, malformed, scans, scans_per_s, last_scan_ms, scans_dropped, peak_rss_mb,
                 degenerate_axes.empty() ? "" : " | DEGENERATE: ", degenerate_axes.c_str());
   return line;
 }
@@ -118,6 +118,7 @@ Status WriteLiveSummary(const std::string& path, const LiveStatus& s, const Live
                {"kernel_dropped_datagrams", s.kernel_dropped}, {"queue_dropped", s.queue_dropped},
                {"malformed_datagrams", s.malformed}, {"late_samples", s.late_samples}};
   j["hold_timeouts"] = s.hold_timeouts;
+  j["peak_rss_mb"] = s.peak_rss_mb;
   j["scans"] = {{"processed", s.scans}, {"dropped", s.scans_dropped}};
   j["config"] = {{"bind_address", c.bind_address}, {"data_port", c.data_port}, {"position_port", c.position_port},
                  {"rig_port", c.rig_port}, {"rcvbuf_bytes", c.rcvbuf_bytes}, {"hold_s", c.merge.hold_s},

@@ -1,6 +1,8 @@
 // The live session's threads (contract in live_session.hpp).
 #include "bench/live/live_session.hpp"
 
+#include <sys/resource.h>
+
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -187,6 +189,8 @@ LiveStatus LiveSession::Impl::Current() const {
   st.malformed = data.rejected() + position.rejected() + rig.malformed();
   st.late_samples = merger.counts().late_samples;
   st.hold_timeouts = merger.counts().hold_timeouts;
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) == 0) st.peak_rss_mb = usage.ru_maxrss / 1024.0;  // Linux: KiB
   return st;
 }
 

@@ -52,6 +52,7 @@ struct LiveStatus {
   std::size_t late_samples = 0, hold_timeouts = 0;
   std::size_t scans = 0, scans_dropped = 0, pending_scans = 0;
   double scans_per_s = 0.0, last_scan_ms = 0.0;
+  double peak_rss_mb = 0.0;        ///< the process's peak resident memory so far [MiB] (getrusage)
   std::string degenerate_axes;     ///< of the last scan, e.g. "tx ry" (empty when well observed)
   std::string Line() const;        ///< one status line for a terminal
 };

@@ -57,9 +57,10 @@ LiveRun RunLive(const Recording& rec, double rate, double drop, const std::strin
   run.status = session.status();
   run.result = session.result();
   std::printf("live %.0fx, drop %.0f %%: %zu scans, %zu dropped, %zu packets lost (%zu not sent), %zu kernel drops, "
-              "%zu hold timeouts, %zu late samples\n",
+              "%zu hold timeouts, %zu late samples, process peak RSS %.0f MB\n",
               rate, 100 * drop, run.status.scans, run.status.scans_dropped, run.status.packets_lost,
-              run.sent.data_dropped, run.status.kernel_dropped, run.status.hold_timeouts, run.status.late_samples);
+              run.sent.data_dropped, run.status.kernel_dropped, run.status.hold_timeouts, run.status.late_samples,
+              run.status.peak_rss_mb);
   return run;
 }
 

@@ -2,7 +2,11 @@
 // intersected with its six walls and a tilted panel), points taken with the true T_rotor_lidar and given the
 // believed one. Also the residual's geometry against RigCalib, the static-span detector and the span parser.
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
+
+#include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
 
@@ -125,6 +129,38 @@ TEST(RotorCalib, RecoversLeverAndTiltInASyntheticRoom) {
   }
   for (int p : {kLeverZ, kTiltZ, kEncoderZero})
     EXPECT_FALSE(result.observability[p].observable) << CalibParamName(p) << " " << result.observability[p].independence;
+}
+
+TEST(CalibOutput, WritesJsonAndPictures) {
+  const RigCalib truth = sim::DefaultRigCalib();
+  CalibrationReport rep;
+  rep.input = Believed(truth);
+  const std::vector<RotorPoint> points = SyntheticRoom(truth, 0.0, 0.005);
+  rep.options.max_queries = 3000;
+  ASSERT_TRUE(CalibrateRotor(points, rep.input, rep.options, &rep.result).ok);
+  rep.output = ApplyCorrection(rep.input, rep.result.correction);
+  rep.has_truth = true;
+  rep.truth_after = CompareCalib(rep.output, truth);
+  const std::string dir = (std::filesystem::temp_directory_path() / "rotolidar_calib_output_test").string();
+  std::filesystem::create_directories(dir);
+  ASSERT_TRUE(WriteCrispnessPicture(dir + "/before.svg", "before", points, rep.input, rep.options, RotorCalibParams{},
+                                    &rep.median_abs_before_m).ok);
+  ASSERT_TRUE(WriteCrispnessPicture(dir + "/after.svg", "after", points, rep.input, rep.options,
+                                    rep.result.correction, &rep.median_abs_after_m).ok);
+  EXPECT_LT(rep.median_abs_after_m, rep.median_abs_before_m);  // the map is crisper
+  ASSERT_TRUE(WriteCalibrationJson(dir + "/calibration.json", rep).ok);
+  std::ifstream f(dir + "/calibration.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_TRUE(j.at("converged").get<bool>());
+  EXPECT_TRUE(j.at("parameters").at("lever_x_m").at("observable").get<bool>());
+  EXPECT_FALSE(j.at("parameters").at("encoder_zero_rad").at("observable").get<bool>());
+  EXPECT_NEAR(j.at("change").at("tilt_deg")[0].get<double>(), -0.2, 0.01);
+  EXPECT_EQ(j.at("hessian").size(), 7u);
+  EXPECT_TRUE(j.contains("truth_error"));
+  const std::uintmax_t svg_bytes = std::filesystem::file_size(dir + "/after.svg");
+  EXPECT_GT(svg_bytes, 1000u);
+  std::filesystem::remove_all(dir);
+  EXPECT_FALSE(WriteCalibrationJson("/nonexistent_dir/calibration.json", rep).ok);
 }
 
 TEST(RotorCalib, RejectsBadOptions) {

@@ -103,6 +103,7 @@ void Visit(V& v, SimConfig& c) {
   // Written only when enabled: a run without rig errors keeps its sim_config.yaml as before.
   v("rig_errors",
     yaml::EmitIf(c.rig_errors.Enabled(), Module(&c.rig_errors, ParseRigErrorConfig, EmitRigErrorConfig)));
+  v("faults", yaml::EmitIf(c.faults.Enabled(), Module(&c.faults, ParseFaultConfig, EmitFaultConfig)));
 }
 
 bool ClockConfig::Validate(std::string* error) const {
@@ -175,6 +176,7 @@ bool SimConfig::Validate(std::string* error) const {
   if (!clocks.Validate(&why)) return fail(why);
   if (!camera.Validate(&why)) return fail(why);
   if (!rig_errors.Validate(&why)) return fail(why);
+  if (!faults.Validate(&why)) return fail(why);
   if (lidar.return_mode != return_mode) return fail("lidar.return_mode must equal return_mode");
   // The physics loop samples the IMU at step boundaries: its period must be a whole number of steps.
   const double steps_per_imu = 1.0 / (imu.noise.rate_hz * rig_model.physics.timestep_s);

@@ -11,6 +11,7 @@
 
 #include "core/io/recording.hpp"
 #include "sim/camera/camera_stream.hpp"
+#include "sim/faults/faults.hpp"
 #include "sim/lidar/position_source.hpp"
 #include "sim/rig/rig_errors.hpp"
 #include "sim/rig/rig_physics.hpp"
@@ -127,7 +128,7 @@ class LidarStream {
         truth_(truth),
         echo_separation_m_(world.lidar.echo_separation_m) {}
 
-  Status FireCovered(const RigTrace& trace, RecordingWriter* writer, SimSummary* summary) {
+  Status FireCovered(const RigTrace& trace, FaultyWriter* writer, SimSummary* summary) {
     const int per_packet = encoder_.SequencesPerPacket();
     const auto T_world_lidar_at = [&](Seconds t) {
       const RigTraceSample s = trace.At(t);
@@ -180,7 +181,7 @@ class LidarStream {
     }
     return Status::Ok();
   }
-  Status WritePositionsUntil(Seconds t_s, RecordingWriter* writer) {
+  Status WritePositionsUntil(Seconds t_s, FaultyWriter* writer) {
     position_packets_.clear();
     positions_.EmitUntil(t_s - Vlp16PositionConfig{}.transmit_latency_s, &position_packets_);
     for (LidarPacket& p : position_packets_) {
@@ -246,7 +247,7 @@ Status MakeCameraStream(const SimConfig& config, SimWorld& world, const RigCalib
 /// The physics loop: steps the rig at its timestep; samples the IMU every whole number of steps (plus the rotor's
 /// vibration when rig_errors configures it); streams the encoder samples the drive produced; feeds the trace that
 /// the LiDAR and truth streams read behind it. `calib` is the TRUE calibration (the rig as it is).
-Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& calib, RecordingWriter* writer,
+Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& calib, FaultyWriter* writer,
                   TruthWriter* truth_writer, SimSummary* summary, const ProgressFn& progress,
                   const std::atomic<bool>* stop) {
   RigState state(*world.rig);
@@ -298,7 +299,7 @@ Status RunPhysics(const SimConfig& config, SimWorld& world, const RigCalib& cali
     }
     if (Status s = truth.WriteCovered(trace); !s) return s;
     if (Status s = lidar.FireCovered(trace, writer, summary); !s) return s;
-    if (Status s = camera ? camera->RenderCovered(trace, config.duration_s, writer, truth_writer) : Status::Ok(); !s)
+    if (Status s = camera ? camera->RenderCovered(trace, config.duration_s, writer->inner(), truth_writer) : Status::Ok(); !s)
       return s;
     trace.DropBefore(std::min({lidar.NextFiringTime(), truth.NextTime(),
                                camera ? camera->NextNeededTime() : lidar.NextFiringTime()}));
@@ -357,9 +358,12 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
     if (Status s = WriteRigErrorTruth(recording_dir, config.rig_errors, calib_errors, calib); !s) return s;
   if (Status s = WriteClockTruth(recording_dir, config.TrueClocks()); !s) return s;
   if (Status s = WriteResolvedConfig(config, world, recording_dir); !s) return s;
-  if (Status s = RunPhysics(config, world, calib, &writer, &truth, summary, progress, stop); !s) return s;
-  if (Status s = writer.Close(); !s) return s;
+  FaultyWriter faulty(config.faults, config.seed, &writer);  // passes everything through when no fault is on
+  if (Status s = RunPhysics(config, world, calib, &faulty, &truth, summary, progress, stop); !s) return s;
+  if (Status s = faulty.Close(); !s) return s;
   if (Status s = truth.Close(); !s) return s;
+  if (config.faults.Enabled())
+    if (Status s = WriteFaultTruth(recording_dir, faulty.truth()); !s) return s;
   if (!summary->stopped) summary->sim_duration_s = config.duration_s;
   summary->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (progress) progress(1.0);

@@ -21,7 +21,10 @@ bool WindowMean(const std::vector<ImuSample>& imu, std::size_t* cursor, double t
   std::size_t n = 0, i = *cursor;
   while (i < imu.size() && imu[i].t_s < t0) ++i;
   *cursor = i;
-  for (; i < imu.size() && imu[i].t_s < t0 + window_s; ++i, ++n) *gyro += imu[i].gyro_radps, *accel += imu[i].accel_mps2;
+  for (; i < imu.size() && imu[i].t_s < t0 + window_s; ++i, ++n) {
+    *gyro += imu[i].gyro_radps;
+    *accel += imu[i].accel_mps2;
+  }
   if (n == 0) return false;
   *gyro /= double(n), *accel /= double(n);
   return true;
@@ -58,7 +61,8 @@ Status DetectStaticSpan(const std::vector<ImuSample>& imu, const StaticSpanOptio
   double end = t0 + options.window_s;
   for (double t = end; t + options.window_s <= imu.back().t_s; t += options.window_s) {
     if (!WindowMean(imu, &cursor, t, options.window_s, &gyro, &accel)) break;  // a gap ends the span
-    if ((gyro - gyro0).norm() > options.gyro_threshold_radps || (accel - accel0).norm() > options.accel_threshold_mps2)
+    if ((gyro - gyro0).norm() > options.gyro_threshold_radps ||
+        (accel - accel0).norm() > options.accel_threshold_mps2)
       break;
     end = t + options.window_s;
   }
@@ -106,7 +110,9 @@ Status LoadRotorPoints(const Recording& rec, const RigCalib& calib, const TimeSp
       const Eigen::Vector3f v(p.x_m, p.y_m, p.z_m);
       const double range = v.norm();
       if (!(range >= options.min_range_m && range <= options.max_range_m)) continue;
-      all.push_back({v, rotor.AngleAt(p.t_s), p.t_s});
+      constexpr double kHalfSpanS = 0.02;
+      const double omega = (rotor.AngleAt(p.t_s + kHalfSpanS) - rotor.AngleAt(p.t_s - kHalfSpanS)) / (2 * kHalfSpanS);
+      all.push_back({v, rotor.AngleAt(p.t_s), p.t_s, omega});
     }
   }
   const std::size_t stride = all.size() / options.max_points + 1;

@@ -9,7 +9,8 @@
 //
 // Points: the VLP-16 packets decoded with the recording's intrinsics and clock offset (as the core decodes
 // them), each point's rotor angle from the encoder interpolated at its firing time (RotorAngleInterpolator, the
-// input calibration's encoder zero), kept when the encoder brackets it and its range lies in [min, max].
+// input calibration's encoder zero), kept when the encoder brackets it and its range lies in [min, max]; the rotor
+// speed from a +-20 ms central difference (one encoder interval's rate is dominated by the count quantisation).
 #include <string>
 #include <vector>
 
@@ -49,6 +50,7 @@ struct RotorPoint {
   Eigen::Vector3f p_lidar = Eigen::Vector3f::Zero();  ///< [m]
   double theta_rad = 0.0;                              ///< rotor angle at the firing time [rad]
   double t_s = 0.0;                                    ///< firing time on the rig clock [s]
+  double omega_radps = 0.0;  ///< rotor speed there: the encoder angle's central difference over +-20 ms [rad/s]
 };
 
 struct RotorPointOptions {

@@ -18,12 +18,12 @@ using Matrix7 = Eigen::Matrix<double, kCalibParamCount, kCalibParamCount>;
 /// The residual of `a` with its normal refitted to the neighbours under `d` (sign of the stored normal).
 double RefittedResidual(const std::vector<ResidualPoint>& table, const double* t0, const PlaneAssociation& a,
                         const RotorCalibParams& d) {
-  const double cz = std::cos(d.encoder_zero_rad), sz = std::sin(d.encoder_zero_rad);
   Eigen::Vector3d q, mean = Eigen::Vector3d::Zero();
-  MotorPoint(table[a.query], t0, d.lever_m.data(), d.tilt_rad.data(), cz, sz, q.data());
+  MotorPoint(table[a.query], t0, d.lever_m.data(), d.tilt_rad.data(), d.encoder_zero_rad, d.time_offset_s, q.data());
   std::vector<Eigen::Vector3d> p(a.neighbours.size());
   for (std::size_t j = 0; j < p.size(); ++j) {
-    MotorPoint(table[a.neighbours[j]], t0, d.lever_m.data(), d.tilt_rad.data(), cz, sz, p[j].data());
+    MotorPoint(table[a.neighbours[j]], t0, d.lever_m.data(), d.tilt_rad.data(), d.encoder_zero_rad, d.time_offset_s,
+               p[j].data());
     mean += p[j];
   }
   mean /= double(p.size());
@@ -34,11 +34,16 @@ double RefittedResidual(const std::vector<ResidualPoint>& table, const double* t
   return n.dot(q - mean);
 }
 
-/// Central-difference step of every parameter [m or rad]: residuals move ~1e-5 m, far above double rounding.
-constexpr double kStep = 1e-4;
+/// Central-difference step of each parameter [m, rad or s]: residuals move ~1e-5 m, far above double rounding
+/// (the time offset's 40 us turns the rotor by 1e-4 rad at the default 2.6 rad/s).
+double StepOf(int param) { return param == kTimeOffset ? 4e-5 : 1e-4; }
 /// A parameter is observable when its sigma is below these (the size of the errors the calibration corrects):
 /// the gauge directions come out many orders of magnitude larger (sigmas of 1e3..1e8 m or rad on the twin).
-constexpr double kObservableSigmaM = 0.01, kObservableSigmaRad = 0.01;
+constexpr double kObservableSigmaM = 0.01, kObservableSigmaRad = 0.01, kObservableSigmaS = 1e-3;
+
+double ObservableSigma(int param) {
+  return param < kTiltX ? kObservableSigmaM : param == kTimeOffset ? kObservableSigmaS : kObservableSigmaRad;
+}
 
 /// Conditional information of `p` given the estimated parameters other than p (Schur complement) [1/unit^2].
 double ConditionalInformation(const Matrix7& H, int p, const std::array<bool, kCalibParamCount>& estimate) {
@@ -70,9 +75,10 @@ void ComputeObservability(const std::vector<ResidualPoint>& table, const double*
     Eigen::Matrix<double, kCalibParamCount, 1> J;
     for (int p = 0; p < kCalibParamCount; ++p) {
       RotorCalibParams plus = x, minus = x;
-      plus.Set(p, x.Get(p) + kStep);
-      minus.Set(p, x.Get(p) - kStep);
-      J[p] = (RefittedResidual(table, t0, a, plus) - RefittedResidual(table, t0, a, minus)) / (2.0 * kStep);
+      plus.Set(p, x.Get(p) + StepOf(p));
+      minus.Set(p, x.Get(p) - StepOf(p));
+      J[p] = (RefittedResidual(table, t0, a, plus) - RefittedResidual(table, t0, a, minus)) /
+             (2.0 * StepOf(p));
     }
     H += w * J * J.transpose();
     weighted_sq += w * r * r;
@@ -89,7 +95,7 @@ void ComputeObservability(const std::vector<ResidualPoint>& table, const double*
     const double info = ConditionalInformation(H, p, options.estimate);
     o.independence = H(p, p) > 0.0 ? std::max(0.0, info / H(p, p)) : 0.0;
     o.sigma = info > 0.0 ? std::sqrt(s2 / info) : std::numeric_limits<double>::infinity();
-    o.observable = o.independence > 1e-3 && o.sigma < (p < kTiltX ? kObservableSigmaM : kObservableSigmaRad);
+    o.observable = o.independence > 1e-3 && o.sigma < ObservableSigma(p);
   }
 }
 

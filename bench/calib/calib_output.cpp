@@ -63,10 +63,13 @@ Status WriteCalibrationJson(const std::string& path, const CalibrationReport& re
   j["static_span_detected"] = rep.span_detected;
   j["points"] = rep.points;
   j["input"] = {{"T_rotor_lidar", PoseJson(rep.input.T_rotor_lidar)},
-                {"encoder_zero_rad", rep.input.encoder.zero_offset_rad}};
+                {"encoder_zero_rad", rep.input.encoder.zero_offset_rad},
+                {"lidar_clock_offset_s", rep.input.lidar_clock_offset_s}};
   j["output"] = {{"T_rotor_lidar", PoseJson(rep.output.T_rotor_lidar)},
-                 {"encoder_zero_rad", rep.output.encoder.zero_offset_rad}};
+                 {"encoder_zero_rad", rep.output.encoder.zero_offset_rad},
+                 {"lidar_clock_offset_s", rep.output.lidar_clock_offset_s}};
   j["change"] = ComparisonJson(CompareCalib(rep.output, rep.input));
+  j["change"]["time_offset_s"] = rep.output.lidar_clock_offset_s - rep.input.lidar_clock_offset_s;
   j["parameters"] = ParametersJson(r);
   j["final_cost"] = r.iterations.empty() ? 0.0 : r.iterations.back().final_cost;
   j["initial_cost"] = r.iterations.empty() ? 0.0 : r.iterations.front().initial_cost;
@@ -87,8 +90,9 @@ Status WriteCalibrationJson(const std::string& path, const CalibrationReport& re
   return f ? Status::Ok() : Status::Error(path + ": cannot write");
 }
 
-Status WriteCrispnessPicture(const std::string& path, const std::string& title, const std::vector<RotorPoint>& points,
-                             const RigCalib& calib, const RotorCalibOptions& options,
+Status WriteCrispnessPicture(const std::string& path, const std::string& title,
+                             const std::vector<RotorPoint>& points, const RigCalib& calib,
+                             const RotorCalibOptions& options,
                              const RotorCalibParams& correction, double* median_abs_m) {
   const std::vector<ResidualPoint> table = PrepareResidualPoints(points, calib);
   const Eigen::Vector3d t = calib.T_rotor_lidar.translation();

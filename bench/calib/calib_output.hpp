@@ -39,12 +39,14 @@ struct CalibrationReport {
 /// parameter the observability (ParamObservability). Fails naming the file.
 Status WriteCalibrationJson(const std::string& path, const CalibrationReport& report);
 
-/// The static map under `correction`: a top view (base frame, 0.15 m cells: means of tens of points) of query points (4x the solve's) within
-/// +-0.4 m of the base origin's height, coloured by the cell mean of the signed distance between the two rotor
-/// halves' views of the surface (+-6 mm scale; 0 = crisp, a calibration error paints walls one colour).
+/// The static map under `correction`: a top view (base frame, 0.15 m cells: means of tens of points) of query
+/// points (4x the solve's) within +-0.4 m of the base origin's height, coloured by the cell mean of the signed
+/// distance between the two rotor halves' views of the surface (+-6 mm scale; 0 = crisp, a calibration error
+/// paints walls one colour).
 /// *median_abs_m: the median |point-to-plane| over all those queries. Fails naming the file.
-Status WriteCrispnessPicture(const std::string& path, const std::string& title, const std::vector<RotorPoint>& points,
-                             const RigCalib& calib, const RotorCalibOptions& options,
-                             const RotorCalibParams& correction, double* median_abs_m);
+Status WriteCrispnessPicture(const std::string& path, const std::string& title,
+                             const std::vector<RotorPoint>& points, const RigCalib& calib,
+                             const RotorCalibOptions& options, const RotorCalibParams& correction,
+                             double* median_abs_m);
 
 }  // namespace rotolidar::bench

@@ -60,13 +60,14 @@ ceres::Solver::Summary Solve(const std::vector<ResidualPoint>& table, const doub
   po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(po);
   ceres::HuberLoss loss(options.huber_m);
-  double* blocks[3] = {params->lever_m.data(), params->tilt_rad.data(), &params->encoder_zero_rad};
+  double* blocks[4] = {params->lever_m.data(), params->tilt_rad.data(), &params->encoder_zero_rad,
+                       &params->time_offset_s};
   for (const PlaneAssociation& a : associations)
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotorPlaneCost, 1, 3, 3, 1>(
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RotorPlaneCost, 1, 3, 3, 1, 1>(
                                  new RotorPlaneCost(&table, &a, t0)),
-                             &loss, blocks[0], blocks[1], blocks[2]);
-  const int sizes[3] = {3, 3, 1};
-  for (int b = 0, first = 0; b < 3; first += sizes[b], ++b) {
+                             &loss, blocks[0], blocks[1], blocks[2], blocks[3]);
+  const int sizes[4] = {3, 3, 1, 1};
+  for (int b = 0, first = 0; b < 4; first += sizes[b], ++b) {
     std::vector<int> held;
     for (int k = 0; k < sizes[b]; ++k)
       if (!options.estimate[first + k]) held.push_back(k);
@@ -83,13 +84,21 @@ ceres::Solver::Summary Solve(const std::vector<ResidualPoint>& table, const doub
   return summary;
 }
 
-/// Largest change of a lever component [m] and of an angle [rad] between two estimates.
-void Change(const RotorCalibParams& a, const RotorCalibParams& b, double* dm, double* drad) {
+/// Largest change of a lever component [m] and of an angle [rad] between two estimates; a time offset counts as
+/// the angle it turns the rotor by at `omega_radps`.
+void Change(const RotorCalibParams& a, const RotorCalibParams& b, double omega_radps, double* dm, double* drad) {
   *dm = *drad = 0.0;
   for (int p = 0; p < kCalibParamCount; ++p) {
-    const double d = std::abs(a.Get(p) - b.Get(p));
+    const double d = std::abs(a.Get(p) - b.Get(p)) * (p == kTimeOffset ? omega_radps : 1.0);
     (p < kTiltX ? *dm : *drad) = std::max(p < kTiltX ? *dm : *drad, d);
   }
+}
+
+/// Mean |rotor speed| over the points [rad/s].
+double MeanSpeed(const std::vector<RotorPoint>& points) {
+  double sum = 0.0;
+  for (const RotorPoint& p : points) sum += std::abs(p.omega_radps);
+  return points.empty() ? 0.0 : sum / double(points.size());
 }
 
 }  // namespace
@@ -102,7 +111,8 @@ bool RotorCalibOptions::Validate(std::string* error) const {
   if (!(max_plane_sigma_m > 0.0)) return Fail(error, "max_plane_sigma_m must be > 0");
   if (!(min_planarity >= 1.0)) return Fail(error, "min_planarity must be >= 1");
   if (!(huber_m > 0.0)) return Fail(error, "huber_m must be > 0");
-  if (!(max_incidence_deg > 0.0 && max_incidence_deg <= 90.0)) return Fail(error, "max_incidence_deg must be in (0, 90]");
+  if (!(max_incidence_deg > 0.0 && max_incidence_deg <= 90.0))
+    return Fail(error, "max_incidence_deg must be in (0, 90]");
   if (max_outer_iterations < 1 || max_solver_iterations < 1) return Fail(error, "iterations must be >= 1");
   if (!(tolerance_m > 0.0 && tolerance_rad > 0.0)) return Fail(error, "tolerances must be > 0");
   if (threads < 1) return Fail(error, "threads must be >= 1");
@@ -119,6 +129,7 @@ std::vector<ResidualPoint> PrepareResidualPoints(const std::vector<RotorPoint>& 
     for (int k = 0; k < 3; ++k) table[i].u[k] = u[k];
     table[i].cos_theta = std::cos(points[i].theta_rad);
     table[i].sin_theta = std::sin(points[i].theta_rad);
+    table[i].omega_radps = points[i].omega_radps;
   }
   return table;
 }
@@ -132,10 +143,9 @@ Eigen::Vector3d RayDirectionMotor(const ResidualPoint& p) {
 void MotorFramePoints(const std::vector<ResidualPoint>& table, const double* t0, const RotorCalibParams& d,
                       std::vector<float>* xyz) {
   xyz->resize(3 * table.size());
-  const double cz = std::cos(d.encoder_zero_rad), sz = std::sin(d.encoder_zero_rad);
   double out[3];
   for (std::size_t i = 0; i < table.size(); ++i) {
-    MotorPoint(table[i], t0, d.lever_m.data(), d.tilt_rad.data(), cz, sz, out);
+    MotorPoint(table[i], t0, d.lever_m.data(), d.tilt_rad.data(), d.encoder_zero_rad, d.time_offset_s, out);
     for (int k = 0; k < 3; ++k) (*xyz)[3 * i + k] = float(out[k]);
   }
 }
@@ -144,7 +154,8 @@ std::vector<int> RotorSectors(const std::vector<RotorPoint>& points, const Rotor
   std::vector<int> sector(points.size());
   const double width = 2.0 * M_PI / sectors;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    double a = std::fmod(points[i].theta_rad - d.encoder_zero_rad, 2.0 * M_PI);
+    double a = std::fmod(points[i].theta_rad - d.encoder_zero_rad + points[i].omega_radps * d.time_offset_s,
+                         2.0 * M_PI);
     if (a < 0) a += 2.0 * M_PI;
     sector[i] = std::min(sectors - 1, int(a / width));
   }
@@ -181,7 +192,7 @@ std::vector<double> PlaneResiduals(const std::vector<ResidualPoint>& table, cons
   std::vector<double> r(associations.size());
   for (std::size_t i = 0; i < associations.size(); ++i) {
     const RotorPlaneCost cost(&table, &associations[i], t0);
-    cost(d.lever_m.data(), d.tilt_rad.data(), &d.encoder_zero_rad, &r[i]);
+    cost(d.lever_m.data(), d.tilt_rad.data(), &d.encoder_zero_rad, &d.time_offset_s, &r[i]);
   }
   return r;
 }
@@ -197,11 +208,13 @@ Status CalibrateRotor(const std::vector<RotorPoint>& points, const RigCalib& cal
   std::vector<float> xyz;
   std::vector<PlaneAssociation> associations;
   RotorCalibParams params;
+  const double speed = MeanSpeed(points);
   for (int it = 0; it < options.max_outer_iterations && !result->converged; ++it) {
     MotorFramePoints(table, t0, params, &xyz);
     associations = AssociatePlanes(table, xyz, RotorSectors(points, params, options.sectors), options);
-    if (associations.empty()) return Status::Error("calibration: no flat neighbourhood seen from opposite rotor "
-                                                   "angles (too few points, or no planes in the scene)");
+    if (associations.empty())
+      return Status::Error("calibration: no flat neighbourhood seen from opposite rotor angles (too few points, a "
+                           "rotor that turned less than half a revolution in the span, or no planes in the scene)");
     CalibIteration step;
     step.associations = int(associations.size());
     std::vector<double> r = PlaneResiduals(table, t0, associations, params);
@@ -209,13 +222,14 @@ Status CalibrateRotor(const std::vector<RotorPoint>& points, const RigCalib& cal
     step.median_abs_residual_m = Median(r);
     const RotorCalibParams before = params;
     const ceres::Solver::Summary summary = Solve(table, t0, associations, options, &params);
+    if (!summary.IsSolutionUsable()) return Status::Error("calibration: Ceres failed: " + summary.message);
     step.initial_cost = summary.initial_cost, step.final_cost = summary.final_cost;
     step.solver_iterations = int(summary.iterations.size()) - 1;
     step.correction = params;
     result->solver_iterations += step.solver_iterations;
     result->iterations.push_back(step);
     double dm, drad;
-    Change(before, params, &dm, &drad);
+    Change(before, params, speed, &dm, &drad);
     result->converged = it > 0 && dm <= options.tolerance_m && drad <= options.tolerance_rad;
   }
   result->correction = params;

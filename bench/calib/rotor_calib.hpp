@@ -30,7 +30,7 @@ namespace rotolidar::bench {
 struct RotorCalibOptions {
   int sectors = 4;                   ///< rotor-angle sectors (even); queries meet the sector half a turn away
   int max_queries = 20000;           ///< query points, evenly sampled [-]
-  int neighbours = 16;               ///< neighbours that define a query's plane (<= 32)
+  int neighbours = 32;               ///< neighbours that define a query's plane (<= 32)
   double neighbour_radius_m = 0.4;   ///< neighbours farther than this from the query are not used [m]
   double max_plane_sigma_m = 0.04;   ///< the plane's thickness (sqrt of its smallest eigenvalue) at most [m]
   double min_planarity = 6.0;        ///< middle / smallest eigenvalue at least (a plane, not a line or a blob)
@@ -41,11 +41,11 @@ struct RotorCalibOptions {
   int max_outer_iterations = 8;      ///< re-associations
   int max_solver_iterations = 25;    ///< Ceres iterations per association
   double tolerance_m = 2e-5;         ///< converged when no lever component moves more than this [m] ...
-  double tolerance_rad = 2e-5;       ///< ... and no angle more than this [rad] in one outer iteration
+  double tolerance_rad = 2e-5;       ///< ... and no angle (a time offset: times the rotor speed) more than this [rad]
   int threads = 2;
   /// Which parameters (CalibParam order) are estimated; the rest stay at the input calibration. Default: the
   /// lever arm across the rotor axis and the tilt about rotor x and y (what a static stretch observes).
-  std::array<bool, kCalibParamCount> estimate{true, true, false, true, true, false, false};
+  std::array<bool, kCalibParamCount> estimate{true, true, false, true, true, false, false, false};
   bool Validate(std::string* error) const;
 };
 
@@ -61,12 +61,12 @@ struct CalibIteration {
 /// A parameter's observability from the Gauss-Newton Hessian at the estimate (calib_observability.cpp).
 struct ParamObservability {
   bool estimated = false;
-  /// 1-sigma [m or rad] of this parameter if it were estimated together with the estimated ones (its own value
+  /// 1-sigma [m, rad or s] of this parameter if it were estimated together with the estimated ones (its own value
   /// when estimated); infinity where the Hessian gives it no information of its own.
   double sigma = 0.0;
   /// Share of its information not explained by the estimated parameters: 1 = independent, 0 = none of its own.
   double independence = 0.0;
-  bool observable = false;  ///< independence > 1e-3 and sigma below 0.01 m or 0.01 rad
+  bool observable = false;  ///< independence > 1e-3 and sigma below 0.01 m, 0.01 rad or 1 ms
 };
 
 struct RotorCalibResult {

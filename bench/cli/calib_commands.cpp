@@ -42,9 +42,16 @@ Status ParseEstimate(const std::string& text, std::array<bool, kCalibParamCount>
     }
     if (!found)
       return Status::Error("--estimate: unknown parameter '" + item + "' (lever_x, lever_y, lever_z, tilt_x, "
-                           "tilt_y, tilt_z, encoder_zero)");
+                           "tilt_y, tilt_z, encoder_zero, time_offset)");
   }
   return Status::Ok();
+}
+
+/// A default value as the help table shows it (shortest round-trip form: "0.4", not "0.400000").
+std::string Num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
 }
 
 void AddOptions(OptionParser* p) {
@@ -55,24 +62,25 @@ void AddOptions(OptionParser* p) {
   p->Add("out", "runs/calibrate", "-", "output folder: calib.yaml, calibration.json, map_before.svg, map_after.svg");
   p->Add("static-span", "", "s", "A:B, the stretch of rig time where the base stands still; empty = detect it "
                                  "from the IMU (the first seconds without motion)");
-  p->Add("min-range", std::to_string(d.min_range_m), "m", "closer returns are not used");
-  p->Add("max-range", std::to_string(d.max_range_m), "m", "farther returns are not used");
+  p->Add("min-range", Num(d.min_range_m), "m", "closer returns are not used");
+  p->Add("max-range", Num(d.max_range_m), "m", "farther returns are not used");
   p->Add("max-points", std::to_string(d.max_points), "-", "points used at most (evenly thinned)");
   p->Add("queries", std::to_string(c.max_queries), "-", "query points (point-to-plane residuals) at most");
   p->Add("neighbours", std::to_string(c.neighbours), "-", "neighbours that define a query's plane (3..32)");
-  p->Add("radius", std::to_string(c.neighbour_radius_m), "m", "neighbours farther than this are not used");
+  p->Add("radius", Num(c.neighbour_radius_m), "m", "neighbours farther than this are not used");
   p->Add("sectors", std::to_string(c.sectors), "-", "rotor-angle sectors (even); queries meet the opposite one");
-  p->Add("max-incidence", std::to_string(c.max_incidence_deg), "deg",
+  p->Add("max-incidence", Num(c.max_incidence_deg), "deg",
          "queries whose ray meets their plane more obliquely than this are not used (grazing returns)");
-  p->Add("huber", std::to_string(c.huber_m), "m", "Huber loss scale of the point-to-plane residual");
+  p->Add("huber", Num(c.huber_m), "m", "Huber loss scale of the point-to-plane residual");
   p->Add("iterations", std::to_string(c.max_outer_iterations), "-", "re-associations at most");
   p->Add("threads", std::to_string(c.threads), "-", "Ceres threads");
   p->Add("estimate", "lever_x,lever_y,tilt_x,tilt_y", "-",
-         "parameters to estimate (rotor frame): lever_x|y|z, tilt_x|y|z, encoder_zero; a static stretch observes "
-         "only the default four (docs/calibration.md, Observability)");
+         "parameters to estimate (rotor frame): lever_x|y|z, tilt_x|y|z, encoder_zero, time_offset (the LiDAR's "
+         "clock against the encoder's); a static stretch observes only the default four, time_offset also when "
+         "the rotor speed changes (docs/calibration.md, Observability)");
 }
 
-Status ReadOptions(const OptionParser& p, RotorPointOptions* po, RotorCalibOptions* co) {
+Status ReadOptions(const OptionParser& p, RotorPointOptions* po, RotorCalibOptions* co, TimeSpan* span) {
   long max_points = 0, queries = 0, neighbours = 0, sectors = 0, iterations = 0, threads = 0;
   for (const Status& s : {p.GetDouble("min-range", &po->min_range_m), p.GetDouble("max-range", &po->max_range_m),
                           p.GetInt("max-points", &max_points), p.GetInt("queries", &queries),
@@ -84,6 +92,8 @@ Status ReadOptions(const OptionParser& p, RotorPointOptions* po, RotorCalibOptio
     if (!s) return s;
   if (max_points < 1000 || queries < 10 || queries > 10000000)
     return Status::Error("--max-points must be >= 1000 and --queries 10..1e7");
+  if (!p.Get("static-span").empty())
+    if (Status s = ParseTimeSpan(p.Get("static-span"), span); !s) return Status::Error("--static-span: " + s.message);
   po->max_points = std::size_t(max_points);
   co->max_queries = int(queries), co->neighbours = int(neighbours), co->sectors = int(sectors);
   co->max_outer_iterations = int(iterations), co->threads = int(threads);
@@ -92,9 +102,9 @@ Status ReadOptions(const OptionParser& p, RotorPointOptions* po, RotorCalibOptio
   return Status::Ok();
 }
 
-/// The static span: --static-span, else detected from the IMU.
+/// The static span: --static-span (already parsed), else detected from the IMU.
 Status FindSpan(const OptionParser& p, const Recording& rec, CalibrationReport* report) {
-  if (!p.Get("static-span").empty()) return ParseTimeSpan(p.Get("static-span"), &report->span);
+  if (!p.Get("static-span").empty()) return Status::Ok();
   report->span_detected = true;
   const Status s = DetectStaticSpan(rec.imu, StaticSpanOptions{}, &report->span);
   return s ? s : Status::Error(rec.dir + "/imu.csv: " + s.message);
@@ -119,11 +129,11 @@ void PrintResult(const CalibrationReport& rep) {
               rep.median_abs_before_m, rep.median_abs_after_m, r.residual_sigma_m);
   for (int p = 0; p < kCalibParamCount; ++p) {
     const ParamObservability& o = r.observability[p];
-    const bool deg = p >= kTiltX;
+    const bool deg = p >= kTiltX && p != kTimeOffset;
     const double scale = deg ? 180.0 / M_PI : 1e3;
-    std::printf("  %-17s %s change %+9.4f %s, sigma %s, independence %.2e%s\n", CalibParamName(p),
-                o.estimated ? "estimated" : "held     ", scale * r.correction.Get(p), deg ? "deg" : "mm ",
-                std::isfinite(o.sigma) ? (std::to_string(scale * o.sigma) + (deg ? " deg" : " mm")).c_str() : "inf",
+    const char* unit = deg ? "deg" : p == kTimeOffset ? "ms " : "mm ";
+    std::printf("  %-17s %s change %+9.4f %s, sigma %9.3g %s, independence %.2e%s\n", CalibParamName(p),
+                o.estimated ? "estimated" : "held     ", scale * r.correction.Get(p), unit, scale * o.sigma, unit,
                 o.independence, o.observable ? "" : " (unobservable here)");
   }
   if (!rep.has_truth) return;
@@ -159,7 +169,7 @@ int CmdCalibrate(int argc, char** argv) {
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   CalibrationReport rep;
   RotorPointOptions point_options;
-  if (Status s = ReadOptions(p, &point_options, &rep.options); !s) return Usage(s.message);
+  if (Status s = ReadOptions(p, &point_options, &rep.options, &rep.span); !s) return Usage(s.message);
   Recording rec;
   if (Status s = LoadRecording(p.Get("RECORDING"), &rec); !s) return Fail(s);
   rep.recording = rec.dir;

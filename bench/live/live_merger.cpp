@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/wire/packet_gaps.hpp"
@@ -23,43 +24,41 @@ bool LiveMergerConfig::Validate(std::string* error) const {
     if (error) *error = "hold_s: " + std::to_string(hold_s) + " s is outside [0, 10]";
     return false;
   }
-  if (!std::isfinite(lidar_clock_offset_s)) {
-    if (error) *error = "lidar_clock_offset_s: not finite";
-    return false;
-  }
-  if (!(delay_window_s > 0.0)) {
-    if (error) *error = "delay_window_s: must be > 0";
+  if (!std::isfinite(lidar_clock_offset_s) || !std::isfinite(min_capture_s)) {
+    if (error) *error = "lidar_clock_offset_s, min_capture_s: not finite";
     return false;
   }
   return true;
 }
 
-LiveMerger::LiveMerger(const LiveMergerConfig& config) : config_(config) {}
+LiveMerger::LiveMerger(const LiveMergerConfig& config)
+    : config_(config), released_packet_s_(config.min_capture_s) {}
 
-void LiveMerger::TrackDelay(const LidarPacket& packet) {
-  if (packet.payload.size() != kVlp16PacketBytes) return;
+bool LiveMerger::DataCaptureTime(const LidarPacket& packet, double* t_s) const {
+  if (packet.udp_port == kVlp16PositionPort || packet.payload.size() != kVlp16PacketBytes) return false;
   Vlp16RawPacket raw;
-  if (!ParseVlp16DataPacket(packet.payload.data(), packet.payload.size(), &raw)) return;
-  // Rig time of the capture if the network added nothing (the twin's rule, core/wire/vlp16.hpp).
-  const double t_sent = raw.timestamp_us * 1e-6 + config_.lidar_clock_offset_s +
-                        Vlp16PacketPeriodUs(raw.return_mode) * 1e-6 - 55.296e-6 + 15 * kVlp16FiringPeriodS +
-                        kVlp16TransmitLatencyS;
-  const double delay = packet.t_capture_s - t_sent;
-  if (!have_delay_ || packet.t_capture_s - window_start_host_s_ > config_.delay_window_s) {
-    previous_min_s_ = have_delay_ ? window_min_s_ : delay;
-    window_min_s_ = delay;
-    window_start_host_s_ = packet.t_capture_s;
+  if (!ParseVlp16DataPacket(packet.payload.data(), packet.payload.size(), &raw)) return false;
+  // The twin's capture rule (core/wire/vlp16.hpp): last firing sequence + 15 firings + transmit latency.
+  int64_t unwrapped_us = raw.timestamp_us;  // microseconds past the hour, unwrapped against the anchor
+  if (have_anchor_) {
+    const double hour_s = 3600.0, ref_s = anchor_rig_s_ - config_.lidar_clock_offset_s;
+    unwrapped_us += static_cast<int64_t>(std::llround(std::floor(ref_s / hour_s) * hour_s * 1e6));
+    if (unwrapped_us * 1e-6 - ref_s > hour_s / 2) unwrapped_us -= 3600000000LL;
+    if (ref_s - unwrapped_us * 1e-6 > hour_s / 2) unwrapped_us += 3600000000LL;
   }
-  window_min_s_ = std::min(window_min_s_, delay);
-  delay_s_ = std::min(window_min_s_, previous_min_s_);
-  have_delay_ = true;
+  *t_s = unwrapped_us * 1e-6 + config_.lidar_clock_offset_s + Vlp16PacketPeriodUs(raw.return_mode) * 1e-6 -
+         55.296e-6 + 15 * kVlp16FiringPeriodS + kVlp16TransmitLatencyS;
+  return true;
 }
 
 void LiveMerger::AddPacket(LidarPacket packet) {
-  TrackDelay(packet);
-  auto at = packets_.end();  // nearly always the end: two sockets interleave by host time
-  while (at != packets_.begin() && std::prev(at)->t_capture_s > packet.t_capture_s) --at;
-  packets_.insert(at, std::move(packet));
+  double rig_s = std::numeric_limits<double>::quiet_NaN();
+  if (DataCaptureTime(packet, &rig_s)) {
+    have_anchor_ = true;
+    anchor_rig_s_ = rig_s;
+    anchor_host_s_ = packet.t_capture_s;
+  }
+  packets_.push_back({std::move(packet), rig_s});
 }
 
 void LiveMerger::AddSample(const RigSample& sample) {
@@ -104,12 +103,14 @@ void LiveMerger::EmitSamplesUpTo(Seconds t_s, std::vector<LiveItem>* out) {
 }
 
 void LiveMerger::EmitPacket(std::vector<LiveItem>* out) {
+  Held held = std::move(packets_.front());
+  packets_.pop_front();
   LiveItem item;
   item.kind = LiveItem::Kind::kPacket;
-  item.packet = std::move(packets_.front());
-  packets_.pop_front();
-  // Rig capture time; never before the previous packet's (the recording is in capture order).
-  item.packet.t_capture_s = std::max(HostToRig(item.packet.t_capture_s), released_packet_s_);
+  item.packet = std::move(held.packet);
+  const double rig_s = std::isnan(held.rig_s) ? HostToRig(item.packet.t_capture_s) : held.rig_s;
+  // Never before the previous packet's (the recording is in capture order), nor before the recording's epoch.
+  item.packet.t_capture_s = std::max(rig_s, released_packet_s_);
   released_packet_s_ = item.packet.t_capture_s;
   EmitSamplesUpTo(item.packet.t_capture_s, out);
   out->push_back(std::move(item));
@@ -117,16 +118,17 @@ void LiveMerger::EmitPacket(std::vector<LiveItem>* out) {
 }
 
 void LiveMerger::Release(double now_host_s, std::vector<LiveItem>* out) {
-  while (!packets_.empty() && have_delay_) {
-    const double host_s = packets_.front().t_capture_s;
-    const bool reached = SamplesReachedS() >= HostToRig(host_s);
-    if (!reached && now_host_s - host_s < config_.hold_s) break;
+  while (!packets_.empty() && have_anchor_) {
+    const Held& front = packets_.front();
+    const double rig_s = std::isnan(front.rig_s) ? HostToRig(front.packet.t_capture_s) : front.rig_s;
+    const bool reached = SamplesReachedS() >= rig_s;
+    if (!reached && now_host_s - front.packet.t_capture_s < config_.hold_s) break;
     if (!reached) ++counts_.hold_timeouts;
     EmitPacket(out);
   }
   // Without packets to wait for, samples go once they are hold_s old.
-  if (packets_.empty() && have_delay_) EmitSamplesUpTo(HostToRig(now_host_s) - config_.hold_s, out);
-  if (!have_delay_ && !samples_.empty() && samples_.rbegin()->first - samples_.begin()->first > 10.0) {
+  if (packets_.empty() && have_anchor_) EmitSamplesUpTo(HostToRig(now_host_s) - config_.hold_s, out);
+  if (!have_anchor_ && !samples_.empty() && samples_.rbegin()->first - samples_.begin()->first > 10.0) {
     EmitSamplesUpTo(samples_.rbegin()->first - 10.0, out);  // no LiDAR yet: keep at most 10 s of samples
   }
 }

@@ -214,6 +214,7 @@ Status LiveSession::Start() {
   if (!impl_->config.Validate(&why)) return Status::Error("live config: " + why);
   if (!impl_->estimator_config.Validate(&why)) return Status::Error("slam config: " + why);
   impl_->config.merge.lidar_clock_offset_s = impl_->calib.lidar_clock_offset_s;
+  impl_->config.merge.min_capture_s = -impl_->calib.epoch_unix_s;
   impl_->merger = LiveMerger(impl_->config.merge);
   if (Status s = impl_->recording.Open(impl_->out_dir + "/recording", impl_->calib); !s) return s;
   impl_->t0_s = SteadyS();

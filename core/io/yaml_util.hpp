@@ -30,19 +30,22 @@ void CheckKeys(const std::string& file, const YAML::Node& node, const std::set<s
 /// Reads `node` (present) into *value; a wrong type names file:line and `field`.
 template <typename T>
 void ReadAs(const std::string& file, const YAML::Node& node, const std::string& field, T* value) {
+  [[maybe_unused]] const T before = *value;  // the field's default
   try {
     *value = node.as<T>();
   } catch (const YAML::Exception&) {
     throw ParseError(Where(file, node) + "field '" + field + "': cannot read value '" +
                      (node.IsScalar() ? node.Scalar() : std::string("<non-scalar>")) + "'");
   }
-  // YAML spells NaN and infinity (.nan, .inf); no field of rotolidar takes them.
-  auto finite = [&](double x) {
-    if (!std::isfinite(x)) throw ParseError(Where(file, node) + "field '" + field + "': not a finite number");
+  // YAML spells NaN and infinity (.nan, .inf). NaN is never a value; an infinity only where the field's default
+  // is that same infinity (it means "never", e.g. a motor profile's stop_at_s).
+  auto finite = [&](double x, bool infinity_allowed) {
+    if (std::isnan(x) || (std::isinf(x) && !infinity_allowed))
+      throw ParseError(Where(file, node) + "field '" + field + "': not a finite number");
   };
-  if constexpr (std::is_floating_point_v<T>) finite(*value);
+  if constexpr (std::is_floating_point_v<T>) finite(*value, std::isinf(before) && before == *value);
   if constexpr (std::is_same_v<T, std::vector<double>>)
-    for (double x : *value) finite(x);
+    for (double x : *value) finite(x, false);
 }
 
 /// Reads node[key] into *value when present (keeps the default otherwise); wrong types name the key and line.

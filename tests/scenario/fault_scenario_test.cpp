@@ -85,7 +85,9 @@ FaultRun SimulateAndRun(const std::string& name, const sim::FaultConfig& faults,
   FaultRun r;
   if (::testing::Test::HasFailure()) return r;
   const std::string rec = dir + "/recording";
-  if (faults.Enabled()) EXPECT_TRUE(sim::ReadFaultTruth(rec, &r.injected).ok);
+  if (faults.Enabled()) {
+    EXPECT_TRUE(sim::ReadFaultTruth(rec, &r.injected).ok);
+  }
   const Status slam = RunSlam(rec, EstimatorConfig{}, dir + "/slam", &r.slam);
   EXPECT_TRUE(slam.ok) << slam.message;
   const Status eval = EvaluateAgainstTruth(rec, r.slam.trajectory, &r.ape);
@@ -176,7 +178,9 @@ TEST(FaultScenario, BlindedLidar) {
   size_t empty = 0;
   for (const ScanReport& s : r.slam.scans) {
     const bool inside = s.t_start_s - t0 > kFaultStartS + 0.05 && s.t_end_s - t0 < kFaultEndS - 0.05;
-    if (inside) EXPECT_EQ(s.num_points, 0u) << s.t_start_s - t0;
+    if (inside) {
+      EXPECT_EQ(s.num_points, 0u) << s.t_start_s - t0;
+    }
     empty += s.num_points == 0;
   }
   EXPECT_GE(empty, 8u);

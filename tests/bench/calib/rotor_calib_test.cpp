@@ -4,7 +4,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <random>
 
 #include <nlohmann/json.hpp>
 
@@ -14,6 +13,7 @@
 #include "bench/calib/calib_output.hpp"
 #include "bench/calib/rotor_calib.hpp"
 #include "core/types/geometry.hpp"
+#include "core/util/rng.hpp"
 #include "sim/sim_config.hpp"
 
 namespace rotolidar::bench {
@@ -41,8 +41,7 @@ double CastRoom(const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
 /// Points of a rig with calibration `truth` over two rotor revolutions; theta as the believed calibration's
 /// encoder reads it (true angle minus the zero error), range noise sigma_m.
 std::vector<RotorPoint> SyntheticRoom(const RigCalib& truth, double zero_error_rad, double sigma_m) {
-  std::mt19937 rng(7);
-  std::normal_distribution<double> noise(0.0, sigma_m);
+  RandomStream rng(7, "calib.synthetic_room");
   std::vector<RotorPoint> points;
   const LidarIntrinsics lidar;
   for (int i = 0; i < 480; ++i) {
@@ -53,9 +52,9 @@ std::vector<RotorPoint> SyntheticRoom(const RigCalib& truth, double zero_error_r
       for (int l = 0; l < 16; ++l) {
         const double el = lidar.elevation_deg[l] * kDeg;
         const Eigen::Vector3d d_lidar(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-        const double range = CastRoom(T.translation(), T.linear() * d_lidar) + noise(rng);
+        const double range = CastRoom(T.translation(), T.linear() * d_lidar) + rng.Normal(0.0, sigma_m);
         if (range < 1.0) continue;
-        points.push_back({(range * d_lidar).cast<float>(), theta - zero_error_rad, 0.0});
+        points.push_back({(range * d_lidar).cast<float>(), theta - zero_error_rad, 0.0, 2.6});
       }
     }
   }
@@ -77,8 +76,10 @@ TEST(RotorCalib, MotorPointMatchesRigCalibChain) {
   d.lever_m = {0.01, -0.02, 0.03};
   d.tilt_rad = {0.01, 0.02, -0.03};
   d.encoder_zero_rad = 0.05;
+  d.time_offset_s = 0.01;  // the encoder's angle 10 ms later: + 2.0 rad/s * 0.01 s
   const RigCalib corrected = ApplyCorrection(calib, d);
-  const RotorPoint p{Eigen::Vector3f(3.0f, -1.0f, 0.5f), 1.3, 0.0};
+  EXPECT_DOUBLE_EQ(corrected.lidar_clock_offset_s, calib.lidar_clock_offset_s + 0.01);
+  const RotorPoint p{Eigen::Vector3f(3.0f, -1.0f, 0.5f), 1.3, 0.0, 2.0};
   const std::vector<ResidualPoint> table = PrepareResidualPoints({p}, calib);
   const Eigen::Vector3d t = calib.T_rotor_lidar.translation();
   const double t0[3] = {t.x(), t.y(), t.z()};
@@ -86,7 +87,7 @@ TEST(RotorCalib, MotorPointMatchesRigCalibChain) {
   MotorFramePoints(table, t0, d, &xyz);
   // theta' = theta - encoder_zero change: the corrected calibration's own chain.
   const Eigen::Vector3d expect = calib.T_base_motor.inverse() *
-                                 corrected.T_base_lidar(p.theta_rad - d.encoder_zero_rad) *
+                                 corrected.T_base_lidar(p.theta_rad - d.encoder_zero_rad + 2.0 * 0.01) *
                                  p.p_lidar.cast<double>();
   EXPECT_LT((Eigen::Vector3f(&xyz[0]).cast<double>() - expect).norm(), 1e-5);
 }
@@ -127,8 +128,9 @@ TEST(RotorCalib, RecoversLeverAndTiltInASyntheticRoom) {
     EXPECT_TRUE(result.observability[p].observable) << CalibParamName(p);
     EXPECT_LT(result.observability[p].sigma, 1e-3) << CalibParamName(p);
   }
-  for (int p : {kLeverZ, kTiltZ, kEncoderZero})
-    EXPECT_FALSE(result.observability[p].observable) << CalibParamName(p) << " " << result.observability[p].independence;
+  for (int p : {kLeverZ, kTiltZ, kEncoderZero, kTimeOffset})  // time offset: an encoder zero at constant speed
+    EXPECT_FALSE(result.observability[p].observable)
+        << CalibParamName(p) << " " << result.observability[p].independence;
 }
 
 TEST(CalibOutput, WritesJsonAndPictures) {
@@ -155,7 +157,7 @@ TEST(CalibOutput, WritesJsonAndPictures) {
   EXPECT_TRUE(j.at("parameters").at("lever_x_m").at("observable").get<bool>());
   EXPECT_FALSE(j.at("parameters").at("encoder_zero_rad").at("observable").get<bool>());
   EXPECT_NEAR(j.at("change").at("tilt_deg")[0].get<double>(), -0.2, 0.01);
-  EXPECT_EQ(j.at("hessian").size(), 7u);
+  EXPECT_EQ(j.at("hessian").size(), std::size_t(kCalibParamCount));
   EXPECT_TRUE(j.contains("truth_error"));
   const std::uintmax_t svg_bytes = std::filesystem::file_size(dir + "/after.svg");
   EXPECT_GT(svg_bytes, 1000u);

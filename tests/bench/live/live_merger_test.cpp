@@ -43,18 +43,19 @@ std::vector<LiveItem::Kind> Kinds(const std::vector<LiveItem>& items) {
 TEST(LiveMerger, SamplesBeforeTheirPacketAndRigClockCaptureTimes) {
   LiveMerger merger(LiveMergerConfig{});
   const double host0 = 5000.0;  // the host's steady clock has nothing to do with the rig clock
-  // Packet 0 fired at rig 1.000 s and arrived with the least delay; packet 1 is 0.3 ms later than it should be.
+  // Packet 0 fired at rig 1.000 s; packet 1 one period later, and the network held it 0.3 ms longer.
   merger.AddPacket(DataPacket(1.0, host0));
   merger.AddPacket(DataPacket(1.0 + kPeriodS, host0 + kPeriodS + 0.0003));
   for (double t : {0.999, 1.0005, 1.0015, 1.0020, 1.0031}) merger.AddSample(Imu(t));
-  merger.AddSample(Encoder(1.0031));
+  merger.AddSample(Encoder(1.0031));  // the samples have reached 1.0031 > both capture times
   std::vector<LiveItem> out;
   merger.Release(host0 + 0.002, &out);
   using K = LiveItem::Kind;
-  // Rig captures: 1.0 + send delay (~1.41 ms), then that + period + 0.3 ms (~3.04 ms).
+  // Rig captures from the packets' own timestamps, as the twin stamps them: 1.0 + send delay (~1.41 ms), then
+  // one period later (~2.74 ms), whatever the network did.
   ASSERT_EQ(Kinds(out), (std::vector<K>{K::kImu, K::kImu, K::kPacket, K::kImu, K::kImu, K::kPacket}));
-  EXPECT_NEAR(out[2].packet.t_capture_s, 1.0 + kSendDelayS, 1e-6);
-  EXPECT_NEAR(out[5].packet.t_capture_s, 1.0 + kSendDelayS + kPeriodS + 0.0003, 1e-6);
+  EXPECT_NEAR(out[2].packet.t_capture_s, 1.0 + kSendDelayS, 1e-6);  // the timestamp counts whole microseconds
+  EXPECT_NEAR(out[5].packet.t_capture_s, 1.0 + kSendDelayS + kPeriodS, 1e-6);
   EXPECT_EQ(merger.counts().hold_timeouts, 0u);
   // With no packet left, samples go once they are hold_s old on the rig clock.
   out.clear();
@@ -91,18 +92,26 @@ TEST(LiveMerger, APacketWaitsForTheSamplesButNotForever) {
   EXPECT_EQ(merger.counts().late_samples, 2u);
 }
 
-TEST(LiveMerger, TheFastestPacketDefinesTheDelay) {
-  LiveMerger merger(LiveMergerConfig{});
+TEST(LiveMerger, PositionPacketsFollowTheDataPacketsAndTimesNeverPrecedeTheEpoch) {
+  LiveMergerConfig config;
+  config.min_capture_s = 0.0;  // epoch_unix_s = 0: a pcap cannot hold negative rig times
+  LiveMerger merger(config);
+  LidarPacket position;
+  position.udp_port = kVlp16PositionPort;
+  position.payload.assign(kVlp16PositionPacketBytes, 0);
+  position.t_capture_s = 50.0;  // host time; before any data packet: held
+  merger.AddPacket(position);
   std::vector<LiveItem> out;
-  merger.AddPacket(DataPacket(2.0, 10.0 + 0.004));  // delayed by 4 ms: the only reference so far
+  merger.Release(50.001, &out);
+  EXPECT_TRUE(out.empty());
+  merger.AddPacket(DataPacket(0.0, 50.002));  // fired at rig 0: capture 1.41 ms; arrived 2 ms after the position
+  position.t_capture_s = 50.0025;
+  merger.AddPacket(position);
   merger.ReleaseAll(&out);
-  // Ten packets later one comes on time: the reference drops by 4 ms and the host clock maps 4 ms earlier.
-  merger.AddPacket(DataPacket(2.0 + 10 * kPeriodS, 10.0 + 10 * kPeriodS));
-  merger.ReleaseAll(&out);
-  ASSERT_EQ(out.size(), 2u);
-  EXPECT_NEAR(out[0].packet.t_capture_s, 2.0 + kSendDelayS, 1e-6);
-  EXPECT_NEAR(out[1].packet.t_capture_s, 2.0 + 10 * kPeriodS + kSendDelayS, 1e-6);
-  EXPECT_NEAR(merger.HostToRig(20.0), 12.0 + kSendDelayS, 1e-6);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0].packet.t_capture_s, 0.0);  // 1.41 ms - 2 ms would be negative: held at the epoch
+  EXPECT_NEAR(out[1].packet.t_capture_s, kSendDelayS, 1e-9);
+  EXPECT_NEAR(out[2].packet.t_capture_s, kSendDelayS + 0.0005, 1e-9);  // the data packet + 0.5 ms of host time
 }
 
 }  // namespace

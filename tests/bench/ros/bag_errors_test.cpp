@@ -226,5 +226,30 @@ TEST_F(BagImportErrors, MonoImagesAndNonIncreasingStamps) {
   ExpectMessage(Import(dir_ + "/order.bag"), {"topic /imu, message 2: field 'header.stamp'", "does not increase"});
 }
 
+// The VLP-16 clock offset follows the new epoch: moved by (calib epoch - new epoch) when the calib has one, kept when
+// its epoch is 0, or set from UTC with --lidar-clock pps (1700000123 mod 3600 = 923 s past the hour).
+TEST_F(BagImportErrors, LidarClockOffsetFollowsTheEpoch) {
+  const std::string bag = WriteBag(Content{});
+  RigCalib with_epoch = calib_;
+  with_epoch.epoch_unix_s = 1700000000.0;
+  with_epoch.lidar_clock_offset_s = 0.5;
+  ASSERT_TRUE(SaveCalibYaml(dir_ + "/epoch.yaml", with_epoch));
+  BagImportOptions o;
+  o.calib_path = dir_ + "/epoch.yaml";
+  ASSERT_TRUE(Import(bag, o).ok);
+  EXPECT_EQ(summary_.lidar_clock_offset_s, 0.5 - 123.0);
+  with_epoch.epoch_unix_s = 0.0;
+  ASSERT_TRUE(SaveCalibYaml(dir_ + "/epoch.yaml", with_epoch));
+  ASSERT_TRUE(Import(bag, o).ok);
+  EXPECT_EQ(summary_.lidar_clock_offset_s, 0.5);
+  o.lidar_clock = LidarClock::kPps;
+  ASSERT_TRUE(Import(bag, o).ok);
+  EXPECT_EQ(summary_.lidar_clock_offset_s, -923.0);
+  RigCalib written;
+  ASSERT_TRUE(LoadCalibYaml(dir_ + "/out/calib.yaml", &written));
+  EXPECT_EQ(written.lidar_clock_offset_s, -923.0);
+  EXPECT_EQ(written.epoch_unix_s, 1700000123.0);
+}
+
 }  // namespace
 }  // namespace rotolidar::bench::rosmsg

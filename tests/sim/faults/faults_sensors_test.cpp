@@ -32,7 +32,7 @@ TEST(SensorFaults, FrozenEncoderRepeatsTheLastCountOverExactlyTheInterval) {
   const Recording rec = Load(WriteThrough("encoder", c, 1, in, &truth));
   ASSERT_EQ(rec.encoder.size(), in.encoder.size());  // samples keep coming, on time
   for (size_t i = 0; i < in.encoder.size(); ++i) {
-    EXPECT_EQ(rec.encoder[i].t_s, in.encoder[i].t_s);
+    EXPECT_NEAR(rec.encoder[i].t_s, in.encoder[i].t_s, 1e-9);  // the CSV's precision
     const bool frozen = i >= 1001 && i <= 1750;
     EXPECT_EQ(rec.encoder[i].count, frozen ? in.encoder[1000].count : in.encoder[i].count) << in.encoder[i].t_s;
   }
@@ -54,7 +54,7 @@ TEST(SensorFaults, ImuDropoutRemovesExactlyTheInterval) {
   EXPECT_EQ(truth.imu.dropped_interval_s[1], in.imu[700].t_s);
   for (size_t i = 0; i < rec.imu.size(); ++i) {
     const size_t source = i <= 600 ? i : i + 100;  // the samples after the gap, shifted by the 100 dropped
-    EXPECT_EQ(rec.imu[i].t_s, in.imu[source].t_s) << i;
+    EXPECT_NEAR(rec.imu[i].t_s, in.imu[source].t_s, 1e-9) << i;
   }
 }
 
@@ -99,18 +99,23 @@ TEST(FaultYaml, RoundTripUnknownKeysAndValidation) {
   EXPECT_EQ(config.faults.lidar_loss.burst_length_packets, 40);
   EXPECT_EQ(config.faults.lidar_reorder.max_distance_packets, 8);  // the default
   EXPECT_EQ(config.faults.encoder_freeze.duration_s, 1.0);
+  // The resolved config writes the section (it is on); the section reads back to the same values.
   YAML::Emitter out;
   out.SetDoublePrecision(17);
   EmitSimConfig(out, config);
-  SimConfig again = DefaultSimConfig();
-  ASSERT_TRUE(ParseSimConfig("again.yaml", YAML::Load(out.c_str()), &again).ok);
+  const YAML::Node emitted_config = YAML::Load(out.c_str());
+  ASSERT_TRUE(emitted_config["faults"]);
+  FaultConfig again;
+  const Status reparsed = ParseFaultConfig("again.yaml", emitted_config["faults"], &again);
+  ASSERT_TRUE(reparsed.ok) << reparsed.message;
   const auto emitted = [](const FaultConfig& f) {
     YAML::Emitter e;
     e.SetDoublePrecision(17);
     EmitFaultConfig(e, f);
     return std::string(e.c_str());
   };
-  EXPECT_EQ(emitted(again.faults), emitted(config.faults));
+  EXPECT_EQ(emitted(again), emitted(config.faults));
+  EXPECT_EQ(again.lidar_loss.burst_rate_hz, 0.5);
   YAML::Emitter plain;
   EmitSimConfig(plain, DefaultSimConfig());
   EXPECT_EQ(std::string(plain.c_str()).find("faults"), std::string::npos);  // off: not written

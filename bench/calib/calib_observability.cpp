@@ -13,7 +13,7 @@
 namespace rotolidar::bench {
 namespace {
 
-using Matrix7 = Eigen::Matrix<double, kCalibParamCount, kCalibParamCount>;
+using HessianMatrix = Eigen::Matrix<double, kCalibParamCount, kCalibParamCount>;
 
 /// The residual of `a` with its normal refitted to the neighbours under `d` (sign of the stored normal).
 double RefittedResidual(const std::vector<ResidualPoint>& table, const double* t0, const PlaneAssociation& a,
@@ -46,7 +46,7 @@ double ObservableSigma(int param) {
 }
 
 /// Conditional information of `p` given the estimated parameters other than p (Schur complement) [1/unit^2].
-double ConditionalInformation(const Matrix7& H, int p, const std::array<bool, kCalibParamCount>& estimate) {
+double ConditionalInformation(const HessianMatrix& H, int p, const std::array<bool, kCalibParamCount>& estimate) {
   std::vector<int> others;
   for (int k = 0; k < kCalibParamCount; ++k)
     if (estimate[k] && k != p) others.push_back(k);
@@ -67,7 +67,7 @@ void ComputeObservability(const std::vector<ResidualPoint>& table, const double*
                           const std::vector<PlaneAssociation>& associations, const RotorCalibOptions& options,
                           RotorCalibResult* result) {
   const RotorCalibParams& x = result->correction;
-  Matrix7 H = Matrix7::Zero();
+  HessianMatrix H = HessianMatrix::Zero();
   double weighted_sq = 0.0;
   for (const PlaneAssociation& a : associations) {
     const double r = RefittedResidual(table, t0, a, x);

@@ -49,7 +49,7 @@ struct LiveSession::Impl {
   Status OpenSources();
   std::size_t Drain(double wait_s);
   void Worker();
-  void FeedAll(std::deque<LiveItem>* items, Estimator* estimator);
+  void FeedAll(std::deque<LiveItem>* items, Estimator* estimator, SnapshotWriter* snapshots);
   void AfterScans(std::vector<ScanReport> reports, Estimator* estimator, SnapshotWriter* snapshots);
   LiveStatus Current() const;
   void Forward(std::vector<LiveItem> items);
@@ -105,19 +105,36 @@ void LiveSession::Impl::Forward(std::vector<LiveItem> items) {
   cv.notify_one();
 }
 
-void LiveSession::Impl::FeedAll(std::deque<LiveItem>* items, Estimator* estimator) {
+// Keeping up (the batch spans at most max_pending_scans revolutions): Process after every packet, exactly as
+// `rotolidar slam` plays a recording, so that the session equals an offline run of its own recording. Behind:
+// feed the whole batch (decoding is cheap), drop the oldest complete revolutions, keep the newest.
+void LiveSession::Impl::FeedAll(std::deque<LiveItem>* items, Estimator* estimator, SnapshotWriter* snapshots) {
+  double first_s = 0.0, last_s = 0.0;
+  bool any = false;
+  for (const LiveItem& item : *items) {
+    if (item.kind != LiveItem::Kind::kPacket) continue;
+    if (!any) first_s = item.packet.t_capture_s;
+    last_s = item.packet.t_capture_s;
+    any = true;
+  }
+  const bool behind = last_s - first_s > config.max_pending_scans * 60.0 / calib.lidar.rpm;
   for (const LiveItem& item : *items) {
     switch (item.kind) {
       case LiveItem::Kind::kImu: estimator->Feed(item.imu); break;
       case LiveItem::Kind::kEncoder: estimator->Feed(item.encoder); break;
       default:
         if (Status s = estimator->Feed(item.packet); !s) LOG_WARN("live: packet: " << s.message);
+        if (!behind) AfterScans(estimator->Process(), estimator, snapshots);
     }
   }
-  if (!items->empty()) {
+  if (behind && estimator->pending_scans() > 1) {
+    const std::size_t dropped = estimator->DropPendingScans(1);
     std::lock_guard<std::mutex> lock(mutex);
-    for (const LiveItem& item : *items)
-      if (item.kind == LiveItem::Kind::kPacket) worker_view.rig_time_s = item.packet.t_capture_s;
+    worker_view.scans_dropped += dropped;
+  }
+  if (any) {
+    std::lock_guard<std::mutex> lock(mutex);
+    worker_view.rig_time_s = last_s;
   }
   items->clear();
 }
@@ -148,12 +165,7 @@ void LiveSession::Impl::Worker() {
       if (inbox.empty() && inbox_closed) break;
       items.swap(inbox);
     }
-    FeedAll(&items, &estimator);
-    if (estimator.pending_scans() > config.max_pending_scans) {
-      const std::size_t dropped = estimator.DropPendingScans(1);
-      std::lock_guard<std::mutex> lock(mutex);
-      worker_view.scans_dropped += dropped;
-    }
+    FeedAll(&items, &estimator, &snapshots);
     AfterScans(estimator.Process(), &estimator, &snapshots);
   }
   AfterScans(estimator.Finish(), &estimator, &snapshots);

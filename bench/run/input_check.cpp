@@ -2,15 +2,21 @@
 #include "bench/run/input_check.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include <yaml-cpp/yaml.h>
 
 #include "core/wire/packet_gaps.hpp"
+#include "core/wire/packet_orderer.hpp"
 #include "core/wire/vlp16.hpp"
 
 namespace rotolidar::bench {
 namespace {
+
+constexpr double kBlindS = 0.5;            // a stretch without returns this long is a blind sensor [s]
+constexpr double kFrozenEncoderS = 0.25;   // a count unchanged this long while the rotor should turn [s]
+constexpr std::size_t kSaturatedSamples = 3;  // samples exactly at an axis's extreme value
 
 std::string Fmt(const char* format, double a, double b = 0.0) {
   char text[160];
@@ -80,16 +86,84 @@ void CheckCalibKeys(const Recording& rec, std::vector<InputWarning>* out) {
                                                                 "wrong lever arm or axis blurs the map)", 1});
 }
 
+bool NoReturns(const LidarPacket& p) {
+  for (int b = 0; b < 12; ++b)
+    for (int ch = 0; ch < 32; ++ch) {
+      const uint8_t* d = p.payload.data() + 100 * b + 4 + 3 * ch;
+      if (d[0] != 0 || d[1] != 0) return false;
+    }
+  return true;
+}
+
+// Gaps are counted in timestamp order (after the core's own reordering), so reordered packets are not "lost".
 void CheckLidar(const Recording& rec, std::vector<InputWarning>* out) {
+  PacketOrderer orderer;
+  std::vector<LidarPacket> ordered;
+  for (const LidarPacket& p : rec.lidar_packets) orderer.Push(p, &ordered);
+  orderer.Flush(&ordered);
   Vlp16GapCounter gaps;
-  for (const LidarPacket& p : rec.lidar_packets) {
+  std::size_t blind_runs = 0;
+  double blind_start = 0.0, longest_blind = 0.0, last_t = 0.0;
+  bool in_blind = false;
+  for (const LidarPacket& p : ordered) {
     if (p.udp_port == kVlp16PositionPort || p.payload.size() != kVlp16PacketBytes) continue;
     const uint8_t* b = p.payload.data() + 1200;
     gaps.Add(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24, p.payload[1204]);
+    const bool blind = NoReturns(p);
+    if (blind && !in_blind) blind_start = p.t_capture_s;
+    if (!blind && in_blind && last_t - blind_start >= kBlindS) ++blind_runs, longest_blind = std::max(longest_blind, last_t - blind_start);
+    in_blind = blind;
+    last_t = p.t_capture_s;
   }
+  if (in_blind && last_t - blind_start >= kBlindS) ++blind_runs, longest_blind = std::max(longest_blind, last_t - blind_start);
   if (gaps.lost() > 0)
     out->push_back({"lidar.lost_packets", rec.dir + "/lidar.pcap: " + std::to_string(gaps.lost()) +
                                               " data packet(s) missing from the timestamp sequence", gaps.lost()});
+  if (blind_runs > 0)
+    out->push_back({"lidar.blind", rec.dir + "/lidar.pcap: " + std::to_string(blind_runs) + " stretch(es) of " +
+                                       Fmt("%.1f s", kBlindS) + " or more without a single return (the longest " +
+                                       Fmt("%.2f s", longest_blind) + "): a covered or failed sensor",
+                    blind_runs});
+}
+
+// Runs of one unchanged count while the rotor should turn: a frozen encoder (or a stalled motor).
+void CheckFrozenEncoder(const Recording& rec, std::vector<InputWarning>* out) {
+  if (rec.calib.motor_speed_radps <= 0.0 || rec.encoder.size() < 2) return;
+  std::size_t runs = 0;
+  double longest = 0.0;
+  std::size_t start = 0;
+  for (std::size_t i = 1; i <= rec.encoder.size(); ++i) {
+    if (i < rec.encoder.size() && rec.encoder[i].count == rec.encoder[start].count) continue;
+    const double span = rec.encoder[i - 1].t_s - rec.encoder[start].t_s;
+    if (span >= kFrozenEncoderS) ++runs, longest = std::max(longest, span);
+    start = i;
+  }
+  if (runs > 0)
+    out->push_back({"encoder.frozen", rec.dir + "/encoder.csv: the count stood still " + std::to_string(runs) +
+                                          " time(s) for " + Fmt("%.2f s", kFrozenEncoderS) + " or more (the longest " +
+                                          Fmt("%.2f s", longest) + ") while calib.yaml says the rotor turns at " +
+                                          Fmt("%.2f rad/s", rec.calib.motor_speed_radps) +
+                                          ": a frozen encoder or a stalled motor", runs});
+}
+
+// A clipped IMU repeats its extreme value: the largest |value| of an axis met exactly by several samples, but not
+// by most of them.
+void CheckImuSaturation(const Recording& rec, std::vector<InputWarning>* out) {
+  static const char* kAxes[6] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
+  for (int axis = 0; axis < 6; ++axis) {
+    double peak = 0.0;
+    std::size_t at_peak = 0;
+    for (const ImuSample& s : rec.imu) {
+      const double v = std::abs(axis < 3 ? s.gyro_radps[axis] : s.accel_mps2[axis - 3]);
+      if (v > peak) peak = v, at_peak = 1;
+      else if (v == peak && v > 0.0) ++at_peak;
+    }
+    // Half the samples or more at one value is a constant signal (a noise-free IMU at rest), not a clip.
+    if (at_peak >= kSaturatedSamples && 2 * at_peak < rec.imu.size())
+      out->push_back({"imu.saturated", rec.dir + "/imu.csv: " + kAxes[axis] + " sits at its extreme " +
+                                           Fmt("%.4g", peak) + " on " + std::to_string(at_peak) +
+                                           " samples: a clipped (saturated) sensor", at_peak});
+  }
 }
 
 }  // namespace
@@ -100,6 +174,8 @@ std::vector<InputWarning> CheckRecording(const Recording& recording, const Input
   CheckEncoder(recording, config, &out);
   CheckCalibKeys(recording, &out);
   CheckLidar(recording, &out);
+  CheckFrozenEncoder(recording, &out);
+  CheckImuSaturation(recording, &out);
   return out;
 }
 

@@ -11,7 +11,11 @@
 //                            data: calib.yaml's counts_per_rev (e.g. 16384 for a 14-bit chip) disagrees with
 //                            the data (e.g. a 12-bit encoder's 0..4095)
 //   calib.pose_missing       T_base_motor / T_rotor_lidar / T_base_imu not in calib.yaml: identity assumed
-//   lidar.lost_packets       data packets missing from the timestamp sequence (core/wire/packet_gaps.hpp)
+//   lidar.lost_packets       data packets missing from the timestamp sequence (core/wire/packet_gaps.hpp),
+//                            counted after the core's reordering (core/wire/packet_orderer.hpp)
+//   lidar.blind              0.5 s or more of data packets without a single return (a covered or failed sensor)
+//   encoder.frozen           the count unchanged for 0.25 s or more while calib.yaml says the rotor turns
+//   imu.saturated            an axis sits at its extreme value on 3 or more samples (a clipped sensor)
 #include <string>
 #include <vector>
 

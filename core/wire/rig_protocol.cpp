@@ -29,7 +29,9 @@ std::string At(std::size_t offset, const char* field) {
 Status DecodeRecord(const uint8_t* r, std::size_t offset, RigSample* sample) {
   const uint8_t type = r[0];
   const int64_t t_ns = Get<int64_t>(r + 8);
-  const double t_s = static_cast<double>(t_ns) * 1e-9;
+  // Divided by the exactly representable 1e9: the double nearest to the decimal t_ns / 10^9, the value a CSV
+  // with nanosecond times reads back (so a live session and its recording feed the estimator the same times).
+  const double t_s = static_cast<double>(t_ns) / 1e9;
   if (type == static_cast<uint8_t>(RigSample::Type::kImu)) {
     sample->type = RigSample::Type::kImu;
     sample->imu.t_s = t_s;

@@ -9,8 +9,14 @@
 // the absolute pose). Recovery time: from the fault's end to the last scan pair after the fault's start whose
 // per-scan error exceeds kRecoveredRpeM (0 when none does). Measured values: docs/noise_models.md, "Faults".
 //
-// MEASURED (2-core machine, seed 1; `ctest --test-dir build -R FaultScenario -V` prints them):
-//   MEASURED_TABLE
+// Measured (2-core machine, seed 1; `ctest --test-dir build -R FaultScenario -V` prints them): ATE RMSE [m] /
+// recovery [s] (intervals 4-5 s); the fault-free baseline 0.0156.
+//   random loss 5 %              0.0173 / whole run     bursts 1 Hz x 75 packets   0.0205 / whole run
+//   duplicates 5 %               0.0156 / whole run     swaps 5 %, up to 8 later   0.0156 / whole run
+//   head blinded 1 s             0.0166 / 0.00          encoder frozen 1 s         0.1061 / 0.10
+//   IMU dropout 1 s              0.2918 / 4.09          IMU clipped 0.5 rad/s, 11 m/s^2   0.0413 / whole run
+// Each bound is about 2x the measured value (the run is deterministic; the margin is for other machines'
+// floating point and thread timing, as in the other scenario tests).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +26,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/eval/trajectory_lookup.hpp"
+#include "bench/run/scan_health.hpp"
 #include "bench/run/slam_run.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/io/trajectory_io.hpp"
@@ -34,8 +41,10 @@ namespace fs = std::filesystem;
 constexpr double kDurationS = 10.0;
 constexpr double kFaultStartS = 4.0;  // interval faults: [4, 5) s, while the rig walks
 constexpr double kFaultEndS = 5.0;
-/// A scan pair counts as recovered below this per-scan error [m]: MEASURED_THRESHOLD.
-constexpr double kRecoveredRpeM = 0.01;
+/// A scan pair counts as recovered below this per-scan error [m]. The fault-free run's per-scan error: median
+/// 0.0043 m; up to 0.045 m in its first 2 s (moving start, the IMU initialises at scan 10), at most 0.026 m
+/// after them. The threshold is 1.5x that.
+constexpr double kRecoveredRpeM = 0.04;
 
 struct FaultRun {
   SlamRunResult slam;
@@ -74,8 +83,10 @@ double RecoveryTime(const std::vector<std::pair<double, double>>& rpe, double t0
 }
 
 /// Simulates the demo's first 10 s with `faults`, runs the core and evaluates it.
+/// `min_scans`: the run keeps going: at least this many scans (101 without faults; lost or blinded head
+/// revolutions give none).
 FaultRun SimulateAndRun(const std::string& name, const sim::FaultConfig& faults, double fault_start_s = 0.0,
-             double fault_end_s = 0.0) {
+                        double fault_end_s = 0.0, size_t min_scans = 97) {
   sim::SimConfig config = sim::PresetSimConfig(sim::Realism::kTypical);
   config.scene = "box_room";
   config.duration_s = kDurationS;
@@ -98,7 +109,7 @@ FaultRun SimulateAndRun(const std::string& name, const sim::FaultConfig& faults,
   // The run keeps going: a pose for every scan of the whole run.
   EXPECT_LT(r.slam.trajectory.front().t_s - truth.front().t_s, 0.3);
   EXPECT_GT(r.slam.trajectory.back().t_s - truth.front().t_s, kDurationS - 0.3);
-  EXPECT_GE(r.slam.scans.size(), size_t(kDurationS * 10) - 3);
+  EXPECT_GE(r.slam.scans.size(), min_scans);
   r.rpe = PerScanError(r.slam.trajectory, truth);
   const double t0 = truth.front().t_s;
   r.recovery_s = fault_end_s > 0 ? RecoveryTime(r.rpe, t0, fault_start_s, fault_end_s) : 0.0;
@@ -116,12 +127,24 @@ FaultRun SimulateAndRun(const std::string& name, const sim::FaultConfig& faults,
   return r;
 }
 
+/// Scans whose registration did not converge (AssessScanHealth), counted by start time relative to t0.
+size_t NotConvergedBetween(const SlamRunResult& r, double from_s, double to_s) {
+  if (r.scans.empty()) return 0;
+  const double t0 = r.scans.front().t_start_s;
+  size_t n = 0;
+  for (const ScanProblemStretch& s : AssessScanHealth(r.scans).stretches)
+    if (s.problem == ScanProblem::kNotConverged && s.t_start_s - t0 >= from_s && s.t_start_s - t0 < to_s)
+      n += s.scans();
+  return n;
+}
+
 TEST(FaultScenario, Baseline) {
   const FaultRun r = SimulateAndRun("baseline", sim::FaultConfig{});
-  EXPECT_EQ(Warning(r.slam, "lidar.lost_packets"), nullptr);
-  EXPECT_EQ(Warning(r.slam, "imu.gaps"), nullptr);
+  EXPECT_TRUE(r.slam.input_warnings.empty());
   EXPECT_EQ(r.slam.packet_order.total(), 0u);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED_BASELINE
+  EXPECT_EQ(AssessScanHealth(r.slam.scans).not_converged, 0u);
+  EXPECT_EQ(r.slam.scans.size(), 101u);
+  EXPECT_LT(r.ape.stats.rmse, 0.03);  // measured 0.0156 m (max 0.0392); the demo's 20 s bound
 }
 
 TEST(FaultScenario, RandomPacketLoss) {
@@ -132,29 +155,29 @@ TEST(FaultScenario, RandomPacketLoss) {
   ASSERT_NE(w, nullptr);
   EXPECT_LE(w->count, r.injected.lidar.lost_random);  // a loss at the very end leaves no gap
   EXPECT_GE(w->count + 2, r.injected.lidar.lost_random);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
+  EXPECT_LT(r.ape.stats.rmse, 0.035);  // measured 0.0173 m (385 packets lost); ~2x
 }
 
 TEST(FaultScenario, PacketLossBursts) {
   sim::FaultConfig f;
   f.lidar_loss.burst_rate_hz = 1.0;
   f.lidar_loss.burst_length_packets = 75;  // a tenth of a second: a whole head revolution's data
-  const FaultRun r = SimulateAndRun("lidar_bursts", f);
+  const FaultRun r = SimulateAndRun("lidar_bursts", f, 0.0, 0.0, 85);  // measured 90 scans
   const InputWarning* w = Warning(r.slam, "lidar.lost_packets");
   ASSERT_NE(w, nullptr);
   EXPECT_LE(w->count, r.injected.lidar.lost_burst);
-  EXPECT_GE(w->count + 75, r.injected.lidar.lost_burst);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
+  EXPECT_GE(w->count + 75, r.injected.lidar.lost_burst);  // a burst at the very end leaves no gap
+  EXPECT_LT(r.ape.stats.rmse, 0.04);  // measured 0.0205 m (825 packets in 11 bursts); ~2x
 }
 
 TEST(FaultScenario, DuplicatedPackets) {
   sim::FaultConfig f;
   f.lidar_duplicate.probability = 0.05;
   const FaultRun r = SimulateAndRun("lidar_duplicate", f);
-  EXPECT_EQ(r.slam.packet_order.duplicate, r.injected.lidar.duplicated);
   EXPECT_GT(r.injected.lidar.duplicated, 0u);
+  EXPECT_EQ(r.slam.packet_order.duplicate, r.injected.lidar.duplicated);
   EXPECT_EQ(Warning(r.slam, "lidar.lost_packets"), nullptr);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
+  EXPECT_LT(r.ape.stats.rmse, 0.03);  // measured 0.0156 m, the baseline's (the orderer drops every copy)
 }
 
 TEST(FaultScenario, ReorderedPackets) {
@@ -164,28 +187,28 @@ TEST(FaultScenario, ReorderedPackets) {
   EXPECT_GT(r.injected.lidar.swaps, 0u);
   EXPECT_EQ(r.slam.packet_order.reordered, r.injected.lidar.arrived_after_newer);
   EXPECT_EQ(r.slam.packet_order.duplicate + r.slam.packet_order.late, 0u);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
+  // Not asserted: the input check also reports `lidar.lost_packets` here (1297, as many as were reordered),
+  // though no packet was lost: it counts the timestamp gaps in arrival order, before the orderer.
+  EXPECT_LT(r.ape.stats.rmse, 0.03);  // measured 0.0156 m, the baseline's (the orderer restores the order)
 }
 
 TEST(FaultScenario, BlindedLidar) {
   sim::FaultConfig f;
   f.lidar_blind = {kFaultStartS, kFaultEndS - kFaultStartS};
-  const FaultRun r = SimulateAndRun("lidar_blind", f, kFaultStartS, kFaultEndS);
+  const FaultRun r = SimulateAndRun("lidar_blind", f, kFaultStartS, kFaultEndS, 88);  // measured 91 scans
   EXPECT_GT(r.injected.lidar.blinded, 700u);  // 1 s of packets
-  // Reported through the scans: those wholly inside the interval hold no points.
-  ASSERT_FALSE(r.slam.scans.empty());
-  const double t0 = r.slam.scans.front().t_start_s;
-  size_t empty = 0;
-  for (const ScanReport& s : r.slam.scans) {
-    const bool inside = s.t_start_s - t0 > kFaultStartS + 0.05 && s.t_end_s - t0 < kFaultEndS - 0.05;
-    if (inside) {
-      EXPECT_EQ(s.num_points, 0u) << s.t_start_s - t0;
-    }
-    empty += s.num_points == 0;
+  // The core's only sign of it: no scan (and no pose) while the head is blind, the trajectory bridges 1 s.
+  ASSERT_GE(r.slam.trajectory.size(), 2u);
+  const double t0 = r.slam.trajectory.front().t_s;
+  double longest = 0.0, at = 0.0;
+  for (size_t i = 1; i < r.slam.trajectory.size(); ++i) {
+    const double step = r.slam.trajectory[i].t_s - r.slam.trajectory[i - 1].t_s;
+    if (step > longest) longest = step, at = r.slam.trajectory[i - 1].t_s - t0;
   }
-  EXPECT_GE(empty, 8u);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
-  EXPECT_LT(r.recovery_s, 5.0);      // MEASURED
+  EXPECT_NEAR(longest, 1.1, 0.15);
+  EXPECT_NEAR(at, kFaultStartS - 0.1, 0.15);
+  EXPECT_LT(r.ape.stats.rmse, 0.035);  // measured 0.0166 m; ~2x
+  EXPECT_LT(r.recovery_s, 1.0);        // measured 0 s: no scan pair after it above the threshold
 }
 
 TEST(FaultScenario, FrozenEncoder) {
@@ -193,8 +216,11 @@ TEST(FaultScenario, FrozenEncoder) {
   f.encoder_freeze = {kFaultStartS, kFaultEndS - kFaultStartS};
   const FaultRun r = SimulateAndRun("encoder_freeze", f, kFaultStartS, kFaultEndS);
   EXPECT_GT(r.injected.encoder.frozen_samples, 0u);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
-  EXPECT_LT(r.recovery_s, 5.0);      // MEASURED
+  // No input warning (the samples keep their rate); the scans register badly: measured 3 not converged in
+  // the interval (4.5, 4.8, 4.9 s; registration RMSE 0.25-0.30 m against 0.05 m).
+  EXPECT_GE(NotConvergedBetween(r.slam, kFaultStartS, kFaultEndS + 0.2), 1u);
+  EXPECT_LT(r.ape.stats.rmse, 0.2);   // measured 0.1061 m (max 0.58 m); ~2x
+  EXPECT_LT(r.recovery_s, 1.0);       // measured 0.10 s
 }
 
 TEST(FaultScenario, ImuDropout) {
@@ -205,16 +231,18 @@ TEST(FaultScenario, ImuDropout) {
   ASSERT_NE(w, nullptr);
   EXPECT_EQ(w->count, 1u);
   EXPECT_EQ(r.injected.imu.dropped_interval, 200u);  // 1 s at 200 Hz
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
-  EXPECT_LT(r.recovery_s, 5.0);      // MEASURED
+  EXPECT_LT(r.ape.stats.rmse, 0.5);  // measured 0.2918 m (max 0.84 m); ~1.7x
+  EXPECT_LT(r.recovery_s, 4.95);     // measured 4.10 s (27 scans not converged after the gap)
 }
 
 TEST(FaultScenario, ImuSaturation) {
   sim::FaultConfig f;
-  f.imu_saturation = {1.0, 12.0};  // MEASURED_SATURATION
+  // The walk's IMU peaks: |gyro z| 1.13 rad/s (p90 0.75), accel z 13.5 m/s^2 (p90 12.9): both clip often.
+  f.imu_saturation = {0.5, 11.0};
   const FaultRun r = SimulateAndRun("imu_saturation", f);
-  EXPECT_GT(r.injected.imu.saturated_samples, 0u);
-  EXPECT_LT(r.ape.stats.rmse, 1.0);  // MEASURED
+  EXPECT_GT(r.injected.imu.saturated_samples, 500u);  // measured 1075 of 2001
+  // Not reported by the core (no input check looks for clipped samples).
+  EXPECT_LT(r.ape.stats.rmse, 0.08);  // measured 0.0413 m (max 0.22 m); ~2x
 }
 
 }  // namespace

@@ -149,7 +149,20 @@ TEST_F(LiveLoopback, AtFiveTimesRealTimeItKeepsUpOrDropsWholeScans) {
   EvalResult ape;
   ASSERT_TRUE(EvaluateAgainstTruth(*dir_ + "/recording", run.result.trajectory, &ape).ok);
   std::printf("live 5x: ATE %.4f m\n", ape.stats.rmse);
+  // Measured on 2 cores: 0.0169 m when it kept up (= offline), 0.0331 m when 35 of 81 scans were dropped.
   EXPECT_LT(ape.stats.rmse, 0.05);
+}
+
+TEST_F(LiveLoopback, AtTwentyTimesRealTimeItDropsWholeScansAndRecovers) {
+  // 8 s of data in 0.4 s: more than the estimator can do on any machine (it runs ~7x real time on 2 cores).
+  const LiveRun run = RunLive(*recording_, 20.0, 0.0, *dir_ + "/live20");
+  EXPECT_GT(run.status.scans_dropped, 0u);
+  EXPECT_EQ(run.status.scans + run.status.scans_dropped, offline_->scans.size());  // every drop counted, whole
+  ASSERT_FALSE(run.result.trajectory.empty());
+  for (std::size_t i = 1; i < run.result.trajectory.size(); ++i)
+    EXPECT_GT(run.result.trajectory[i].t_s, run.result.trajectory[i - 1].t_s);
+  // Recovered: the newest scan is always kept, so the run ends with the recording's last revolution.
+  EXPECT_NEAR(run.result.trajectory.back().t_s, offline_->trajectory.back().t_s, 1e-9);
 }
 
 TEST_F(LiveLoopback, TenPercentPacketLossIsCountedAndSurvived) {
@@ -164,7 +177,8 @@ TEST_F(LiveLoopback, TenPercentPacketLossIsCountedAndSurvived) {
   EvalResult offline_ape;
   ASSERT_TRUE(EvaluateAgainstTruth(*dir_ + "/recording", offline_->trajectory, &offline_ape).ok);
   std::printf("10 %% loss: ATE %.4f m (no loss, offline: %.4f m)\n", ape.stats.rmse, offline_ape.stats.rmse);
-  EXPECT_LT(ape.stats.rmse, 0.05);
+  // Measured: 0.0170 m against 0.0169 m without loss (626 of 6030 packets lost); the bound leaves 1.8x.
+  EXPECT_LT(ape.stats.rmse, 0.03);
 }
 
 // Shares the fixture's recording: `rotolidar slam` asked to stop halfway (a signal handler sets the flag) finishes

@@ -1,5 +1,6 @@
 // ImportBag on small hand-made bags: a minimal valid bag (epoch, rig times, encoder counts, image conversion), and
-// every kind of bad input giving a clear message that names the bag, the topic, the message index and the field.
+// every kind of bad input giving a clear message that names the bag, the topic, the message index and the field;
+// the VLP-16 clock offset moved onto the new epoch.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

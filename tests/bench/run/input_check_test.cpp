@@ -20,7 +20,8 @@ Recording CleanRecording(const std::string& name) {
   std::filesystem::create_directories(rec.dir);
   rec.calib.motor_speed_radps = 2.6;
   EXPECT_TRUE(SaveCalibYaml(rec.dir + "/calib.yaml", rec.calib).ok);  // every key written
-  for (int i = 0; i < 2000; ++i) rec.imu.push_back({0.005 * i, {}, {}});
+  for (int i = 0; i < 2000; ++i)
+    rec.imu.push_back({0.005 * i, Eigen::Vector3d(0.01 * std::sin(i), 0, 0), Eigen::Vector3d(0, 0, 9.81 + 0.01 * std::cos(i))});
   for (int i = 0; i < 10000; ++i) {
     const double t = 1e-3 * i, turns = 2.6 * t / (2 * M_PI);
     rec.encoder.push_back({t, static_cast<uint32_t>((turns - std::floor(turns)) * 4096)});
@@ -28,6 +29,7 @@ Recording CleanRecording(const std::string& name) {
   for (int i = 0; i < 7540; ++i) {
     Vlp16RawPacket raw;
     raw.timestamp_us = static_cast<uint32_t>(i * 1327.104);
+    for (Vlp16RawBlock& block : raw.blocks) block.distance_2mm.fill(2500);  // every laser sees 5 m
     rec.lidar_packets.push_back({raw.timestamp_us * 1e-6, kVlp16DataPort, SerializeVlp16DataPacket(raw)});
   }
   return rec;
@@ -71,6 +73,32 @@ TEST(InputCheck, CalibrationThatDisagreesWithTheDataIsNamed) {
   std::size_t poses = 0;
   for (const InputWarning& x : w) poses += x.code == "calib.pose_missing";
   EXPECT_EQ(poses, 3u);  // T_base_motor, T_rotor_lidar, T_base_imu
+}
+
+TEST(InputCheck, ReorderedPacketsAreNotLost) {
+  Recording rec = CleanRecording("reordered");
+  for (std::size_t i = 10; i + 3 < rec.lidar_packets.size(); i += 50) std::swap(rec.lidar_packets[i], rec.lidar_packets[i + 3]);
+  const std::vector<InputWarning> w = CheckRecording(rec);
+  EXPECT_EQ(Find(w, "lidar.lost_packets"), nullptr) << InputWarningsText(w);
+}
+
+TEST(InputCheck, FrozenEncoderSaturatedImuAndBlindLidarAreNamed) {
+  Recording rec = CleanRecording("faults");
+  for (int i = 4000; i < 5000; ++i) rec.encoder[i].count = rec.encoder[3999].count;  // 1 s frozen
+  for (int i = 0; i < 2000; i += 100) rec.imu[i].gyro_radps.z() = (i % 200 ? -0.5 : 0.5);  // clipped at 0.5 rad/s
+  for (int i = 3000; i < 3000 + 754; ++i) {  // 1 s of packets without a return
+    Vlp16RawPacket raw;
+    ASSERT_TRUE(ParseVlp16DataPacket(rec.lidar_packets[i].payload.data(), kVlp16PacketBytes, &raw).ok);
+    for (Vlp16RawBlock& block : raw.blocks) block.distance_2mm.fill(0);
+    rec.lidar_packets[i].payload = SerializeVlp16DataPacket(raw);
+  }
+  const std::vector<InputWarning> w = CheckRecording(rec);
+  ASSERT_NE(Find(w, "encoder.frozen"), nullptr) << InputWarningsText(w);
+  EXPECT_NE(Find(w, "encoder.frozen")->message.find("the longest 1.00 s"), std::string::npos);
+  ASSERT_NE(Find(w, "imu.saturated"), nullptr) << InputWarningsText(w);
+  EXPECT_EQ(Find(w, "imu.saturated")->count, 20u);
+  ASSERT_NE(Find(w, "lidar.blind"), nullptr) << InputWarningsText(w);
+  EXPECT_EQ(Find(w, "lidar.blind")->count, 1u);
 }
 
 }  // namespace

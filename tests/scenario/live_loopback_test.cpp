@@ -11,6 +11,8 @@
 #include <fstream>
 #include <thread>
 
+#include <unistd.h>
+
 #include "bench/live/live_session.hpp"
 #include "bench/live/udp_replay.hpp"
 #include "bench/report/run_report.hpp"
@@ -76,30 +78,36 @@ double MaxPositionGap(const Trajectory& a, const Trajectory& b) {
   return gap;
 }
 
+// ctest runs each test in its own process, two at a time: each process simulates into its own folder (by pid).
 class LiveLoopback : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     sim::SimConfig config = sim::PresetSimConfig(sim::Realism::kTypical);
     config.scene = "box_room";
     config.duration_s = 8.0;
-    dir_ = new std::string(test_util::SimulateFresh(config, "rotolidar_live_loopback"));
+    dir_ = new std::string(test_util::SimulateFresh(config, "rotolidar_live_loopback_" + std::to_string(getpid())));
     recording_ = new Recording;
-    ASSERT_TRUE(LoadRecording(*dir_ + "/recording", recording_).ok);
     offline_ = new SlamRunResult;
-    ASSERT_TRUE(RunSlam(*dir_ + "/recording", EstimatorConfig{}, *dir_ + "/offline", offline_).ok);
+    setup_ok_ = LoadRecording(*dir_ + "/recording", recording_).ok &&
+                RunSlam(*dir_ + "/recording", EstimatorConfig{}, *dir_ + "/offline", offline_).ok;
   }
   static void TearDownTestSuite() {
+    std::filesystem::remove_all(*dir_);
     delete dir_;
     delete recording_;
     delete offline_;
   }
+  // A failed set-up fails every test (a failure inside SetUpTestSuite would only mark them skipped).
+  void SetUp() override { ASSERT_TRUE(setup_ok_) << "simulating or running offline SLAM failed in " << *dir_; }
   static std::string* dir_;
   static Recording* recording_;
   static SlamRunResult* offline_;
+  static bool setup_ok_;
 };
 std::string* LiveLoopback::dir_ = nullptr;
 Recording* LiveLoopback::recording_ = nullptr;
 SlamRunResult* LiveLoopback::offline_ = nullptr;
+bool LiveLoopback::setup_ok_ = false;
 
 TEST_F(LiveLoopback, AtRealTimeItEqualsOfflineAndRecordsEverything) {
   const LiveRun run = RunLive(*recording_, 1.0, 0.0, *dir_ + "/live1");

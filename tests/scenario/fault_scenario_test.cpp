@@ -187,8 +187,8 @@ TEST(FaultScenario, ReorderedPackets) {
   EXPECT_GT(r.injected.lidar.swaps, 0u);
   EXPECT_EQ(r.slam.packet_order.reordered, r.injected.lidar.arrived_after_newer);
   EXPECT_EQ(r.slam.packet_order.duplicate + r.slam.packet_order.late, 0u);
-  // Not asserted: the input check also reports `lidar.lost_packets` here (1297, as many as were reordered),
-  // though no packet was lost: it counts the timestamp gaps in arrival order, before the orderer.
+  // The input check counts gaps after the same reordering: nothing lost.
+  EXPECT_EQ(Warning(r.slam, "lidar.lost_packets"), nullptr);
   EXPECT_LT(r.ape.stats.rmse, 0.03);  // measured 0.0156 m, the baseline's (the orderer restores the order)
 }
 
@@ -197,7 +197,10 @@ TEST(FaultScenario, BlindedLidar) {
   f.lidar_blind = {kFaultStartS, kFaultEndS - kFaultStartS};
   const FaultRun r = SimulateAndRun("lidar_blind", f, kFaultStartS, kFaultEndS, 88);  // measured 91 scans
   EXPECT_GT(r.injected.lidar.blinded, 700u);  // 1 s of packets
-  // The core's only sign of it: no scan (and no pose) while the head is blind, the trajectory bridges 1 s.
+  const InputWarning* w = Warning(r.slam, "lidar.blind");
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(w->count, 1u);
+  // No scan (and no pose) while the head is blind: the trajectory bridges 1 s.
   ASSERT_GE(r.slam.trajectory.size(), 2u);
   const double t0 = r.slam.trajectory.front().t_s;
   double longest = 0.0, at = 0.0;
@@ -216,8 +219,11 @@ TEST(FaultScenario, FrozenEncoder) {
   f.encoder_freeze = {kFaultStartS, kFaultEndS - kFaultStartS};
   const FaultRun r = SimulateAndRun("encoder_freeze", f, kFaultStartS, kFaultEndS);
   EXPECT_GT(r.injected.encoder.frozen_samples, 0u);
-  // No input warning (the samples keep their rate); the scans register badly: measured 3 not converged in
-  // the interval (4.5, 4.8, 4.9 s; registration RMSE 0.25-0.30 m against 0.05 m).
+  const InputWarning* w = Warning(r.slam, "encoder.frozen");
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(w->count, 1u);
+  // The scans register badly: measured 3 not converged in the interval (4.5, 4.8, 4.9 s; registration RMSE
+  // 0.25-0.30 m against 0.05 m).
   EXPECT_GE(NotConvergedBetween(r.slam, kFaultStartS, kFaultEndS + 0.2), 1u);
   EXPECT_LT(r.ape.stats.rmse, 0.2);   // measured 0.1061 m (max 0.58 m); ~2x
   EXPECT_LT(r.recovery_s, 1.0);       // measured 0.10 s
@@ -241,7 +247,7 @@ TEST(FaultScenario, ImuSaturation) {
   f.imu_saturation = {0.5, 11.0};
   const FaultRun r = SimulateAndRun("imu_saturation", f);
   EXPECT_GT(r.injected.imu.saturated_samples, 500u);  // measured 1075 of 2001
-  // Not reported by the core (no input check looks for clipped samples).
+  ASSERT_NE(Warning(r.slam, "imu.saturated"), nullptr);  // the axes that sit at +-0.5 rad/s and 11 m/s^2
   EXPECT_LT(r.ape.stats.rmse, 0.08);  // measured 0.0413 m (max 0.22 m); ~2x
 }
 

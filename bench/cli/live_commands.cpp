@@ -58,7 +58,7 @@ int CmdLive(int argc, char** argv) {
   p.Add("position-port", "8308", "-", "UDP port of VLP-16 position packets");
   p.Add("rig-port", "2370", "-", "UDP port of rig samples (IMU, encoder)");
   p.Add("hold", "0.25", "s", "longest a packet waits for the rig samples of its time");
-  p.Add("max-pending-scans", "3", "-", "more complete scans waiting than this: drop the oldest whole scans");
+  p.Add("max-pending-scans", "3", "-", "behind by more revolutions than this: drop the oldest whole scans, keep the newest");
   p.Add("snapshot-period", "10", "s", "wall time between trajectory/map snapshots (0: none)");
   p.Add("status-period", "1", "s", "wall time between status lines");
   p.Add("idle-stop", "0", "s", "stop when no data came for this long after the first (0: never)");

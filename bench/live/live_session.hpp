@@ -28,7 +28,8 @@ struct LiveConfig {
   uint16_t rig_port = 2370;              ///< rig samples (kRigSamplePort); 0 = any free port
   std::size_t rcvbuf_bytes = 8u << 20;   ///< kernel receive buffer per socket [bytes]
   LiveMergerConfig merge;
-  /// More complete scans than this waiting for the estimator: the oldest are dropped, the newest kept.
+  /// Behind: one inbox batch spans more revolutions than this. The oldest complete scans are then dropped, the
+  /// newest kept; otherwise every packet is processed as `rotolidar slam` processes a recording.
   std::size_t max_pending_scans = 3;
   double snapshot_period_s = 10.0;  ///< wall time between trajectory / map snapshots [s]; 0 = none
   double status_period_s = 1.0;     ///< wall time between status reports [s]

@@ -106,9 +106,11 @@ void CheckLidar(const Recording& rec, std::vector<InputWarning>* out) {
   double blind_start = 0.0, longest_blind = 0.0, last_t = 0.0;
   bool in_blind = false;
   for (const LidarPacket& p : ordered) {
-    if (p.udp_port == kVlp16PositionPort || p.payload.size() != kVlp16PacketBytes) continue;
-    const uint8_t* b = p.payload.data() + 1200;
-    gaps.Add(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24, p.payload[1204]);
+    uint32_t stamp = 0;
+    uint8_t mode = 0;
+    if (p.udp_port == kVlp16PositionPort || !Vlp16DataTimestamp(p.payload.data(), p.payload.size(), &stamp, &mode))
+      continue;
+    gaps.Add(stamp, mode);
     const bool blind = NoReturns(p);
     if (blind && !in_blind) blind_start = p.t_capture_s;
     if (!blind && in_blind && last_t - blind_start >= kBlindS) ++blind_runs, longest_blind = std::max(longest_blind, last_t - blind_start);

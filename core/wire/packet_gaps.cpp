@@ -9,6 +9,14 @@ constexpr double kSingleReturnPeriodUs = 12 * 2 * 55.296;
 constexpr uint8_t kDualReturnMode = 0x39;
 }  // namespace
 
+bool Vlp16DataTimestamp(const uint8_t* payload, std::size_t size, uint32_t* timestamp_us, uint8_t* return_mode) {
+  if (size != 1206) return false;
+  const uint8_t* b = payload + 1200;
+  *timestamp_us = uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+  *return_mode = payload[1204];
+  return true;
+}
+
 double Vlp16PacketPeriodUs(uint8_t return_mode) {
   return return_mode == kDualReturnMode ? 0.5 * kSingleReturnPeriodUs : kSingleReturnPeriodUs;
 }

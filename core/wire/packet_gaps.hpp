@@ -24,6 +24,10 @@ class Vlp16GapCounter {
   std::size_t lost_ = 0, out_of_order_ = 0;
 };
 
+/// The timestamp [us past the hour] and return-mode byte of a 1206-byte data payload (bytes 1200-1204, manual
+/// 9.3.1.4), without parsing the rest; false for any other size.
+bool Vlp16DataTimestamp(const uint8_t* payload, std::size_t size, uint32_t* timestamp_us, uint8_t* return_mode);
+
 /// Packet period [us] for a return-mode byte (0x39 = dual: half the single-return period).
 double Vlp16PacketPeriodUs(uint8_t return_mode);
 

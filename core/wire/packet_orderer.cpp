@@ -4,19 +4,16 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "core/wire/packet_gaps.hpp"
 #include "core/wire/vlp16.hpp"
 
 namespace rotolidar {
 namespace {
 
 constexpr int64_t kHourUs = 3600LL * 1000000LL;
-constexpr std::size_t kTimestampOffset = 1200;  // manual 9.3.1.4
-
 bool TimestampOf(const LidarPacket& p, uint32_t* us) {
-  if (p.udp_port == kVlp16PositionPort || p.payload.size() != kVlp16PacketBytes) return false;
-  const uint8_t* b = p.payload.data() + kTimestampOffset;
-  *us = uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
-  return true;
+  uint8_t mode = 0;
+  return p.udp_port != kVlp16PositionPort && Vlp16DataTimestamp(p.payload.data(), p.payload.size(), us, &mode);
 }
 
 }  // namespace

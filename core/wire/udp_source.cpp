@@ -58,8 +58,9 @@ void UdpPacketSource::ReceiveLoop() {
     if (static_cast<std::size_t>(n) == kVlp16PacketBytes) {
       packet.udp_port = kVlp16DataPort;
       uint32_t stamp = 0;
-      for (int b = 3; b >= 0; --b) stamp = (stamp << 8) | buffer[1200 + b];  // little-endian (manual 9.3.1.4)
-      gaps_.Add(stamp, buffer[1204]);
+      uint8_t mode = 0;
+      Vlp16DataTimestamp(buffer.data(), static_cast<std::size_t>(n), &stamp, &mode);
+      gaps_.Add(stamp, mode);
       lost_ = gaps_.lost();
     } else if (static_cast<std::size_t>(n) == kVlp16PositionPacketBytes) {
       packet.udp_port = kVlp16PositionPort;

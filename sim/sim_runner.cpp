@@ -362,8 +362,12 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
   if (Status s = RunPhysics(config, world, calib, &faulty, &truth, summary, progress, stop); !s) return s;
   if (Status s = faulty.Close(); !s) return s;
   if (Status s = truth.Close(); !s) return s;
-  if (config.faults.Enabled())
+  if (config.faults.Enabled()) {
     if (Status s = WriteFaultTruth(recording_dir, faulty.truth()); !s) return s;
+    const FaultTruth& f = faulty.truth();
+    summary->lidar_packets = summary->lidar_packets - f.lidar.data_packets_in + f.lidar.data_packets_out;
+    summary->imu_samples -= f.imu.dropped_interval + f.imu.dropped_random;
+  }
   if (!summary->stopped) summary->sim_duration_s = config.duration_s;
   summary->wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (progress) progress(1.0);

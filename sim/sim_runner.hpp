@@ -14,10 +14,12 @@ namespace rotolidar::sim {
 struct SimSummary {
   double sim_duration_s = 0.0;
   double wall_time_s = 0.0;
-  size_t lidar_packets = 0;
+  // Counts of what reached the recording: with faults on (faults.yaml), lost packets and dropped IMU samples are
+  // not counted and duplicated packets are. Returns and rays are the caster's, before faults.
+  size_t lidar_packets = 0;   ///< VLP-16 data packets in lidar.pcap
   size_t lidar_returns = 0;   ///< rays with a non-zero distance
   size_t lidar_rays = 0;
-  size_t imu_samples = 0;
+  size_t imu_samples = 0;     ///< rows of imu.csv
   size_t encoder_samples = 0;
   size_t camera_frames = 0;    ///< images written to camera/ (0 when the camera is off)
   size_t scene_triangles = 0;  ///< static plus dynamic-object triangles (EmbreeScene::num_triangles)

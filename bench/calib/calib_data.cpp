@@ -5,14 +5,10 @@
 
 #include "core/deskew/rotary.hpp"
 #include "core/wire/vlp16.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::bench {
 namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 /// Mean gyro and accel of the samples with t in [t0, t0 + window); false when there is none.
 bool WindowMean(const std::vector<ImuSample>& imu, std::size_t* cursor, double t0, double window_s,
@@ -33,17 +29,17 @@ bool WindowMean(const std::vector<ImuSample>& imu, std::size_t* cursor, double t
 }  // namespace
 
 bool StaticSpanOptions::Validate(std::string* error) const {
-  if (!(window_s > 0.0 && window_s <= 10.0)) return Fail(error, "static span: window_s must be in (0, 10] s");
-  if (!(gyro_threshold_radps > 0.0)) return Fail(error, "static span: gyro_threshold_radps must be > 0");
-  if (!(accel_threshold_mps2 > 0.0)) return Fail(error, "static span: accel_threshold_mps2 must be > 0");
-  if (!(margin_s >= 0.0)) return Fail(error, "static span: margin_s must be >= 0");
+  if (!(window_s > 0.0 && window_s <= 10.0)) return FailValidation(error, "static span: window_s must be in (0, 10] s");
+  if (!(gyro_threshold_radps > 0.0)) return FailValidation(error, "static span: gyro_threshold_radps must be > 0");
+  if (!(accel_threshold_mps2 > 0.0)) return FailValidation(error, "static span: accel_threshold_mps2 must be > 0");
+  if (!(margin_s >= 0.0)) return FailValidation(error, "static span: margin_s must be >= 0");
   return true;
 }
 
 bool RotorPointOptions::Validate(std::string* error) const {
   if (!(min_range_m >= 0.0 && max_range_m > min_range_m))
-    return Fail(error, "points: need 0 <= min_range_m < max_range_m");
-  if (max_points < 1000) return Fail(error, "points: max_points must be >= 1000");
+    return FailValidation(error, "points: need 0 <= min_range_m < max_range_m");
+  if (max_points < 1000) return FailValidation(error, "points: max_points must be >= 1000");
   return true;
 }
 

@@ -8,14 +8,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/registration/kd_tree.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::bench {
 namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -104,20 +100,20 @@ double MeanSpeed(const std::vector<RotorPoint>& points) {
 }  // namespace
 
 bool RotorCalibOptions::Validate(std::string* error) const {
-  if (sectors < 2 || sectors % 2 != 0 || sectors > 64) return Fail(error, "sectors must be even, 2..64");
-  if (max_queries < 10) return Fail(error, "max_queries must be >= 10");
-  if (neighbours < 3 || neighbours > KdTree3f::kMaxK) return Fail(error, "neighbours must be 3..32");
-  if (!(neighbour_radius_m > 0.0)) return Fail(error, "neighbour_radius_m must be > 0");
-  if (!(max_plane_sigma_m > 0.0)) return Fail(error, "max_plane_sigma_m must be > 0");
-  if (!(min_planarity >= 1.0)) return Fail(error, "min_planarity must be >= 1");
-  if (!(huber_m > 0.0)) return Fail(error, "huber_m must be > 0");
+  if (sectors < 2 || sectors % 2 != 0 || sectors > 64) return FailValidation(error, "sectors must be even, 2..64");
+  if (max_queries < 10) return FailValidation(error, "max_queries must be >= 10");
+  if (neighbours < 3 || neighbours > KdTree3f::kMaxK) return FailValidation(error, "neighbours must be 3..32");
+  if (!(neighbour_radius_m > 0.0)) return FailValidation(error, "neighbour_radius_m must be > 0");
+  if (!(max_plane_sigma_m > 0.0)) return FailValidation(error, "max_plane_sigma_m must be > 0");
+  if (!(min_planarity >= 1.0)) return FailValidation(error, "min_planarity must be >= 1");
+  if (!(huber_m > 0.0)) return FailValidation(error, "huber_m must be > 0");
   if (!(max_incidence_deg > 0.0 && max_incidence_deg <= 90.0))
-    return Fail(error, "max_incidence_deg must be in (0, 90]");
-  if (max_outer_iterations < 1 || max_solver_iterations < 1) return Fail(error, "iterations must be >= 1");
-  if (!(tolerance_m > 0.0 && tolerance_rad > 0.0)) return Fail(error, "tolerances must be > 0");
-  if (threads < 1) return Fail(error, "threads must be >= 1");
+    return FailValidation(error, "max_incidence_deg must be in (0, 90]");
+  if (max_outer_iterations < 1 || max_solver_iterations < 1) return FailValidation(error, "iterations must be >= 1");
+  if (!(tolerance_m > 0.0 && tolerance_rad > 0.0)) return FailValidation(error, "tolerances must be > 0");
+  if (threads < 1) return FailValidation(error, "threads must be >= 1");
   if (std::none_of(estimate.begin(), estimate.end(), [](bool b) { return b; }))
-    return Fail(error, "estimate: at least one parameter must be estimated");
+    return FailValidation(error, "estimate: at least one parameter must be estimated");
   return true;
 }
 

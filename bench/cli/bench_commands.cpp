@@ -26,7 +26,7 @@ const Benchmark kBenchmarks[] = {
     {"camera", BenchCamera, "camera twin frames/s per renderer and image size (target 640x480 >= 30 fps, 2 cores)"},
 };
 
-void Usage(std::ostream& os) {
+void PrintBenchUsage(std::ostream& os) {
   os << "usage: rotolidar bench <name> [options]   (rotolidar bench <name> --help)\n\nbenchmarks:\n";
   for (const Benchmark& b : kBenchmarks) os << "  " << b.name << std::string(std::max<std::size_t>(8, std::strlen(b.name) + 1) - std::strlen(b.name), ' ') << b.summary << "\n";
 }
@@ -35,13 +35,13 @@ void Usage(std::ostream& os) {
 
 int CmdBench(int argc, char** argv) {
   if (argc < 1 || std::strcmp(argv[0], "--help") == 0 || std::strcmp(argv[0], "-h") == 0) {
-    Usage(argc < 1 ? std::cerr : std::cout);
+    PrintBenchUsage(argc < 1 ? std::cerr : std::cout);
     return argc < 1 ? 2 : 0;
   }
   for (const Benchmark& b : kBenchmarks)
     if (std::strcmp(argv[0], b.name) == 0) return b.run(argc - 1, argv + 1);
   std::cerr << "error: unknown benchmark '" << argv[0] << "'\n";
-  Usage(std::cerr);
+  PrintBenchUsage(std::cerr);
   return 2;
 }
 

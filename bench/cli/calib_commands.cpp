@@ -19,12 +19,7 @@
 namespace rotolidar::bench {
 namespace {
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
-int Usage(const std::string& message) {
+int CalibUsage(const std::string& message) {
   std::cerr << "error: calibrate: " << message << "\n";
   return 2;
 }
@@ -169,7 +164,7 @@ int CmdCalibrate(int argc, char** argv) {
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   CalibrationReport rep;
   RotorPointOptions point_options;
-  if (Status s = ReadOptions(p, &point_options, &rep.options, &rep.span); !s) return Usage(s.message);
+  if (Status s = ReadOptions(p, &point_options, &rep.options, &rep.span); !s) return CalibUsage(s.message);
   Recording rec;
   if (Status s = LoadRecording(p.Get("RECORDING"), &rec); !s) return Fail(s);
   rep.recording = rec.dir;

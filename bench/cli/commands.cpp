@@ -32,11 +32,6 @@ Status LoadSlamConfig(const std::string& path, EstimatorConfig* config) {
 
 namespace {
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
 /// --carrier: scene (the scene's default), handheld, wheeled, car or scripted_loop.
 Status ApplyCarrierOption(const OptionParser& p, sim::SimConfig* config) {
   const std::string name = p.Get("carrier");

@@ -18,11 +18,6 @@ std::string FormatNumber(double value) {
   return os.str();
 }
 
-int Usage(const std::string& message) {
-  std::cerr << "error: " << message << "\n";
-  return 2;
-}
-
 Status ParseEvalOptions(const OptionParser& p, EvalOptions* o) {
   o->ref_path = p.Get("REF");
   o->est_path = p.Get("EST");

@@ -13,11 +13,6 @@
 namespace rotolidar::bench {
 namespace {
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
 Status LoadEstimatorConfig(const std::string& path, EstimatorConfig* config) {
   if (path.empty()) return Status::Ok();
   try {
@@ -63,6 +58,7 @@ int CmdSlamKitti(int argc, char** argv) {
   p.Add("lines", "0", "-", "scan lines per frame (0: DIR/sequence_info.txt's scan_lines, else the first frame's)");
   p.Add("imu", "auto", "-", "auto: use DIR/imu.csv when present | on: require it | off: LiDAR-only");
   p.Add("deskew", "auto", "-", "auto: deskew raw bins (sequence_info.txt's deskew: none...) | on | off");
+  p.AddFlag("strict", "fail on missing frame ids or empty bins instead of warning");
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   if (!ParseKittiSwitch(p.Get("deskew"), &o.deskew)) return Fail(Status::Error("--deskew: auto, on or off"));
   o.paths.dir = p.Get("kitti");
@@ -75,8 +71,10 @@ int CmdSlamKitti(int argc, char** argv) {
   if (Status s = GetCount(p, "start", &o.start_frame); !s) return Fail(s);
   if (Status s = GetCount(p, "lines", &o.scan.expected_lines); !s) return Fail(s);
   if (Status s = LoadEstimatorConfig(p.Get("config"), &o.estimator); !s) return Fail(s);
+  o.strict = p.Flag("strict");
   KittiRunResult r;
   if (Status s = RunKitti(o, &r, MakeProgressPrinter("slam")); !s) return Fail(s);
+  for (const InputWarning& w : r.input_warnings) std::printf("warning: %s\n", w.message.c_str());
   std::printf("%zu frames (%d..%d), median %.1f ms per frame, map %zu points; outputs in %s\n", r.frame_ids.size(),
               r.frame_ids.front(), r.frame_ids.back(), r.median_scan_ms, r.map_points, o.out_dir.c_str());
   std::printf("scan lines: %d expected (from %s), split by %s; range noise %.3g m (from %s)\n", r.expected_lines,

@@ -13,7 +13,7 @@
 namespace rotolidar::bench {
 namespace {
 
-int Fail(const Status& s) {
+int TwinFail(const Status& s) {
   std::cerr << "error: kitti-twin: " << s.message << "\n";
   return 1;
 }
@@ -88,9 +88,9 @@ int CmdKittiTwin(int argc, char** argv) {
     std::cerr << "error: kitti-twin: --out DIR is required (see --help)\n";
     return 2;
   }
-  if (Status s = ReadTwinOptions(p, &o); !s) return Fail(s);
+  if (Status s = ReadTwinOptions(p, &o); !s) return TwinFail(s);
   KittiTwinResult r;
-  if (Status s = RunKittiTwin(o, &r, MakeProgressPrinter("kitti-twin")); !s) return Fail(s);
+  if (Status s = RunKittiTwin(o, &r, MakeProgressPrinter("kitti-twin")); !s) return TwinFail(s);
   std::printf("wrote %s: %zu frames (%.1f m of path), %zu points (%.0f a frame), %zu IMU samples, scene %s, %s; "
               "casting %.1f s (%.0f ms a frame)\n", o.out_dir.c_str(), r.frames, r.path_length_m, r.points,
               double(r.points) / double(r.frames), r.imu_samples, r.scene_path.c_str(),

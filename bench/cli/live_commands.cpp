@@ -14,11 +14,6 @@
 namespace rotolidar::bench {
 namespace {
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
 Status Port(const OptionParser& p, const char* name, uint16_t* port) {
   long v = 0;
   if (Status s = p.GetInt(name, &v); !s) return s;

@@ -19,11 +19,6 @@
 namespace rotolidar::bench {
 namespace {
 
-int Fail(const Status& s, int code = 1) {
-  std::cerr << "error: " << s.message << "\n";
-  return code;
-}
-
 Status WriteSummaryJson(const std::string& path, const LoopPrResult& r, const graph::LoopClosureState& state,
                         const std::vector<LoopTruthCheck>& checks, const LoopPrConfig& c) {
   nlohmann::json j;

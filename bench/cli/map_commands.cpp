@@ -16,16 +16,6 @@
 namespace rotolidar::bench {
 namespace {
 
-int Usage(const std::string& message) {
-  std::cerr << "error: " << message << "\n";
-  return 2;
-}
-
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
 // "xmin,ymin,zmin,xmax,ymax,zmax" -> box; "" -> empty box.
 Status ParseRegion(const std::string& text, Eigen::AlignedBox3d* box) {
   box->setEmpty();

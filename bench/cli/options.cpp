@@ -8,6 +8,16 @@
 
 namespace rotolidar::bench {
 
+int Fail(const Status& s, int code) {
+  std::cerr << "error: " << s.message << "\n";
+  return code;
+}
+
+int Usage(const std::string& message) {
+  std::cerr << "error: " << message << "\n";
+  return 2;
+}
+
 void OptionParser::Add(const std::string& name, const std::string& default_value, const std::string& unit,
                        const std::string& help) {
   specs_.push_back({name, default_value, unit, help, false});

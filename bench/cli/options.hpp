@@ -52,4 +52,8 @@ class OptionParser {
 /// (0 after help, 2 after a usage error, whose message goes to stderr).
 int ParseOrHelp(OptionParser& parser, int argc, char** argv);
 
+/// The subcommands' exit paths: "error: <message>" on stderr, then the exit code to return from the command.
+int Fail(const Status& s, int code = 1);  ///< the command failed (1 unless given)
+int Usage(const std::string& message);     ///< the command line was wrong (2)
+
 }  // namespace rotolidar::bench

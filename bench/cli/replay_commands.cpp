@@ -20,11 +20,6 @@
 namespace rotolidar::bench {
 namespace {
 
-int Usage(const std::string& message) {
-  std::cerr << "error: " << message << "\n";
-  return 2;
-}
-
 /// Packets in file order from a pcap (streamed) or a raw payload file (loaded; the raw format has no capture
 /// times, so each packet gets the rig time of its own VLP-16 timestamp, unwrapped across hours).
 class ReplaySource {

@@ -12,11 +12,6 @@
 namespace rotolidar::bench {
 namespace {
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
 /// The folder sim::ResolveScenePath looks names up in ($ROTOLIDAR_SCENES, else the source tree's scenes/): the
 /// empty name is never an existing file, so it resolves to "<dir>/.yaml".
 std::string DefaultSceneDir() { return std::filesystem::path(sim::ResolveScenePath("")).parent_path().string(); }

@@ -22,16 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
-int Usage(const std::string& message) {
-  std::cerr << "error: " << message << "\n";
-  return 2;
-}
-
 bool IsImageFile(const fs::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });

@@ -24,7 +24,7 @@
 namespace rotolidar::bench {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
 
 bool Increasing(const std::vector<double>& v) {
   if (v.size() < 2) return false;
@@ -120,7 +120,7 @@ void ScanPlanes(const LidarScan& scan, int scan_index, const PlaneResidualOption
       const double r = pts[i].norm();
       PlaneResidual pr;
       pr.range_m = static_cast<float>(r);
-      pr.incidence_deg = static_cast<float>(std::acos(std::min(1.0, std::abs(n.dot(pts[i])) / r)) * kRadToDeg);
+      pr.incidence_deg = static_cast<float>(std::acos(std::min(1.0, std::abs(n.dot(pts[i])) / r)) * kDegPerRad);
       pr.residual_m = static_cast<float>(dist);
       pr.intensity = intensity[i];
       pr.scan = scan_index;

@@ -11,33 +11,25 @@
 #include "bench/run/atomic_write.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/io/trajectory_io.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::bench {
-namespace {
-
 double SteadyS() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
-
-}  // namespace
-
 bool LiveConfig::Validate(std::string* error) const {
   std::string why;
-  if (!merge.Validate(&why)) return Fail(error, "merge." + why);
-  if (max_pending_scans < 1) return Fail(error, "max_pending_scans: must be >= 1");
-  if (!(snapshot_period_s >= 0.0)) return Fail(error, "snapshot_period_s: must be >= 0");
-  if (!(status_period_s > 0.0)) return Fail(error, "status_period_s: must be > 0");
-  if (!(idle_stop_s >= 0.0)) return Fail(error, "idle_stop_s: must be >= 0");
-  if (!(duration_s >= 0.0)) return Fail(error, "duration_s: must be >= 0");
-  if (rcvbuf_bytes > (std::size_t(1) << 30)) return Fail(error, "rcvbuf_bytes: more than 1 GiB");
+  if (!merge.Validate(&why)) return FailValidation(error, "merge." + why);
+  if (max_pending_scans < 1) return FailValidation(error, "max_pending_scans: must be >= 1");
+  if (!(snapshot_period_s >= 0.0)) return FailValidation(error, "snapshot_period_s: must be >= 0");
+  if (!(status_period_s > 0.0)) return FailValidation(error, "status_period_s: must be > 0");
+  if (!(idle_stop_s >= 0.0)) return FailValidation(error, "idle_stop_s: must be >= 0");
+  if (!(duration_s >= 0.0)) return FailValidation(error, "duration_s: must be >= 0");
+  if (rcvbuf_bytes > (std::size_t(1) << 30)) return FailValidation(error, "rcvbuf_bytes: more than 1 GiB");
   const bool distinct = (data_port == 0 || (data_port != position_port && data_port != rig_port)) &&
                         (position_port == 0 || position_port != rig_port);
-  if (!distinct) return Fail(error, "data_port, position_port, rig_port: must differ (or be 0 = any free port)");
+  if (!distinct) return FailValidation(error, "data_port, position_port, rig_port: must differ (or be 0 = any free port)");
   return true;
 }
 

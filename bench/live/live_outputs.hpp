@@ -10,6 +10,9 @@
 
 namespace rotolidar::bench {
 
+/// Seconds on the monotonic clock (the host's std::chrono::steady_clock): for periods and rates, not stamps.
+double SteadyS();
+
 class SnapshotWriter {
  public:
   /// period_s <= 0: never writes.

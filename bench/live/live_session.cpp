@@ -16,14 +16,6 @@
 #include "core/wire/udp_source.hpp"
 
 namespace rotolidar::bench {
-namespace {
-
-double SteadyS() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-}  // namespace
-
 struct LiveSession::Impl {
   RigCalib calib;
   EstimatorConfig estimator_config;

@@ -10,6 +10,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "bench/perf/perf_util.hpp"
 #include "sim/camera/camera_stream.hpp"
 #include "sim/rig/carrier_paths.hpp"
 #include "sim/sim_config.hpp"
@@ -20,18 +21,6 @@ namespace rotolidar::bench {
 namespace {
 
 double NowS() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-double ProcessCpuS() {  // all threads of the process
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /// The default camera scaled to another size at the same horizontal field of view.
 sim::CameraConfig CameraAtSize(const CameraBenchOptions& o, int width, int height) {
@@ -89,7 +78,7 @@ Status BenchOne(const CameraBenchOptions& o, const sim::Scene& scene, sim::Embre
     cpu.push_back(cpu_s);
     level += cv::mean(image)[0] / 3 + cv::mean(image)[1] / 3 + cv::mean(image)[2] / 3;
   }
-  *row = {renderer, w, h, Median(render), Median(blur), Median(sensor), Median(png), Median(total), Median(cpu),
+  *row = {renderer, w, h, PerfMedian(render), PerfMedian(blur), PerfMedian(sensor), PerfMedian(png), PerfMedian(total), PerfMedian(cpu),
           level / o.frames};
   return Status::Ok();
 }

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/perf/perf_util.hpp"
 #include "bench/run/slam_run.hpp"
 #include "bench/run/truth_eval.hpp"
 #include "core/io/recording.hpp"
@@ -20,25 +21,12 @@
 namespace rotolidar::bench {
 namespace {
 
-double ProcessCpuS() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 double WallS() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 StageTime Stage(std::vector<double> ms) {
   StageTime s;
   if (ms.empty()) return s;
-  s.median_ms = Median(ms);
+  s.median_ms = PerfMedian(ms);
   std::sort(ms.begin(), ms.end());
   const std::size_t rank = static_cast<std::size_t>(std::ceil(0.9 * static_cast<double>(ms.size())));
   s.p90_ms = ms[std::clamp<std::size_t>(rank, 1, ms.size()) - 1];
@@ -157,8 +145,8 @@ Status RunSlamBench(const SlamBenchOptions& o, SlamBenchResult* result) {
     if (Status s = EvaluateAgainstTruth(o.recording_dir, run.trajectory, &ate); !s) return s;
     result->ate_rmse_m = ate.stats.rmse, result->ate_max_m = ate.stats.max, result->ate_poses = ate.stats.count;
   }
-  result->points_per_scan = static_cast<std::size_t>(Median(points));
-  result->cpu_s = Median(cpu), result->wall_s = Median(wall);
+  result->points_per_scan = static_cast<std::size_t>(PerfMedian(points));
+  result->cpu_s = PerfMedian(cpu), result->wall_s = PerfMedian(wall);
   result->total = Stage(total), result->deskew = Stage(desk), result->preprocess = Stage(pre);
   result->features = Stage(feat), result->registration = Stage(reg), result->fusion = Stage(fuse);
   result->map = Stage(map);

@@ -36,6 +36,17 @@ std::vector<size_t> SelectFrames(const KittiSequence& seq, const KittiRunOptions
   return picked;
 }
 
+/// "5, 7-9, 12" for ascending ids: the first `limit` runs, then "...".
+std::string IdRuns(const std::vector<std::pair<int, int>>& runs, size_t limit = 10) {
+  std::string text;
+  for (size_t k = 0; k < runs.size() && k < limit; ++k) {
+    if (k > 0) text += ", ";
+    text += std::to_string(runs[k].first);
+    if (runs[k].second > runs[k].first) text += "-" + std::to_string(runs[k].second);
+  }
+  return runs.size() > limit ? text + ", ..." : text;
+}
+
 /// Bin i of the sequence as ScanPoints: lines split by its per-point times when the sequence has them, else by
 /// azimuth (KittiScanPoints). Errors name the file.
 Status ScanPointsOf(const KittiSequence& seq, size_t i, Seconds t_s, const KittiScanConfig& config,
@@ -228,6 +239,9 @@ Status WriteMetrics(const std::string& path, const KittiSequence& seq, const Kit
               {"samples_fed", r.imu_samples_fed}, {"frames_from_window", r.frames_imu_initialized}};
   j["slam"] = {{"wall_time_s", r.wall_time_s}, {"median_scan_ms", r.median_scan_ms}, {"map_points", r.map_points}};
   j["health"] = ScanHealthJson(AssessScanHealth(r.scans));
+  j["input_warnings"] = nlohmann::json::array();
+  for (const InputWarning& w : r.input_warnings)
+    j["input_warnings"].push_back({{"code", w.code}, {"count", w.count}, {"message", w.message}});
   if (r.has_ground_truth) {
     j["ground_truth"] = seq.poses_path;
     j["ape_translation_m"] = StatsJson(r.ape, "none");
@@ -277,6 +291,38 @@ Status WriteOutputs(const KittiSequence& seq, const KittiRunOptions& o, const st
 
 }  // namespace
 
+std::vector<InputWarning> CheckKittiFrames(const KittiSequence& seq, const std::vector<size_t>& picked) {
+  std::vector<std::pair<int, int>> missing, empty;
+  size_t missing_count = 0;
+  for (size_t n = 0; n < picked.size(); ++n) {
+    const int id = seq.frame_ids[picked[n]];
+    if (n > 0 && id > seq.frame_ids[picked[n - 1]] + 1) {
+      missing.emplace_back(seq.frame_ids[picked[n - 1]] + 1, id - 1);
+      missing_count += size_t(id - 1 - seq.frame_ids[picked[n - 1]]);
+    }
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(seq.bin_paths[picked[n]], ec);
+    if (!ec && bytes < sizeof(float) * 4) empty.emplace_back(id, id);
+  }
+  std::vector<InputWarning> warnings;
+  const std::string dir = std::filesystem::path(seq.bin_paths.front()).parent_path().string();
+  if (missing_count > 0)
+    warnings.push_back({"kitti.missing_frames",
+                        dir + ": " + std::to_string(missing_count) + (missing_count == 1 ? " frame" : " frames") +
+                            " missing between frames " +
+                            std::to_string(seq.frame_ids[picked.front()]) + " and " +
+                            std::to_string(seq.frame_ids[picked.back()]) + " (ids " + IdRuns(missing) +
+                            "): the estimator bridges each gap as one longer step",
+                        missing_count});
+  if (!empty.empty())
+    warnings.push_back({"kitti.empty_frames",
+                        dir + ": " + std::to_string(empty.size()) + (empty.size() == 1 ? " bin" : " bins") +
+                            " without a point (ids " + IdRuns(empty) +
+                            "): those frames are predicted, not registered",
+                        empty.size()});
+  return warnings;
+}
+
 bool ParseKittiSwitch(const std::string& word, KittiSwitch* value) {
   if (word == "auto") *value = KittiSwitch::kAuto;
   else if (word == "on") *value = KittiSwitch::kOn;
@@ -323,6 +369,9 @@ Status RunKitti(const KittiRunOptions& options, KittiRunResult* result,
   if (ec) return Status::Error(options.out_dir + ": cannot create folder: " + ec.message());
 
   KittiRunResult r;
+  r.input_warnings = CheckKittiFrames(seq, picked);
+  if (options.strict && !r.input_warnings.empty())
+    return Status::Error("--strict: " + r.input_warnings.front().message);
   r.nominal_times = seq.nominal_times;
   r.point_times = !seq.point_time_paths.empty();
   if (options.imu == KittiSwitch::kOn && seq.imu.empty())

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "bench/run/eval_run.hpp"
+#include "bench/run/input_check.hpp"
 #include "core/io/kitti.hpp"
 #include "core/pipeline/estimator.hpp"
 
@@ -54,11 +55,15 @@ struct KittiRunOptions {
   /// Deskew each bin with its per-point times: kAuto when sequence_info.txt's deskew starts with "none" (raw
   /// bins), kOn always, kOff never (KITTI's own bins are already compensated).
   KittiSwitch deskew = KittiSwitch::kAuto;
+  /// Fail before running when the frame check warns (missing or empty bins) instead of warning.
+  bool strict = false;
   bool Validate(std::string* error) const;  ///< false naming the field (start_frame, max_frames, sub-configs)
 };
 
 struct KittiRunResult {
   std::vector<int> frame_ids;        ///< frames used, in order
+  /// The frame check's findings (CheckKittiFrames): kitti.missing_frames, kitti.empty_frames.
+  std::vector<InputWarning> input_warnings;
   Trajectory trajectory_velo;        ///< T_velo(first)_velo(k) at the frame times
   Trajectory trajectory_cam0;        ///< KITTI convention (see above), same times
   std::vector<ScanReport> scans;     ///< one per frame used
@@ -93,6 +98,11 @@ struct KittiRunResult {
   Trajectory odometry_cam0;          ///< the odometry before loop closure, KITTI cam0 convention
   EvalResult ape_odometry, ape_se3_odometry;  ///< as ape / ape_se3, of odometry_cam0 (with ground truth)
 };
+
+/// Checks the chosen frames before a run: ids missing between the first and the last one (a gap in velodyne/, so
+/// the estimator bridges a longer time), and bins with no point (a file shorter than one 16-byte point). Each
+/// finding names the folder and the frame ids (the first 10). `picked` indexes sequence.frame_ids.
+std::vector<InputWarning> CheckKittiFrames(const KittiSequence& sequence, const std::vector<size_t>& picked);
 
 /// Opens the sequence, runs the estimator over the chosen frames, evaluates against the poses file when there is
 /// one, and writes the outputs. Fails (naming the file) on unreadable input, no frame in range, or unwritable

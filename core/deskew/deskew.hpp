@@ -73,6 +73,7 @@ Pose3 MotionTablePose(const MotionTable& table, Seconds t_s);
 class MotionInterpolator {
  public:
   explicit MotionInterpolator(const MotionTable& table);  ///< ROTOLIDAR_CHECKs a non-empty, consistent table
+  explicit MotionInterpolator(MotionTable&&) = delete;     ///< holds a reference: a temporary would dangle
   /// T_base(t0)_base(t) * p_base [m]; *outside = t lies outside the table's span (its nearest end was used).
   Eigen::Vector3d Apply(Seconds t, const Eigen::Vector3d& p_base, bool* outside);
 

@@ -64,6 +64,7 @@ class RotorAngleInterpolator {
 class RotaryTransform {
  public:
   explicit RotaryTransform(const RotorAngleInterpolator& rotor);
+  explicit RotaryTransform(RotorAngleInterpolator&&) = delete;  ///< a temporary would dangle
   /// p in the base frame at its firing time [m]; *fallback = the uniform-rotation model was used.
   Eigen::Vector3d Apply(const LidarPoint& p, bool* fallback);
 

@@ -6,6 +6,7 @@
 
 #include "core/io/kitti.hpp"
 #include "core/io/kitti_text.hpp"
+#include "core/util/text.hpp"
 
 namespace rotolidar {
 
@@ -37,12 +38,6 @@ Status WriteKittiPointTimes(const std::string& path, const std::vector<float>& t
 
 namespace {
 
-std::string Trim(const std::string& s) {
-  const size_t b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
-
 /// The text fields by key, in the order they are written (scan_lines is separate: it is a number).
 std::vector<std::pair<const char*, std::string*>> TextFields(KittiSequenceInfo* info) {
   return {{"sensor", &info->sensor},         {"point_order", &info->point_order},
@@ -68,11 +63,11 @@ Status ReadKittiSequenceInfo(const std::string& path, KittiSequenceInfo* info) {
   std::vector<std::string> seen;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = int(i) + 1;
-    const std::string text = Trim(lines[i]);
+    const std::string text = TrimSpace(lines[i]);
     if (text.empty() || text[0] == '#') continue;
     const size_t colon = text.find(':');
     if (colon == std::string::npos) return Status::Error(Where(path, line) + "expected 'key: value', got '" + text + "'");
-    const std::string key = Trim(text.substr(0, colon)), value = Trim(text.substr(colon + 1));
+    const std::string key = TrimSpace(text.substr(0, colon)), value = TrimSpace(text.substr(colon + 1));
     for (const std::string& k : seen)
       if (k == key) return Status::Error(Where(path, line) + "key '" + key + "' given twice");
     seen.push_back(key);

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <vector>
 
+#include "core/util/text.hpp"
+
 namespace rotolidar {
 namespace {
 
@@ -16,18 +18,9 @@ constexpr int kDigits = std::numeric_limits<double>::max_digits10;
 const char* const kTumFields[] = {"t", "x", "y", "z", "qx", "qy", "qz", "qw"};
 const char* const kEurocFields[] = {"timestamp_ns", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z"};
 
-std::string Where(const std::string& path, int line) { return path + ":" + std::to_string(line) + ": "; }
-
 Status FieldError(const std::string& path, int line, const std::string& field, const std::string& token,
                   const std::string& what) {
-  return Status::Error(Where(path, line) + "field '" + field + "' = '" + token + "': " + what);
-}
-
-std::string Trim(const std::string& s) {
-  const size_t b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  const size_t e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
+  return Status::Error(FileLinePrefix(path, line) + "field '" + field + "' = '" + token + "': " + what);
 }
 
 /// Whitespace-separated tokens, or comma-separated (each trimmed) when `comma` is set.
@@ -36,7 +29,7 @@ std::vector<std::string> Split(const std::string& line, bool comma) {
   if (comma) {
     std::stringstream ss(line);
     std::string tok;
-    while (std::getline(ss, tok, ',')) out.push_back(Trim(tok));
+    while (std::getline(ss, tok, ',')) out.push_back(TrimSpace(tok));
   } else {
     std::istringstream ss(line);
     std::string tok;
@@ -76,7 +69,7 @@ Status ForEachDataLine(const std::string& path, std::vector<std::pair<int, std::
   int line_no = 0;
   while (std::getline(in, text)) {
     ++line_no;
-    const std::string t = Trim(text);
+    const std::string t = TrimSpace(text);
     if (t.empty() || t[0] == '#') continue;
     lines->emplace_back(line_no, t);
   }
@@ -88,7 +81,7 @@ Status MakeQuaternionPose(const Eigen::Vector3d& t, const Eigen::Quaterniond& q,
                           int line, Pose3* T) {
   const double n = q.norm();
   if (!(n > 1e-9)) {
-    return Status::Error(Where(path, line) + "field 'quaternion': norm " + std::to_string(n) + " is zero");
+    return Status::Error(FileLinePrefix(path, line) + "field 'quaternion': norm " + std::to_string(n) + " is zero");
   }
   *T = MakePose(t, q);
   return Status::Ok();
@@ -97,7 +90,7 @@ Status MakeQuaternionPose(const Eigen::Vector3d& t, const Eigen::Quaterniond& q,
 Status ParseTumLine(const std::string& path, int line, const std::string& text, StampedPose* sp) {
   const auto toks = Split(text, false);
   if (toks.size() != 8) {
-    return Status::Error(Where(path, line) + "expected 8 fields 't x y z qx qy qz qw', got " +
+    return Status::Error(FileLinePrefix(path, line) + "expected 8 fields 't x y z qx qy qz qw', got " +
                          std::to_string(toks.size()));
   }
   double v[8];
@@ -112,7 +105,7 @@ Status ParseKittiLine(const std::string& path, int line, const std::string& text
                                        "r12", "ty",  "r20", "r21", "r22", "tz"};
   const auto toks = Split(text, false);
   if (toks.size() != 12) {
-    return Status::Error(Where(path, line) + "expected 12 fields (row-major 3x4 [R|t]), got " +
+    return Status::Error(FileLinePrefix(path, line) + "expected 12 fields (row-major 3x4 [R|t]), got " +
                          std::to_string(toks.size()));
   }
   double v[12];
@@ -123,7 +116,7 @@ Status ParseKittiLine(const std::string& path, int line, const std::string& text
   }
   const double err = (T.linear().transpose() * T.linear() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (!(err <= 1e-3) || T.linear().determinant() <= 0.0) {
-    return Status::Error(Where(path, line) + "fields 'r00'..'r22': not a rotation (|R^T R - I| = " +
+    return Status::Error(FileLinePrefix(path, line) + "fields 'r00'..'r22': not a rotation (|R^T R - I| = " +
                          std::to_string(err) + ")");
   }
   sp->T_ref_body = T;
@@ -133,7 +126,7 @@ Status ParseKittiLine(const std::string& path, int line, const std::string& text
 Status ParseEurocLine(const std::string& path, int line, const std::string& text, StampedPose* sp) {
   const auto toks = Split(text, true);
   if (toks.size() < 8) {
-    return Status::Error(Where(path, line) + "expected at least 8 comma-separated fields "
+    return Status::Error(FileLinePrefix(path, line) + "expected at least 8 comma-separated fields "
                          "'timestamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z', got " + std::to_string(toks.size()));
   }
   int64_t ns = 0;
@@ -150,7 +143,7 @@ Status CheckOrder(const std::string& path, const std::vector<std::pair<int, std:
                   const Trajectory& traj) {
   for (size_t i = 1; i < traj.size(); ++i) {
     if (traj[i].t_s < traj[i - 1].t_s) {
-      return Status::Error(Where(path, lines[i].first) + "field 't': time goes backwards (" +
+      return Status::Error(FileLinePrefix(path, lines[i].first) + "field 't': time goes backwards (" +
                            std::to_string(traj[i].t_s) + " after " + std::to_string(traj[i - 1].t_s) + ")");
     }
   }

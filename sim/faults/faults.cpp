@@ -10,18 +10,18 @@
 namespace rotolidar::sim {
 namespace {
 
-bool Check(bool ok, const std::string& field, const char* what, std::string* error) {
+bool CheckFault(bool ok, const std::string& field, const char* what, std::string* error) {
   if (!ok && error) *error = "faults." + field + ": " + what;
   return ok;
 }
 
 bool Probability(double p, bool one_allowed, const std::string& field, std::string* error) {
   const bool ok = std::isfinite(p) && p >= 0.0 && (one_allowed ? p <= 1.0 : p < 1.0);
-  return Check(ok, field, one_allowed ? "must be in [0, 1]" : "must be in [0, 1)", error);
+  return CheckFault(ok, field, one_allowed ? "must be in [0, 1]" : "must be in [0, 1)", error);
 }
 
 bool NonNegative(double x, const std::string& field, std::string* error) {
-  return Check(std::isfinite(x) && x >= 0.0, field, "must be finite and >= 0", error);
+  return CheckFault(std::isfinite(x) && x >= 0.0, field, "must be finite and >= 0", error);
 }
 
 bool ValidInterval(double start_s, double duration_s, const std::string& name, std::string* error) {
@@ -64,11 +64,11 @@ bool FaultConfig::Validate(std::string* error) const {
   const LidarLossFault& l = lidar_loss;
   return Probability(l.probability, false, "lidar_loss.probability", error) &&
          NonNegative(l.burst_rate_hz, "lidar_loss.burst_rate_hz", error) &&
-         Check(l.burst_length_packets >= 1 && l.burst_length_packets <= 1000000, "lidar_loss.burst_length_packets",
+         CheckFault(l.burst_length_packets >= 1 && l.burst_length_packets <= 1000000, "lidar_loss.burst_length_packets",
                "must be in [1, 1000000]", error) &&
          Probability(lidar_duplicate.probability, true, "lidar_duplicate.probability", error) &&
          Probability(lidar_reorder.probability, true, "lidar_reorder.probability", error) &&
-         Check(lidar_reorder.max_distance_packets >= 1 && lidar_reorder.max_distance_packets <= 1000,
+         CheckFault(lidar_reorder.max_distance_packets >= 1 && lidar_reorder.max_distance_packets <= 1000,
                "lidar_reorder.max_distance_packets", "must be in [1, 1000]", error) &&
          ValidInterval(lidar_blind.start_s, lidar_blind.duration_s, "lidar_blind", error) &&
          ValidInterval(encoder_freeze.start_s, encoder_freeze.duration_s, "encoder_freeze", error) &&

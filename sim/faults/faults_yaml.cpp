@@ -72,7 +72,7 @@ void Visit(V& v, FaultTruth& c) {
 }
 
 namespace {
-std::string TruthPath(const std::string& dir) { return dir + "/truth/faults.yaml"; }
+std::string FaultsTruthPath(const std::string& dir) { return dir + "/truth/faults.yaml"; }
 }  // namespace
 
 Status ParseFaultConfig(const std::string& file, const YAML::Node& node, FaultConfig* config) {
@@ -95,7 +95,7 @@ Status WriteFaultTruth(const std::string& recording_dir, const FaultTruth& truth
   YAML::Emitter out;
   out.SetDoublePrecision(17);  // reads back to the identical double
   yaml::Emit(out, truth);
-  const std::string path = TruthPath(recording_dir);
+  const std::string path = FaultsTruthPath(recording_dir);
   std::ofstream file(path);
   file << "# Faults injected into this recording (sim/faults/faults.hpp): the configuration and what it did.\n"
        << "# Intervals are [first, last] stamp of the messages hit [s]; bursts: [first, last, packets].\n"
@@ -104,7 +104,7 @@ Status WriteFaultTruth(const std::string& recording_dir, const FaultTruth& truth
 }
 
 Status ReadFaultTruth(const std::string& recording_dir, FaultTruth* truth) {
-  const std::string path = TruthPath(recording_dir);
+  const std::string path = FaultsTruthPath(recording_dir);
   FaultTruth t;
   try {
     yaml::Parse(yaml::Section(path, "", "faults"), yaml::LoadFile(path), &t);

@@ -1,6 +1,7 @@
 // VLP-16 position packets on the sim clock (contract in position_source.hpp).
 #include "sim/lidar/position_source.hpp"
 #include "core/util/log.hpp"
+#include "core/util/validation.hpp"
 
 #include <cmath>
 
@@ -10,35 +11,30 @@ namespace {
 constexpr double kHourS = 3600.0;
 constexpr uint8_t kPpsLocked = 2;
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = "lidar_position: " + message;
-  return false;
-}
-
 }  // namespace
 
 double PpsLockedClockOffsetS(double epoch_unix_s) { return -std::fmod(epoch_unix_s, kHourS); }
 
 bool Vlp16PositionConfig::Validate(std::string* error) const {
-  if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) return Fail(error, "rate_hz must be in (0, 1000]");
-  if (!std::isfinite(t0_s)) return Fail(error, "t0_s must be finite");
-  if (!(epoch_unix_s >= 0.0 && std::isfinite(epoch_unix_s))) return Fail(error, "epoch_unix_s must be >= 0");
-  if (!std::isfinite(lidar_clock_offset_s)) return Fail(error, "lidar_clock_offset_s must be finite");
-  if (!std::isfinite(clock_drift_ppm)) return Fail(error, "clock_drift_ppm must be finite");
-  if (pps_status > 3) return Fail(error, "pps_status must be 0..3");
-  if (!(latitude_deg >= -90.0 && latitude_deg <= 90.0)) return Fail(error, "latitude_deg must be in [-90, 90]");
+  if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) return FailValidation(error, "rate_hz must be in (0, 1000]");
+  if (!std::isfinite(t0_s)) return FailValidation(error, "t0_s must be finite");
+  if (!(epoch_unix_s >= 0.0 && std::isfinite(epoch_unix_s))) return FailValidation(error, "epoch_unix_s must be >= 0");
+  if (!std::isfinite(lidar_clock_offset_s)) return FailValidation(error, "lidar_clock_offset_s must be finite");
+  if (!std::isfinite(clock_drift_ppm)) return FailValidation(error, "clock_drift_ppm must be finite");
+  if (pps_status > 3) return FailValidation(error, "pps_status must be 0..3");
+  if (!(latitude_deg >= -90.0 && latitude_deg <= 90.0)) return FailValidation(error, "latitude_deg must be in [-90, 90]");
   if (!(longitude_deg >= -180.0 && longitude_deg <= 180.0)) {
-    return Fail(error, "longitude_deg must be in [-180, 180]");
+    return FailValidation(error, "longitude_deg must be in [-180, 180]");
   }
   if (!(transmit_latency_s >= 0.0 && transmit_latency_s < 0.1)) {
-    return Fail(error, "transmit_latency_s must be in [0, 0.1)");
+    return FailValidation(error, "transmit_latency_s must be in [0, 0.1)");
   }
   if (pps_status == kPpsLocked) {
     // Sensor clock (s past hour) = t - offset; UTC past the hour = epoch + t: equal mod 3600 s (to 1 us).
     double d = std::fmod(-lidar_clock_offset_s - epoch_unix_s, kHourS);
     if (d < 0.0) d += kHourS;
     if (std::min(d, kHourS - d) > 1e-6) {
-      return Fail(error, "pps_status 2 (locked) needs lidar_clock_offset_s = -(epoch_unix_s mod 3600) = " +
+      return FailValidation(error, "pps_status 2 (locked) needs lidar_clock_offset_s = -(epoch_unix_s mod 3600) = " +
                              std::to_string(PpsLockedClockOffsetS(epoch_unix_s)) + ", got " +
                              std::to_string(lidar_clock_offset_s));
     }

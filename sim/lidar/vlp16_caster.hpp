@@ -137,6 +137,8 @@ class Vlp16Caster {
   /// at the edges.
   Vlp16Caster(const EmbreeScene& scene, const LidarIntrinsics& intrinsics, const Vlp16CasterConfig& config,
               uint64_t run_seed);
+  /// Holds a reference to the scene: a temporary would dangle.
+  Vlp16Caster(EmbreeScene&&, const LidarIntrinsics&, const Vlp16CasterConfig&, uint64_t) = delete;
 
   /// Fires `num_sequences` sequences. T_world_lidar_at(t) is called with non-decreasing times between the first
   /// and the last firing time of this call: with pose_per_firing once per laser firing, otherwise once per

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/util/log.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::sim {
 namespace {
@@ -56,11 +57,6 @@ void EulerZyxRates(const Signal& roll, const Signal& pitch, const Signal& yaw, E
       -pitch.d2 * sr - pd * rd * cr + yaw.d2 * cp * cr - yd * pd * sp * cr - yd * rd * cp * sr;
 }
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = "ScriptedBaseMotionConfig: " + message;
-  return false;
-}
-
 }  // namespace
 
 double ScriptedBaseMotionConfig::MinSpeedBound() const {
@@ -77,16 +73,16 @@ bool ScriptedBaseMotionConfig::Validate(std::string* error) const {
                            pitch_amplitude_rad, pitch_hz, duration_s, room_min_x_m, room_max_x_m, room_min_y_m,
                            room_max_y_m, margin_m, min_speed_mps, max_speed_mps};
   for (double v : values)
-    if (!std::isfinite(v)) return Fail(error, "a field is not finite");
-  if (radius_x_m <= 0 || radius_y_m <= 0) return Fail(error, "radius_x_m/radius_y_m must be > 0");
-  if (shape_harmonic_m < 0) return Fail(error, "shape_harmonic_m must be >= 0");
-  if (loop_period_s <= 0) return Fail(error, "loop_period_s must be > 0");
+    if (!std::isfinite(v)) return FailValidation(error, "a field is not finite");
+  if (radius_x_m <= 0 || radius_y_m <= 0) return FailValidation(error, "radius_x_m/radius_y_m must be > 0");
+  if (shape_harmonic_m < 0) return FailValidation(error, "shape_harmonic_m must be >= 0");
+  if (loop_period_s <= 0) return FailValidation(error, "loop_period_s must be > 0");
   if (bounce_amplitude_m < 0 || bounce_hz < 0 || roll_hz < 0 || pitch_hz < 0)
-    return Fail(error, "bounce_amplitude_m, bounce_hz, roll_hz, pitch_hz must be >= 0");
+    return FailValidation(error, "bounce_amplitude_m, bounce_hz, roll_hz, pitch_hz must be >= 0");
   if (std::abs(roll_amplitude_rad) > 0.5 || std::abs(pitch_amplitude_rad) > 0.5)
-    return Fail(error, "roll_amplitude_rad/pitch_amplitude_rad must be within +-0.5 rad (a wobble)");
-  if (duration_s <= 0) return Fail(error, "duration_s must be > 0");
-  if (margin_m < 0) return Fail(error, "margin_m must be >= 0");
+    return FailValidation(error, "roll_amplitude_rad/pitch_amplitude_rad must be within +-0.5 rad (a wobble)");
+  if (duration_s <= 0) return FailValidation(error, "duration_s must be > 0");
+  if (margin_m < 0) return FailValidation(error, "margin_m must be >= 0");
   const double reach_x = radius_x_m + shape_harmonic_m + margin_m;
   const double reach_y = radius_y_m + shape_harmonic_m + margin_m;
   if (center_x_m - reach_x < room_min_x_m || center_x_m + reach_x > room_max_x_m ||
@@ -94,19 +90,19 @@ bool ScriptedBaseMotionConfig::Validate(std::string* error) const {
     std::ostringstream os;
     os << "loop (centre + radius + shape_harmonic_m + margin_m) leaves the room [" << room_min_x_m << ", "
        << room_max_x_m << "] x [" << room_min_y_m << ", " << room_max_y_m << "] m";
-    return Fail(error, os.str());
+    return FailValidation(error, os.str());
   }
   if (MinSpeedBound() < min_speed_mps) {
     std::ostringstream os;
     os << "speed can drop to " << MinSpeedBound() << " m/s < min_speed_mps " << min_speed_mps
        << " (needs 3*shape_harmonic_m < min radius and a shorter loop_period_s)";
-    return Fail(error, os.str());
+    return FailValidation(error, os.str());
   }
   if (MaxSpeedBound() > max_speed_mps) {
     std::ostringstream os;
     os << "speed can reach " << MaxSpeedBound() << " m/s > max_speed_mps " << max_speed_mps
        << " (lengthen loop_period_s)";
-    return Fail(error, os.str());
+    return FailValidation(error, os.str());
   }
   return true;
 }

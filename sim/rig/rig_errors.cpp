@@ -11,13 +11,13 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-bool Check(bool ok, const std::string& field, const std::string& what, std::string* error) {
+bool CheckField(bool ok, const std::string& field, const std::string& what, std::string* error) {
   if (!ok && error) *error = "rig_errors." + field + " " + what;
   return ok;
 }
 
 bool Sigma(double v, double max, const std::string& field, std::string* error) {
-  return Check(std::isfinite(v) && v >= 0.0 && v <= max, field, "must be in [0, " + std::to_string(max) + "]",
+  return CheckField(std::isfinite(v) && v >= 0.0 && v <= max, field, "must be in [0, " + std::to_string(max) + "]",
                error);
 }
 
@@ -35,25 +35,25 @@ bool ValidateCalib(const CalibErrorConfig& c, std::string* error) {
 bool ValidateWobble(const AxisWobbleConfig& w, std::string* error) {
   const double max = 10.0 * kDegToRad;
   return Sigma(w.cone_half_angle_rad, max, "wobble.cone_half_angle_rad", error) &&
-         Check(std::isfinite(w.cone_phase_rad), "wobble.cone_phase_rad", "must be finite", error) &&
+         CheckField(std::isfinite(w.cone_phase_rad), "wobble.cone_phase_rad", "must be finite", error) &&
          Sigma(w.axis_tilt_rad, max, "wobble.axis_tilt_rad", error) &&
-         Check(std::isfinite(w.axis_tilt_azimuth_rad), "wobble.axis_tilt_azimuth_rad", "must be finite", error);
+         CheckField(std::isfinite(w.axis_tilt_azimuth_rad), "wobble.axis_tilt_azimuth_rad", "must be finite", error);
 }
 
 bool ValidateVibration(const RotorVibrationConfig& v, std::string* error) {
   const std::string p = "vibration.";
   if (!Sigma(v.imbalance_accel_mps2, 100.0, p + "imbalance_accel_mps2", error) ||
       !Sigma(v.imbalance_gyro_radps, 10.0, p + "imbalance_gyro_radps", error) ||
-      !Check(std::isfinite(v.reference_speed_radps) && v.reference_speed_radps > 0.0, p + "reference_speed_radps",
+      !CheckField(std::isfinite(v.reference_speed_radps) && v.reference_speed_radps > 0.0, p + "reference_speed_radps",
              "must be > 0", error) ||
-      !Check(std::isfinite(v.imbalance_phase_rad), p + "imbalance_phase_rad", "must be finite", error))
+      !CheckField(std::isfinite(v.imbalance_phase_rad), p + "imbalance_phase_rad", "must be finite", error))
     return false;
   for (size_t i = 0; i < v.harmonics.size(); ++i) {
     const VibrationHarmonic& h = v.harmonics[i];
     const std::string f = p + "harmonics[" + std::to_string(i) + "].";
-    if (!Check(h.order >= 1 && h.order <= 1000, f + "order", "must be in [1, 1000]", error) ||
+    if (!CheckField(h.order >= 1 && h.order <= 1000, f + "order", "must be in [1, 1000]", error) ||
         !Sigma(h.accel_mps2, 100.0, f + "accel_mps2", error) || !Sigma(h.gyro_radps, 10.0, f + "gyro_radps", error) ||
-        !Check(std::isfinite(h.phase_rad), f + "phase_rad", "must be finite", error))
+        !CheckField(std::isfinite(h.phase_rad), f + "phase_rad", "must be finite", error))
       return false;
   }
   return true;

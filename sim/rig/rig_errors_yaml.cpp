@@ -64,7 +64,7 @@ void Visit(V& v, RigErrorTruth& c) {
   v("config", &c.config), v("calibration_errors", &c.drawn);
 }
 
-std::string TruthPath(const std::string& dir) { return dir + "/truth/rig_errors.yaml"; }
+std::string RigErrorsTruthPath(const std::string& dir) { return dir + "/truth/rig_errors.yaml"; }
 
 }  // namespace
 
@@ -91,7 +91,7 @@ Status WriteRigErrorTruth(const std::string& recording_dir, const RigErrorConfig
   YAML::Emitter out;
   out.SetDoublePrecision(17);  // reads back to the identical double
   yaml::Emit(out, truth);
-  const std::string path = TruthPath(recording_dir);
+  const std::string path = RigErrorsTruthPath(recording_dir);
   std::ofstream file(path);
   file << "# Rig imperfections of this run (sim/rig/rig_errors.hpp). calib.yaml = truth/calib_true.yaml with\n"
        << "# calibration_errors applied (rotations as rotation vectors [rad], parent frame); the wobble and the\n"
@@ -101,7 +101,7 @@ Status WriteRigErrorTruth(const std::string& recording_dir, const RigErrorConfig
 }
 
 Status ReadRigErrorTruth(const std::string& recording_dir, RigErrorConfig* config, CalibErrors* errors) {
-  const std::string path = TruthPath(recording_dir);
+  const std::string path = RigErrorsTruthPath(recording_dir);
   RigErrorTruth t;
   try {
     yaml::Parse(yaml::Section(path, "", "rig_errors"), yaml::LoadFile(path), &t);

@@ -40,6 +40,7 @@ class RigState {
  public:
   /// Allocates the mjData; `model` must outlive this object. Starts as Reset(identity, 0, 0).
   explicit RigState(const RigModel& model);
+  explicit RigState(RigModel&&) = delete;  ///< holds a reference to the model: a temporary would dangle
   ~RigState();
   RigState(const RigState&) = delete;
   RigState& operator=(const RigState&) = delete;

@@ -8,7 +8,7 @@
 namespace rotolidar::sim {
 namespace {
 
-constexpr double kTwoPi = 2.0 * M_PI;
+constexpr double kRevolutionRad = 2.0 * M_PI;
 
 bool Finite(double x) { return std::isfinite(x); }
 
@@ -142,16 +142,16 @@ void StepperDrive::ControlTick(const EncoderSample& sample) {
   // Decode exactly as a reader of encoder.csv does, then unwrap next to the predicted angle.
   const double raw = decode_.EncoderAngle(sample.count);
   const double predicted = have_tick_ ? enc_theta_rad_ + enc_speed_radps_ * dt : ref.theta_rad;
-  const double theta = raw + kTwoPi * std::round((predicted - raw) / kTwoPi);
+  const double theta = raw + kRevolutionRad * std::round((predicted - raw) / kRevolutionRad);
   if (have_tick_ && dt > 0) {  // first-order low-pass of the finite-difference speed
-    const double gain = 1.0 - std::exp(-kTwoPi * p.speed_filter_hz * dt);
+    const double gain = 1.0 - std::exp(-kRevolutionRad * p.speed_filter_hz * dt);
     enc_speed_radps_ += gain * ((theta - enc_theta_rad_) / dt - enc_speed_radps_);
   }
   enc_theta_rad_ = theta;
 
   // PID on the position error. The slow part (P, I) may move at most max_correction_speed; the D part, bounded by
   // kd |omega_ref - omega|, stays fast: it is what damps the torsional mode.
-  const double count_rad = kTwoPi / config_.encoder.counts_per_rev;
+  const double count_rad = kRevolutionRad / config_.encoder.counts_per_rev;
   const double e = DeadZone(ref.theta_rad - theta, p.deadband_counts * count_rad);
   const double integral = integral_rad_s_ + e * period;
   const double pi_wanted = p.kp * e + p.ki_per_s * integral;
@@ -204,8 +204,8 @@ void StepperDrive::TrackSlip(double theta_rad, double equilibrium_rad) {
   // Electrical angle of the rotor from the commanded equilibrium; a slip is a move into a neighbouring
   // period's well. Hysteresis (1.25 pi instead of pi) keeps a rotor balancing on the unstable point from counting.
   const double delta = config_.stepper.RotorTeeth() * (theta_rad - equilibrium_rad);
-  if (std::abs(delta - kTwoPi * static_cast<double>(slip_index_)) <= 1.25 * M_PI) return;
-  const auto index = static_cast<int64_t>(std::llround(delta / kTwoPi));
+  if (std::abs(delta - kRevolutionRad * static_cast<double>(slip_index_)) <= 1.25 * M_PI) return;
+  const auto index = static_cast<int64_t>(std::llround(delta / kRevolutionRad));
   diag_.slipped_full_steps += 4 * std::abs(index - slip_index_);
   slip_index_ = index;
 }

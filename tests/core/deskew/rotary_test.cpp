@@ -1,5 +1,7 @@
 // The rotary transform: encoder interpolation, unwrapping, the uniform-rotation fallback, and DeskewScan (rotary
 // transform + carrier motion in one pass) against plain references written here.
+#include <type_traits>
+
 #include <gtest/gtest.h>
 
 #include "core/deskew/deskew.hpp"
@@ -46,6 +48,14 @@ double PlainAngle(const std::vector<std::pair<double, double>>& samples, double 
   const auto& [t1, a1] = samples[k];
   return a0 + (a1 - a0) * (t - t0) / (t1 - t0);
 }
+
+// Classes that keep a reference to their input refuse a temporary at compile time (it would dangle); the
+// interpolator keeps its own copy of the calibration and takes one.
+static_assert(!std::is_constructible_v<RotaryTransform, RotorAngleInterpolator>);
+static_assert(std::is_constructible_v<RotaryTransform, const RotorAngleInterpolator&>);
+static_assert(!std::is_constructible_v<MotionInterpolator, MotionTable>);
+static_assert(std::is_constructible_v<MotionInterpolator, const MotionTable&>);
+static_assert(std::is_constructible_v<RotorAngleInterpolator, RigCalib>);
 
 TEST(RotorAngleInterpolator, TracksAConstantSpeedRotorAcrossWraps) {
   const RigCalib calib = CalibWithEncoder(16384);

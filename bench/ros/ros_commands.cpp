@@ -9,15 +9,6 @@
 #include "bench/ros/bag_import.hpp"
 
 namespace rotolidar::bench {
-namespace {
-
-int Fail(const Status& s) {
-  std::cerr << "error: " << s.message << "\n";
-  return 1;
-}
-
-}  // namespace
-
 int CmdImport(int argc, char** argv) {
   OptionParser p("import",
                  "Convert a ROS 1 bag (velodyne_msgs/VelodyneScan, sensor_msgs/Imu, JointState, Image) "

@@ -9,6 +9,7 @@
 #include "bench/ros/bag_import.hpp"
 
 namespace rotolidar::bench {
+
 int CmdImport(int argc, char** argv) {
   OptionParser p("import",
                  "Convert a ROS 1 bag (velodyne_msgs/VelodyneScan, sensor_msgs/Imu, JointState, Image) "

@@ -9,18 +9,20 @@
 
 #include "bench/ros/bag_io.hpp"
 #include "bench/ros/bag_topics.hpp"
+#include "bench/ros/cloud_to_packets.hpp"
 #include "core/io/calib_yaml.hpp"
 #include "core/io/recording.hpp"
 
 namespace rotolidar::bench::rosmsg {
 namespace {
 
-enum class Stream { kLidar, kImu, kImage, kEncoder };
+enum class Stream { kLidar, kCloud, kImu, kImage, kEncoder };  // kCloud: LiDAR as sensor_msgs/PointCloud2
 
 /// The chosen topics and what each carries.
 struct Plan {
   std::map<std::string, Stream> streams;
   std::vector<std::string> topics;
+  bool lidar_is_cloud = false;  ///< the LiDAR topic is a sensor_msgs/PointCloud2
 };
 
 /// "BAG: topic T, message I: " (every per-message error starts so).
@@ -29,7 +31,7 @@ std::string Where(const std::string& bag, const BagMessage& m) {
 }
 
 Status ChooseTopics(const BagReader& bag, const BagImportOptions& o, Plan* plan, BagImportSummary* sum) {
-  const TopicRole roles[] = {{"lidar", &VelodyneScanMsg::Type(), true},
+  const TopicRole roles[] = {{"lidar", &VelodyneScanMsg::Type(), true, &PointCloud2Msg::Type()},
                              {"imu", &ImuMsg::Type(), true},
                              {"encoder", &JointStateMsg::Type(), true},
                              {"image", &ImageMsg::Type(), false}};
@@ -38,18 +40,22 @@ Status ChooseTopics(const BagReader& bag, const BagImportOptions& o, Plan* plan,
   const Stream streams[] = {Stream::kLidar, Stream::kImu, Stream::kEncoder, Stream::kImage};
   for (int i = 0; i < 4; ++i) {
     if (streams[i] == Stream::kImage && *requested[i] == "none") continue;
-    if (Status s = SelectTopic(bag, roles[i], *requested[i], chosen[i]); !s) return s;
+    const RosMsgType* type = nullptr;
+    if (Status s = SelectTopic(bag, roles[i], *requested[i], chosen[i], &type); !s) return s;
     if (chosen[i]->empty()) continue;
     if (plan->streams.count(*chosen[i]))
       return Status::Error(bag.path() + ": topic " + *chosen[i] + " is chosen for two streams");
-    plan->streams[*chosen[i]] = streams[i];
+    plan->streams[*chosen[i]] = type == &PointCloud2Msg::Type() ? Stream::kCloud : streams[i];
+    plan->lidar_is_cloud |= type == &PointCloud2Msg::Type();
     plan->topics.push_back(*chosen[i]);
   }
   return Status::Ok();
 }
 
-/// Parses `m` as its stream's message and lowers *min_ns to its earliest stamp (header, and each packet's).
-Status EarliestStamp(const std::string& bag, Stream stream, const BagMessage& m, int64_t* min_ns) {
+/// Parses `m` as its stream's message and lowers *min_ns to its earliest stamp (header, each packet's, or a
+/// cloud's earliest firing sequence).
+Status EarliestStamp(const std::string& bag, const LidarIntrinsics& lidar, Stream stream, const BagMessage& m,
+                     int64_t* min_ns) {
   Status s;
   int64_t t = std::numeric_limits<int64_t>::max();
   if (stream == Stream::kLidar) {
@@ -57,6 +63,12 @@ Status EarliestStamp(const std::string& bag, Stream stream, const BagMessage& m,
     s = Parse(m.body, &scan);
     for (const VelodynePacketMsg& p : scan.packets) t = std::min(t, p.stamp.ToNs());
     if (s && scan.packets.empty()) t = scan.header.stamp.ToNs();
+  } else if (stream == Stream::kCloud) {  // the earliest firing sequence (point times may precede the stamp)
+    PointCloud2Msg cloud;
+    std::vector<CloudPoint> points;
+    s = Parse(m.body, &cloud);
+    if (s) s = ReadCloudPoints(cloud, &points);
+    t = cloud.header.stamp.ToNs() + EarliestSequenceOffsetNs(points, lidar);
   } else if (stream == Stream::kImu) {
     ImuMsg imu;
     s = Parse(m.body, &imu);
@@ -79,12 +91,14 @@ Status EarliestStamp(const std::string& bag, Stream stream, const BagMessage& m,
 class Converter {
  public:
   Converter(std::string bag, const RigCalib& calib, int64_t epoch_ns, RecordingWriter* writer)
-      : bag_(std::move(bag)), calib_(calib), epoch_ns_(epoch_ns), writer_(writer) {}
+      : bag_(std::move(bag)), calib_(calib), epoch_ns_(epoch_ns), writer_(writer), packetizer_(calib.lidar) {}
 
   Status Convert(Stream stream, const BagMessage& m, BagImportSummary* sum) {
     switch (stream) {
       case Stream::kLidar:
         return Lidar(m, sum);
+      case Stream::kCloud:
+        return Cloud(m, sum);
       case Stream::kImu:
         return Imu(m, sum);
       case Stream::kImage:
@@ -95,16 +109,27 @@ class Converter {
     return Status::Ok();
   }
 
+  /// Writes the packet the last cloud left unfinished (PointCloud2 input).
+  Status Finish(BagImportSummary* sum) {
+    std::vector<LidarPacket> packets;
+    packetizer_.Flush(&packets);
+    return WritePackets(packets, sum);
+  }
+
  private:
   /// Rig time of a stamp: one correctly rounded division of exact nanoseconds, so a stamp written from a CSV
   /// time with 9 decimals reads back as the identical double.
   Seconds RigTime(const RosTime& t, BagImportSummary* sum) {
     const Seconds rig = static_cast<double>(t.ToNs() - epoch_ns_) / 1e9;
+    Span(rig, sum);
+    return rig;
+  }
+
+  void Span(Seconds rig, BagImportSummary* sum) {
     if (!seen_any_) sum->first_t_s = sum->last_t_s = rig;
     seen_any_ = true;
     sum->first_t_s = std::min(sum->first_t_s, rig);
     sum->last_t_s = std::max(sum->last_t_s, rig);
-    return rig;
   }
 
   Status Increasing(const BagMessage& m, const RosTime& stamp) {
@@ -131,6 +156,31 @@ class Converter {
       ++sum->packets;
     }
     ++sum->scans;
+    return Status::Ok();
+  }
+
+  /// A cloud -> the VLP-16 packets it completes (cloud_to_packets.hpp); the span covers the packets' captures.
+  Status Cloud(const BagMessage& m, BagImportSummary* sum) {
+    PointCloud2Msg cloud;
+    if (Status s = Parse(m.body, &cloud); !s) return Status::Error(Where(bag_, m) + s.message);
+    if (Status s = Increasing(m, cloud.header.stamp); !s) return s;
+    std::vector<CloudPoint> points;
+    if (Status s = ReadCloudPoints(cloud, &points); !s) return Status::Error(Where(bag_, m) + s.message);
+    std::vector<LidarPacket> packets;
+    const Seconds stamp = RigTime(cloud.header.stamp, sum);
+    if (Status s = packetizer_.Add(stamp, points, &packets); !s) return Status::Error(Where(bag_, m) + s.message);
+    sum->cloud_points += points.size();
+    ++sum->scans;
+    if (Status s = WritePackets(packets, sum); !s) return Status::Error(Where(bag_, m) + s.message);
+    return Status::Ok();
+  }
+
+  Status WritePackets(const std::vector<LidarPacket>& packets, BagImportSummary* sum) {
+    for (const LidarPacket& p : packets) {
+      if (Status s = writer_->Write(p); !s) return s;
+      Span(p.t_capture_s, sum);
+      ++sum->packets;
+    }
     return Status::Ok();
   }
 
@@ -202,6 +252,7 @@ class Converter {
   const RigCalib& calib_;
   int64_t epoch_ns_;
   RecordingWriter* writer_;
+  CloudPacketizer packetizer_;
   std::map<std::string, int64_t> last_ns_;
   bool seen_any_ = false;
 };
@@ -218,7 +269,7 @@ Status ChooseEpoch(const BagReader& bag, const Plan& plan, const BagImportOption
                    int64_t* epoch_ns) {
   int64_t min_ns = std::numeric_limits<int64_t>::max();
   Status s = bag.ForEach(plan.topics, [&](const BagMessage& m) {
-    return EarliestStamp(bag.path(), plan.streams.at(m.topic), m, &min_ns);
+    return EarliestStamp(bag.path(), calib->lidar, plan.streams.at(m.topic), m, &min_ns);
   });
   if (!s) return s;
   if (min_ns == std::numeric_limits<int64_t>::max())
@@ -227,7 +278,12 @@ Status ChooseEpoch(const BagReader& bag, const Plan& plan, const BagImportOption
   *epoch_ns = epoch_s * 1000000000LL;
   const double old_epoch = calib->epoch_unix_s;
   calib->epoch_unix_s = static_cast<double>(epoch_s);
-  if (o.lidar_clock == LidarClock::kPps) {
+  if (plan.lidar_is_cloud) {  // packets made on the rig clock
+    if (o.lidar_clock == LidarClock::kPps)
+      return Status::Error(bag.path() + ": --lidar-clock pps applies to raw VelodyneScan packets; the points of " +
+                           "a PointCloud2 carry ROS times (the new VLP-16 clock is the rig clock)");
+    calib->lidar_clock_offset_s = 0.0;
+  } else if (o.lidar_clock == LidarClock::kPps) {
     calib->lidar_clock_offset_s = -static_cast<double>(epoch_s % 3600);
   } else if (old_epoch > 0.0) {
     calib->lidar_clock_offset_s += old_epoch - calib->epoch_unix_s;
@@ -263,9 +319,11 @@ Status ImportBag(const std::string& bag_path, const std::string& out_dir, const 
   Converter converter(bag.path(), calib, epoch_ns, &writer);
   Status s = bag.ForEach(plan.topics,
                          [&](const BagMessage& m) { return converter.Convert(plan.streams.at(m.topic), m, summary); });
+  if (s) s = converter.Finish(summary);
   if (Status c = writer.Close(); s && !c) s = c;
   if (!s) return s;
-  if (summary->packets == 0) return Status::Error(bag_path + ": topic " + summary->lidar_topic + " holds no packets");
+  if (summary->packets == 0)
+    return Status::Error(bag_path + ": topic " + summary->lidar_topic + " holds no packets (or no cloud points)");
   if (summary->encoder < 2)
     return Status::Error(bag_path + ": topic " + summary->encoder_topic + ": " + std::to_string(summary->encoder) +
                          " messages, a recording needs at least 2 encoder samples");

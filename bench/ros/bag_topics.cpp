@@ -3,27 +3,39 @@
 namespace rotolidar::bench::rosmsg {
 namespace {
 
-constexpr const char* kPointCloud2 = "sensor_msgs/PointCloud2";
-
 std::string Flag(const TopicRole& role) { return std::string("--") + role.role + "-topic"; }
 
-Status PointCloudNotSupported(const BagReader& bag, const std::string& topic) {
-  return Status::Error(bag.path() + ": topic " + topic +
-                       " is a sensor_msgs/PointCloud2: LiDAR import from point "
-                       "clouds is not supported yet; it needs velodyne_msgs/VelodyneScan (the raw VLP-16 packets, "
-                       "as the velodyne driver records them; docs/ros.md)");
+/// "velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2" for a role with two types.
+std::string TypeNames(const TopicRole& role) {
+  std::string s = role.type->datatype;
+  if (role.alt_type) s += std::string(" or ") + role.alt_type->datatype;
+  return s;
+}
+
+/// The role's type named `datatype`, or nullptr.
+const RosMsgType* TypeOf(const TopicRole& role, const std::string& datatype) {
+  if (datatype == role.type->datatype) return role.type;
+  if (role.alt_type && datatype == role.alt_type->datatype) return role.alt_type;
+  return nullptr;
 }
 
 Status CheckType(const BagReader& bag, const TopicRole& role, const BagTopic& t) {
-  if (t.datatype != role.type->datatype) {
-    if (std::string(role.role) == "lidar" && t.datatype == kPointCloud2) return PointCloudNotSupported(bag, t.topic);
+  const RosMsgType* type = TypeOf(role, t.datatype);
+  if (type == nullptr)
     return Status::Error(bag.path() + ": topic " + t.topic + " (" + Flag(role) + ") has type " + t.datatype +
-                         ", expected " + role.type->datatype);
-  }
-  if (t.md5 != role.type->md5 && t.md5 != "*") {
+                         ", expected " + TypeNames(role));
+  if (t.md5 != type->md5 && t.md5 != "*") {
     return Status::Error(bag.path() + ": topic " + t.topic + ": type " + t.datatype + " has md5sum " + t.md5 +
-                         ", expected " + role.type->md5 + " (a different definition of the message)");
+                         ", expected " + type->md5 + " (a different definition of the message)");
   }
+  return Status::Ok();
+}
+
+Status Choose(const BagReader& bag, const TopicRole& role, const BagTopic& t, std::string* topic,
+              const RosMsgType** chosen_type) {
+  if (Status s = CheckType(bag, role, t); !s) return s;
+  *topic = t.topic;
+  if (chosen_type) *chosen_type = TypeOf(role, t.datatype);
   return Status::Ok();
 }
 
@@ -39,8 +51,10 @@ std::string DescribeTopics(const std::vector<BagTopic>& topics) {
   return s;
 }
 
-Status SelectTopic(const BagReader& bag, const TopicRole& role, const std::string& requested, std::string* topic) {
+Status SelectTopic(const BagReader& bag, const TopicRole& role, const std::string& requested, std::string* topic,
+                   const RosMsgType** chosen_type) {
   topic->clear();
+  if (chosen_type) *chosen_type = nullptr;
   if (!requested.empty()) {
     std::vector<BagTopic> same_name;
     for (const BagTopic& t : bag.topics())
@@ -49,29 +63,18 @@ Status SelectTopic(const BagReader& bag, const TopicRole& role, const std::strin
       return Status::Error(bag.path() + ": no topic " + requested + " (" + Flag(role) + "); the bag has " +
                            DescribeTopics(bag.topics()));
     for (const BagTopic& t : same_name)
-      if (t.datatype == role.type->datatype) {
-        if (Status s = CheckType(bag, role, t); !s) return s;
-        *topic = t.topic;
-        return Status::Ok();
-      }
+      if (TypeOf(role, t.datatype)) return Choose(bag, role, t, topic, chosen_type);
     return CheckType(bag, role, same_name.front());
   }
-  std::vector<BagTopic> candidates, clouds;
-  for (const BagTopic& t : bag.topics()) {
-    if (t.datatype == role.type->datatype) candidates.push_back(t);
-    if (t.datatype == kPointCloud2) clouds.push_back(t);
-  }
-  if (candidates.size() == 1) {
-    if (Status s = CheckType(bag, role, candidates.front()); !s) return s;
-    *topic = candidates.front().topic;
-    return Status::Ok();
-  }
+  std::vector<BagTopic> candidates;
+  for (const BagTopic& t : bag.topics())
+    if (TypeOf(role, t.datatype)) candidates.push_back(t);
+  if (candidates.size() == 1) return Choose(bag, role, candidates.front(), topic, chosen_type);
   if (candidates.size() > 1)
-    return Status::Error(bag.path() + ": several " + role.type->datatype + " topics: " + DescribeTopics(candidates) +
+    return Status::Error(bag.path() + ": several " + TypeNames(role) + " topics: " + DescribeTopics(candidates) +
                          "; choose one with " + Flag(role));
   if (!role.required) return Status::Ok();
-  if (std::string(role.role) == "lidar" && !clouds.empty()) return PointCloudNotSupported(bag, clouds.front().topic);
-  return Status::Error(bag.path() + ": no " + role.type->datatype + " topic for the " + role.role +
+  return Status::Error(bag.path() + ": no " + TypeNames(role) + " topic for the " + role.role +
                        " stream (a recording needs one); the bag has " + DescribeTopics(bag.topics()));
 }
 

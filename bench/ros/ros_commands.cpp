@@ -18,7 +18,8 @@ int CmdImport(int argc, char** argv) {
   p.AddPositional("BAG", "the ROS 1 bag (.bag)");
   p.AddPositional("OUT_DIR", "the recording folder to write");
   p.Add("calib", "", "-", "the rig's calib.yaml (required): geometry, encoder counts_per_rev and zero offset");
-  p.Add("lidar-topic", "", "-", "velodyne_msgs/VelodyneScan topic; empty = the only one in the bag");
+  p.Add("lidar-topic", "", "-", "velodyne_msgs/VelodyneScan, or sensor_msgs/PointCloud2 with ring and time (or t) "
+                                "fields; empty = the only one in the bag");
   p.Add("imu-topic", "", "-", "sensor_msgs/Imu topic (its frame = the rig's imu frame); empty = the only one");
   p.Add("encoder-topic", "", "-",
         "sensor_msgs/JointState topic, position[0] = motor angle [rad]; empty = the only one");

@@ -174,15 +174,19 @@ TEST_F(BagImportErrors, WrongMessageType) {
   ExpectMessage(Import(dir_ + "/md5.bag"), {"md5sum 0123456789abcdef0123456789abcdef", "expected 6a62c6daae10"});
 }
 
-TEST_F(BagImportErrors, PointCloudLidarIsNotSupportedYet) {
+// A PointCloud2 LiDAR topic is taken (cloud_errors_test.cpp has the valid and malformed clouds); these have no
+// fields. A LiDAR flag naming a topic of a third type lists both accepted types.
+TEST_F(BagImportErrors, PointCloudLidarWithoutFields) {
   Content c;
   c.lidar_type = "cloud";
   const std::string bag = WriteBag(c);
-  ExpectMessage(Import(bag),
-                {"/velodyne_points is a sensor_msgs/PointCloud2", "not supported yet", "velodyne_msgs/VelodyneScan"});
+  ExpectMessage(Import(bag), {"test.bag: topic /velodyne_points, message 0: field 'x': missing", "the cloud has none"});
   BagImportOptions o;
   o.lidar_topic = "/velodyne_points";
-  ExpectMessage(Import(bag, o), {"not supported yet"});
+  ExpectMessage(Import(bag, o), {"message 0: field 'x': missing"});
+  o.lidar_topic = "/imu";
+  ExpectMessage(Import(bag, o), {"topic /imu (--lidar-topic) has type sensor_msgs/Imu, expected "
+                                 "velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2"});
 }
 
 TEST_F(BagImportErrors, BadMessagesNameTopicIndexAndField) {

@@ -22,7 +22,8 @@ CPP
 if [ ! -x "$work/fuzz_wire" ]; then
   clang++ -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -I. -I/usr/include/eigen3 -I/usr/include/opencv4 \
     "$work/main.cpp" tests/fuzz/fuzz_wire.cpp core/wire/rig_protocol.cpp core/wire/packet_orderer.cpp \
-    core/wire/vlp16.cpp core/wire/vlp16_decoder.cpp core/wire/pcap.cpp core/types/calib.cpp core/util/log.cpp \
+    core/wire/vlp16.cpp core/wire/vlp16_decoder.cpp core/wire/packet_gaps.cpp core/wire/pcap.cpp core/types/calib.cpp \
+    core/util/log.cpp \
     -lpcap -lopencv_core -o "$work/fuzz_wire"
 fi
 cd "$work"

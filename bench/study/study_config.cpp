@@ -122,6 +122,35 @@ void Visit(V& v, StudyPlot& p) {
   v("x", &p.x), v("title", &p.title);
 }
 
+template <class V>
+void Visit(V& v, StudySlurmConfig& s) {
+  v("partition", &s.partition), v("time_per_point", &s.time_per_point), v("mem_per_point", &s.mem_per_point);
+  v("cpus_per_point", &s.cpus_per_point), v("max_parallel", &s.max_parallel), v("sbatch_args", &s.sbatch_args);
+  v("poll_interval_s", &s.poll_interval_s);
+}
+
+/// rank_by: a list of metric names, each checked where it stands.
+static void ReadRankBy(const yaml::Section& at, const YAML::Node& n, std::vector<std::string>* rank_by) {
+  if (!n.IsSequence()) throw yaml::ParseError(yaml::Where(at.file, n) + "rank_by: expected a list of metric names");
+  std::vector<std::string> names;
+  for (const YAML::Node& m : n) {
+    yaml::ReadAs(at.file, m, at.path, &names.emplace_back());
+    if (!FindStudyMetric(names.back()))
+      throw yaml::ParseError(yaml::Where(at.file, m) + "rank_by: unknown metric '" + names.back() +
+                             "' (docs/studies.md lists them)");
+  }
+  *rank_by = std::move(names);
+}
+
+/// slurm: the section's fields, then its Validate, so a bad value names the section's line.
+static void ReadSlurm(const yaml::Section& at, const YAML::Node& n, StudySlurmConfig* slurm) {
+  StudySlurmConfig s = *slurm;
+  yaml::ReadValue(at, n, &s);
+  std::string why;
+  if (!s.Validate(&why)) throw yaml::ParseError(yaml::Where(at.file, n) + why);
+  *slurm = std::move(s);
+}
+
 /// In this order: the base sim config, the study's duration over it, then the sweep's variants start from it.
 template <class V>
 void Visit(V& v, StudyConfig& c) {
@@ -131,6 +160,7 @@ void Visit(V& v, StudyConfig& c) {
     ParseSweep(at, n, c.base, sweep);
   };
   v("sweep", yaml::Custom(&c.sweep, read_sweep)), v("plots", yaml::Custom(&c.plots, ReadPlots));
+  v("rank_by", yaml::Custom(&c.rank_by, ReadRankBy)), v("slurm", yaml::Custom(&c.slurm, ReadSlurm));
 }
 
 namespace {
@@ -220,6 +250,9 @@ bool StudyConfig::Validate(std::string* error) const {
     if (p.kind == StudyPlotKind::kLine && !Swept(sweep, p.x))
       return fail("plots: line plot x '" + p.x + "' must be a swept axis (motor_speed_radps or seed)");
   }
+  for (const std::string& m : rank_by)
+    if (!FindStudyMetric(m)) return fail("rank_by: unknown metric '" + m + "' (docs/studies.md lists them)");
+  if (!slurm.Validate(&why)) return fail(why);
   return true;
 }
 

@@ -21,12 +21,15 @@
 //     - coverage_total                          # shorthand: a line plot of the metric against motor speed
 //     - {kind: line, metric: ate_rmse_m, x: motor_speed_radps, title: ...}
 //     - {kind: bars, metrics: [coverage_total, completeness_total], title: ...}
+//   rank_by: [ate_rmse_m, coverage_total]       # study.html's ranking (study_ranking.hpp); [] = none
+//   slurm: {partition: ..., time_per_point: ..., ...}  # the Slurm backend's sbatch options (study_slurm_config.hpp)
 // A point applies, in order: the base config, its variant's keys, then the typed axes (speed, profile, axis,
 // scene, carrier, seed). Axes left out keep the (variant's) config value and are not part of a point's name.
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "bench/study/study_slurm_config.hpp"
 #include "core/util/status.hpp"
 #include "sim/sim_config.hpp"
 
@@ -70,9 +73,13 @@ struct StudyConfig {
   std::string slam_config_path;  ///< "" = the estimator's defaults; else an absolute or CWD-relative path
   StudySweep sweep;
   std::vector<StudyPlot> plots;  ///< empty = DefaultStudyPlots(sweep)
+  StudySlurmConfig slurm;        ///< used by `--backend slurm` only
+  /// The metrics study.html ranks the configurations by (bench/study/study_ranking.hpp); empty = no ranking.
+  std::vector<std::string> rank_by = {"ate_rmse_m", "coverage_total"};
 
   /// False with a message naming the field: an invalid base or variant config, a bad speed, duplicate or
-  /// malformed variant names, unknown plot metrics, a line plot whose x is not swept, more than 10000 points.
+  /// malformed variant names, unknown plot metrics, a line plot whose x is not swept, more than 10000 points,
+  /// an invalid slurm section (StudySlurmConfig::Validate).
   bool Validate(std::string* error) const;
 };
 

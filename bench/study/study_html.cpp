@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bench/report/svg_plot.hpp"
+#include "bench/study/study_ranking.hpp"
 #include "bench/study/study_report.hpp"
 #include "bench/study/study_seeds.hpp"
 
@@ -30,6 +31,7 @@ const char* kStyle =
     "body{font-family:sans-serif;margin:1.5em;color:#222}"
     "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
     "th{background:#eee;position:sticky;top:0}td:first-child{text-align:left}tr.failed{background:#fdd}"
+    "tr.best{background:#dfd;font-weight:bold}.warn{color:#842;font-size:13px}"
     ".figs{display:flex;flex-wrap:wrap;gap:12px}.note{color:#555;font-size:13px}";
 
 /// The table rows of study.csv as HTML (the same numbers, so page and CSV cannot disagree).
@@ -77,6 +79,53 @@ void WriteSeedTable(const StudyResult& result, std::ostringstream& os) {
   os << "</table>\n";
 }
 
+/// "mean ± sd [min, max]" of one metric over a group's seeds.
+std::string SpreadCell(const MetricSpread& s) {
+  if (s.n == 0) return "no value";
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "%.4g &plusmn; %.2g [%.4g, %.4g]", s.mean, s.sd, s.min, s.max);
+  return buf;
+}
+
+/// The configurations ranked per partition (study_ranking.hpp), the best of each marked.
+void WriteRanking(const StudyConfig& config, const StudyResult& result, std::ostringstream& os) {
+  const std::vector<RankedGroup> ranked = RankStudyGroups(result, config.rank_by);
+  if (ranked.empty()) return;
+  os << "<h2>Ranking</h2>\n<p class=\"note\">Points that differ only in seed form a configuration; configurations "
+        "are ranked within each scene/carrier by the sum of their ranks on ";
+  for (size_t m = 0; m < config.rank_by.size(); ++m)
+    os << (m ? ", " : "") << "<b>" << XmlEscape(config.rank_by[m]) << "</b> ("
+       << (HigherIsBetter(config.rank_by[m]) ? "higher" : "lower") << " is better)";
+  os << " (means over seeds); a configuration with a failed seed ranks last. Cells: mean &plusmn; standard deviation "
+        "[min, max] over seeds. t: Welch's t of the first metric against the best; |t| &lt; 2 means the seeds do "
+        "not separate it from the best.</p>\n";
+  std::string partition = "\x01";
+  for (const RankedGroup& g : ranked) {
+    if (g.partition != partition) {
+      if (partition != "\x01") os << "</table>\n";
+      partition = g.partition;
+      os << "<h3>" << XmlEscape(partition) << "</h3>\n<table><tr><th>rank</th><th>configuration</th><th>seeds</th>"
+         << "<th>failed</th><th>score</th>";
+      for (const std::string& m : config.rank_by) os << "<th>" << XmlEscape(m) << "</th>";
+      os << "<th>t vs best</th></tr>\n";
+    }
+    os << "<tr" << (g.rank == 1 ? " class=\"best\"" : g.failed > 0 ? " class=\"failed\"" : "") << "><td>" << g.rank
+       << (g.rank == 1 ? " &#9733; best" : "") << "</td><td>" << XmlEscape(g.design) << "</td><td>" << g.seeds
+       << "</td><td>" << g.failed << "</td><td>" << g.score << "</td>";
+    for (const MetricSpread& s : g.metrics) os << "<td>" << SpreadCell(s) << "</td>";
+    char t[32];
+    std::snprintf(t, sizeof(t), "%.2f", g.t_vs_best);
+    os << "<td>" << (g.rank == 1 ? "&mdash;" : std::isfinite(g.t_vs_best) ? t : "n/a") << "</td></tr>\n";
+  }
+  os << "</table>\n";
+}
+
+const char* kHostLoadWarning =
+    "<p class=\"warn\">&#9888; Time columns (slam_median_scan_ms, slam_realtime_factor, sim_wall_s, slam_wall_s, "
+    "runtime_s) measure the host as much as the configuration: how many points ran at once (--jobs), what else the "
+    "machine was doing, and on Slurm which node a task landed on. Compare them only between points run together on "
+    "one otherwise idle machine; the accuracy and coverage columns do not depend on the host.</p>\n";
+
 }  // namespace
 
 std::string StudyHtml(const StudyConfig& config, const StudyResult& result, const std::vector<StudyFigure>& figures) {
@@ -90,9 +139,10 @@ std::string StudyHtml(const StudyConfig& config, const StudyResult& result, cons
         "differ only in seed are averaged (error bars: standard deviation). Metric definitions: docs/studies.md, "
         "docs/metrics.md.</p>\n<div class=\"figs\">\n";
   for (const StudyFigure& f : figures) os << "<figure>" << f.svg << "</figure>\n";
-  os << "</div>\n";
+  os << "</div>\n" << kHostLoadWarning;
+  WriteRanking(config, result, os);
   WriteSeedTable(result, os);
-  os << "<h2>Points</h2>\n";
+  os << "<h2>Points</h2>\n" << kHostLoadWarning;
   WriteTable(result, os);
   os << "</body></html>\n";
   return os.str();

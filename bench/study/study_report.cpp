@@ -12,8 +12,6 @@
 namespace rotolidar::bench {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 std::string Num(double v) {
   if (!std::isfinite(v)) return "";
   char buf[32];
@@ -60,7 +58,7 @@ std::string GroupLabel(const StudyPoint& p, const std::set<std::string>& skip) {
 }
 
 struct MeanStd {
-  double mean = kNaN, std = kNaN;
+  double mean = kStudyNaN, std = kStudyNaN;
 };
 MeanStd Summarize(const std::vector<double>& v) {
   MeanStd m;
@@ -69,12 +67,12 @@ MeanStd Summarize(const std::vector<double>& v) {
   for (double x : v) s += x;
   m.mean = s / v.size();
   for (double x : v) s2 += (x - m.mean) * (x - m.mean);
-  m.std = v.size() > 1 ? std::sqrt(s2 / (v.size() - 1)) : kNaN;
+  m.std = v.size() > 1 ? std::sqrt(s2 / (v.size() - 1)) : kStudyNaN;
   return m;
 }
 
 double Value(const StudyPointResult& r, size_t metric) {
-  return r.state == PointState::kFailed ? kNaN : r.metrics[metric];
+  return r.state == PointState::kFailed ? kStudyNaN : r.metrics[metric];
 }
 
 std::string LineSvg(const StudyPlot& plot, const StudyResult& result, const std::string& title) {

@@ -19,8 +19,6 @@ namespace rotolidar::bench {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 /// A value as a folder-name fragment: [A-Za-z0-9._-] kept, anything else '_'.
 std::string Sanitize(const std::string& value) {
   std::string out = value;
@@ -86,7 +84,7 @@ bool IsFinished(const std::string& dir, const std::string& config_text) {
 double ReadRecordedRuntime(const std::string& dir) {
   const nlohmann::json j = nlohmann::json::parse(ReadText(dir + "/point_status.json"), nullptr, false);
   if (j.is_object() && j.contains("runtime_s") && j["runtime_s"].is_number()) return j["runtime_s"].get<double>();
-  return kNaN;
+  return kStudyNaN;
 }
 
 Status WriteStatus(const std::string& dir, const StudyPointResult& r) {
@@ -184,7 +182,7 @@ Status ReadPointMetrics(const std::string& path, std::vector<double>* values) {
   if (!fs::exists(path)) return Status::Error(path + ": missing");
   const nlohmann::json j = nlohmann::json::parse(ReadText(path), nullptr, false);
   if (j.is_discarded() || !j.is_object()) return Status::Error(path + ": not a JSON object");
-  values->assign(StudyMetrics().size(), kNaN);
+  values->assign(StudyMetrics().size(), kStudyNaN);
   for (size_t i = 0; i < StudyMetrics().size(); ++i) {
     for (const std::string& pointer : StudyMetrics()[i].json_pointers) {
       const nlohmann::json::json_pointer ptr(pointer);
@@ -196,16 +194,12 @@ Status ReadPointMetrics(const std::string& path, std::vector<double>* values) {
   return Status::Ok();
 }
 
-namespace {
-
-/// One row per point: finished points read back (kResumed), the others get their sim_config.yaml and are
-/// listed in *pending.
-Status PreparePoints(const std::vector<StudyPoint>& points, const std::string& out_dir, StudyResult* res,
-                     std::vector<size_t>* pending) {
+Status PrepareStudyPoints(const std::vector<StudyPoint>& points, const std::string& out_dir, StudyResult* res,
+                          std::vector<size_t>* pending) {
   for (const StudyPoint& p : points) {
     StudyPointResult r;
     r.point = p;
-    r.metrics.assign(StudyMetrics().size(), kNaN);
+    r.metrics.assign(StudyMetrics().size(), kStudyNaN);
     const std::string dir = out_dir + "/points/" + p.id, text = PointConfigText(p);
     std::error_code ec;
     fs::create_directories(dir, ec);
@@ -224,7 +218,17 @@ Status PreparePoints(const std::vector<StudyPoint>& points, const std::string& o
   return Status::Ok();
 }
 
-}  // namespace
+void FinishStudyResult(StudyResult* res) {
+  res->ran = res->resumed = res->failed = res->not_run = 0;
+  for (StudyPointResult& r : res->points) {
+    for (size_t i = 0; i < StudyMetrics().size(); ++i)  // the one metric the study measures itself
+      if (StudyMetrics()[i].name == "runtime_s") r.metrics[i] = r.runtime_s;
+    res->ran += r.state == PointState::kRan;
+    res->resumed += r.state == PointState::kResumed;
+    res->failed += r.state == PointState::kFailed;
+    res->not_run += r.state == PointState::kFailed && r.message == "not run: the study was stopped";
+  }
+}
 
 Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const PointRunner& runner,
                 StudyResult* result) {
@@ -232,7 +236,7 @@ Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const
   if (Status s = ExpandStudy(config, &points); !s) return s;
   StudyResult res;
   std::vector<size_t> pending;
-  if (Status s = PreparePoints(points, options.out_dir, &res, &pending); !s) return s;
+  if (Status s = PrepareStudyPoints(points, options.out_dir, &res, &pending); !s) return s;
   const size_t total = res.points.size();
   std::mutex mutex;
   size_t done = total - pending.size();
@@ -264,14 +268,7 @@ Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const
   std::vector<std::thread> threads;
   for (size_t t = 0; t < jobs; ++t) threads.emplace_back(worker);
   for (std::thread& t : threads) t.join();
-  for (StudyPointResult& r : res.points) {
-    for (size_t i = 0; i < StudyMetrics().size(); ++i)  // the one metric the study measures itself
-      if (StudyMetrics()[i].name == "runtime_s") r.metrics[i] = r.runtime_s;
-    res.ran += r.state == PointState::kRan;
-    res.resumed += r.state == PointState::kResumed;
-    res.failed += r.state == PointState::kFailed;
-    res.not_run += r.state == PointState::kFailed && r.message == "not run: the study was stopped";
-  }
+  FinishStudyResult(&res);
   *result = std::move(res);
   return Status::Ok();
 }

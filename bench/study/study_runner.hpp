@@ -7,7 +7,10 @@
 //   points/<point id>/sim_config.yaml   the point's full sim config (written before it runs)
 //   points/<point id>/log.txt           the child's stdout + stderr
 //   points/<point id>/metrics.json      demo's metrics (written by renaming: its presence = finished)
-//   points/<point id>/point_status.json the study's record of the run: exit code, wall time
+//   points/<point id>/point_status.json the study's record of the run: exit code, wall time (and, from the
+//                                       Slurm backend, the task's Slurm job id, state and exit code)
+//   points/<point id>/slurm_status.json the Slurm array task's own record (slurm_backend.hpp)
+//   slurm/                              the Slurm backend's submissions (slurm_backend.hpp)
 //   points/<point id>/recording/, slam/ demo's outputs
 // A point is finished when its metrics.json exists, parses as JSON and its sim_config.yaml is the one the study
 // would write now (a changed study reruns the points whose config changed).
@@ -21,6 +24,9 @@
 #include "bench/study/study_config.hpp"
 
 namespace rotolidar::bench {
+
+/// A metric a point does not have (a failed point, a key missing from its metrics.json).
+inline constexpr double kStudyNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// One point of the full factorial.
 struct StudyPoint {
@@ -95,6 +101,16 @@ struct StudyRunOptions {
 /// expand or out_dir cannot be written.
 Status RunStudy(const StudyConfig& config, const StudyRunOptions& options, const PointRunner& runner,
                 StudyResult* result);
+
+/// The first half of RunStudy, shared with the Slurm backend: one row per point in expansion order; a finished
+/// point (see the folder layout above) is read back as kResumed, every other point gets its sim_config.yaml
+/// (any stale metrics.json removed), stays kFailed with NaN metrics and is listed (row index) in *pending.
+Status PrepareStudyPoints(const std::vector<StudyPoint>& points, const std::string& out_dir, StudyResult* result,
+                          std::vector<size_t>* pending);
+
+/// The last step of RunStudy: copies each row's runtime_s into its runtime_s metric and recounts ran, resumed,
+/// failed and not_run from the rows' states.
+void FinishStudyResult(StudyResult* result);
 
 /// metrics.json's values for every StudyMetrics() entry (NaN where absent or not a number); runtime_s from
 /// the study's own measurement is filled by the caller. Fails when the file is missing or is not JSON.

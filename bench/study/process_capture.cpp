@@ -58,6 +58,13 @@ int WaitExitCode(pid_t pid) {
 
 }  // namespace
 
+std::vector<char*> SpawnArgv(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  return argv;
+}
+
 std::string FindOnPath(const std::string& program) {
   if (program.empty()) return "";
   if (program.find('/') != std::string::npos) return IsExecutableFile(program) ? program : "";
@@ -82,9 +89,7 @@ Status RunCaptured(const std::vector<std::string>& args, CapturedOutput* output)
     ::close(out_pipe[0]), ::close(out_pipe[1]);
     return Status::Error(std::string("pipe: ") + std::strerror(errno));
   }
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
+  std::vector<char*> argv = SpawnArgv(args);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);

@@ -16,6 +16,9 @@ struct CapturedOutput {
   std::string err;     ///< everything it wrote to stderr
 };
 
+/// argv for posix_spawn: pointers into `args` (which must outlive the result), then a null pointer.
+std::vector<char*> SpawnArgv(const std::vector<std::string>& args);
+
 /// The full path of `program` found on $PATH (or `program` itself when it contains a '/' and is executable);
 /// "" when there is none.
 std::string FindOnPath(const std::string& program);

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "bench/study/process_capture.hpp"
 #include "bench/study/study_runner.hpp"
 
 extern char** environ;
@@ -16,9 +17,7 @@ namespace {
 
 /// Spawns argv[0] with stdin from /dev/null and stdout + stderr appended to log_path; waits for it.
 PointRunOutcome SpawnAndWait(const std::vector<std::string>& args, const std::string& log_path) {
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
+  std::vector<char*> argv = SpawnArgv(args);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);

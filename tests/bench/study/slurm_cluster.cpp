@@ -59,9 +59,7 @@ int FreePort() {
 /// Starts argv in a new session (setsid: a terminal's Ctrl-C reaches the test, not the daemons), stdin from
 /// /dev/null, stdout + stderr to log; -1 when it cannot start.
 pid_t SpawnDaemon(const std::vector<std::string>& args, const std::string& log) {
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
+  std::vector<char*> argv = bench::SpawnArgv(args);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);

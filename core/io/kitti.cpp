@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "core/io/kitti_text.hpp"
+#include "core/util/text.hpp"
 
 static_assert(std::numeric_limits<float>::is_iec559 && sizeof(float) == 4, "KITTI bins are IEEE-754 float32");
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "KITTI bins are little-endian: a big-endian host must swap");
@@ -20,7 +21,7 @@ static_assert(sizeof(rotolidar::KittiPoint) == 16 && std::is_trivially_copyable_
 namespace rotolidar {
 namespace kitti_text {
 
-std::string Where(const std::string& path, int line) { return path + ":" + std::to_string(line) + ": "; }
+std::string Where(const std::string& path, int line) { return FileLinePrefix(path, line); }
 
 bool ParseNumber(const std::string& token, double* value) {
   const char* b = token.data();

@@ -6,10 +6,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/util/text.hpp"
+
 namespace rotolidar::sim {
 namespace {
-
-std::string Where(const std::string& path, int line) { return path + ":" + std::to_string(line) + ": "; }
 
 std::string Trim(const std::string& s) {
   size_t b = 0, e = s.size();
@@ -71,15 +71,15 @@ Status LoadCarWaypointsCsv(const std::string& path, std::vector<CarWaypoint>* ou
     const std::vector<std::string> fields = Split(line, ',');
     if (i == 0 && Trim(fields[0]) == "x_m") continue;  // header
     if (fields.size() != 2 && fields.size() != 3)
-      return Status::Error(Where(path, number) + "expected 2 or 3 comma-separated fields (x_m,y_m[,speed_mps]), got " +
+      return Status::Error(FileLinePrefix(path, number) + "expected 2 or 3 comma-separated fields (x_m,y_m[,speed_mps]), got " +
                            std::to_string(fields.size()));
     double v[3] = {0, 0, 0};
     for (size_t f = 0; f < fields.size(); ++f)
       if (!ParseNumber(fields[f], &v[f]))
-        return Status::Error(Where(path, number) + "field '" + kFields[f] + "': cannot read number '" +
+        return Status::Error(FileLinePrefix(path, number) + "field '" + kFields[f] + "': cannot read number '" +
                              Trim(fields[f]) + "'");
     if (fields.size() == 3 && v[2] <= 0)
-      return Status::Error(Where(path, number) + "field 'speed_mps' must be > 0, got " + Trim(fields[2]));
+      return Status::Error(FileLinePrefix(path, number) + "field 'speed_mps' must be > 0, got " + Trim(fields[2]));
     points.push_back({v[0], v[1], v[2], number});
   }
   if (points.size() < 2) return Status::Error(path + ": need at least 2 waypoints, got " + std::to_string(points.size()));
@@ -95,18 +95,18 @@ Status LoadKittiPoses(const std::string& path, std::vector<Pose3>* out) {
   for (const auto& [number, line] : lines) {
     const std::vector<std::string> fields = SplitWhitespace(line);
     if (fields.size() != 12)
-      return Status::Error(Where(path, number) + "expected 12 numbers (row-major 3x4 [R|t]), got " +
+      return Status::Error(FileLinePrefix(path, number) + "expected 12 numbers (row-major 3x4 [R|t]), got " +
                            std::to_string(fields.size()));
     Eigen::Matrix<double, 3, 4> m;
     for (int k = 0; k < 12; ++k)
       if (!ParseNumber(fields[size_t(k)], &m(k / 4, k % 4)))
-        return Status::Error(Where(path, number) + "field " + std::to_string(k + 1) + " (row " +
+        return Status::Error(FileLinePrefix(path, number) + "field " + std::to_string(k + 1) + " (row " +
                              std::to_string(k / 4) + ", col " + std::to_string(k % 4) + "): cannot read number '" +
                              fields[size_t(k)] + "'");
     const Eigen::Matrix3d R = m.leftCols<3>();
     const double orthonormality = (R.transpose() * R - Eigen::Matrix3d::Identity()).norm();
     if (orthonormality > 1e-3 || R.determinant() < 0)
-      return Status::Error(Where(path, number) + "rotation is not orthonormal (|R^T R - I| = " +
+      return Status::Error(FileLinePrefix(path, number) + "rotation is not orthonormal (|R^T R - I| = " +
                            std::to_string(orthonormality) + ")");
     Pose3 T = Pose3::Identity();
     T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
@@ -125,9 +125,9 @@ Status LoadKittiTimes(const std::string& path, std::vector<double>* out) {
   times.reserve(lines.size());
   for (const auto& [number, line] : lines) {
     double t = 0;
-    if (!ParseNumber(line, &t)) return Status::Error(Where(path, number) + "field 't_s': cannot read number '" + line + "'");
+    if (!ParseNumber(line, &t)) return Status::Error(FileLinePrefix(path, number) + "field 't_s': cannot read number '" + line + "'");
     if (!times.empty() && !(t > times.back()))
-      return Status::Error(Where(path, number) + "field 't_s': times must increase strictly (" + line +
+      return Status::Error(FileLinePrefix(path, number) + "field 't_s': times must increase strictly (" + line +
                            " after " + std::to_string(times.back()) + ")");
     times.push_back(t);
   }

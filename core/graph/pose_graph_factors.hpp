@@ -20,15 +20,17 @@
 #include <cmath>
 #include <string>
 
-#include <ceres/autodiff_cost_function.h>
 #include <ceres/rotation.h>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "core/types/geometry.hpp"
 #include "core/util/status.hpp"
 #include "core/util/validation.hpp"
+
+namespace ceres {
+class CostFunction;
+}  // namespace ceres
 
 namespace rotolidar::graph {
 
@@ -37,13 +39,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 /// Reference (non-templated) error e of an edge, as defined above; zero when T_world_from^-1 T_world_to equals the
 /// measurement. Rotation part in [-pi, pi] rad.
-inline Vector6d RelativePoseError(const Pose3& T_world_from, const Pose3& T_world_to, const Pose3& T_from_to_meas) {
-  const Pose3 E = T_from_to_meas.inverse() * (T_world_from.inverse() * T_world_to);
-  Vector6d e;
-  e.head<3>() = E.translation();
-  e.tail<3>() = LogSO3(E.linear());
-  return e;
-}
+Vector6d RelativePoseError(const Pose3& T_world_from, const Pose3& T_world_to, const Pose3& T_from_to_meas);
 
 /// Ceres functor of the whitened edge residual r = S e, parameter blocks (t_from, q_from, t_to, q_to).
 class RelativePoseResidual {
@@ -81,10 +77,7 @@ class RelativePoseResidual {
 
   /// An automatically differentiated cost (6 residuals; blocks 3, 4, 3, 4), owned by the caller (or by the
   /// ceres::Problem it is added to).
-  static ceres::CostFunction* Create(const Pose3& T_from_to_meas, const Matrix6d& sqrt_information) {
-    return new ceres::AutoDiffCostFunction<RelativePoseResidual, 6, 3, 4, 3, 4>(
-        new RelativePoseResidual(T_from_to_meas, sqrt_information));
-  }
+  static ceres::CostFunction* Create(const Pose3& T_from_to_meas, const Matrix6d& sqrt_information);
 
  private:
   Eigen::Vector3d t_meas_;
@@ -116,35 +109,13 @@ struct InformationFloor {
 /// is more certain than its floor, whatever the conditioning of C: a near-singular covariance cannot make one
 /// loop dominate) and equals C^-1 when every direction of C is already above the floor. Negative (round-off or
 /// indefinite) eigenvalues are clamped as well. Fails on a non-finite covariance or an invalid floor.
-inline Status InformationFromCovariance(const Matrix6d& covariance, const InformationFloor& floor,
-                                        Matrix6d* information) {
-  std::string error;
-  if (!floor.Validate(&error)) return Status::Error("InformationFromCovariance: " + error);
-  if (!covariance.allFinite()) return Status::Error("InformationFromCovariance: covariance is not finite");
-  Vector6d d_inv;
-  d_inv << Eigen::Vector3d::Constant(1.0 / floor.min_sigma_translation_m),
-      Eigen::Vector3d::Constant(1.0 / floor.min_sigma_rotation_rad);
-  // Dimensionless covariance in units of the floors; clamp its eigenvalues to >= 1 (sigma >= floor) and invert.
-  const Matrix6d scaled = d_inv.asDiagonal() * (0.5 * (covariance + covariance.transpose())) * d_inv.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(scaled);
-  if (eig.info() != Eigen::Success) return Status::Error("InformationFromCovariance: eigen-decomposition failed");
-  const Vector6d inv_values = eig.eigenvalues().cwiseMax(1.0).cwiseInverse();
-  const Matrix6d scaled_inv = eig.eigenvectors() * inv_values.asDiagonal() * eig.eigenvectors().transpose();
-  const Matrix6d info = d_inv.asDiagonal() * scaled_inv * d_inv.asDiagonal();
-  *information = 0.5 * (info + info.transpose());
-  return Status::Ok();
-}
+Status InformationFromCovariance(const Matrix6d& covariance, const InformationFloor& floor,
+                                 Matrix6d* information);
 
 /// Converts an information matrix given in the `from`-frame convention of core/ (T_from_to (+) xi = (t + dt,
 /// Exp(dtheta) R), xi = [dt; dtheta] in frame `from`, as core/backend/pose_factors.hpp) into this edge's `to`-frame
 /// error coordinates. The map is exact and linear: xi = A e with A = blockdiag(R, R), R = T_from_to.linear(), so
 /// information_to = A^T information_from A.
-inline Matrix6d InformationInToFrame(const Matrix6d& information_from, const Pose3& T_from_to) {
-  Matrix6d A = Matrix6d::Zero();
-  A.topLeftCorner<3, 3>() = T_from_to.linear();
-  A.bottomRightCorner<3, 3>() = T_from_to.linear();
-  const Matrix6d info = A.transpose() * information_from * A;
-  return 0.5 * (info + info.transpose());
-}
+Matrix6d InformationInToFrame(const Matrix6d& information_from, const Pose3& T_from_to);
 
 }  // namespace rotolidar::graph

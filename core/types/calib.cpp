@@ -44,4 +44,8 @@ double RigCalib::EncoderAngle(uint32_t count) const {
          encoder.zero_offset_rad;
 }
 
+Pose3 RigCalib::T_base_rotor(double theta_rad) const { return T_base_motor * RotZ(theta_rad); }
+
+Pose3 RigCalib::T_base_lidar(double theta_rad) const { return T_base_rotor(theta_rad) * T_rotor_lidar; }
+
 }  // namespace rotolidar

@@ -79,8 +79,10 @@ struct RigCalib {
 
   /// Rotor angle [rad] from a raw encoder count: the centre of the count's bin, minus the zero offset.
   double EncoderAngle(uint32_t count) const;
-  Pose3 T_base_rotor(double theta_rad) const { return T_base_motor * RotZ(theta_rad); }
-  Pose3 T_base_lidar(double theta_rad) const { return T_base_rotor(theta_rad) * T_rotor_lidar; }
+  /// T_base_motor * RotZ(theta_rad): the rotor frame at motor angle theta [rad].
+  Pose3 T_base_rotor(double theta_rad) const;
+  /// T_base_rotor(theta_rad) * T_rotor_lidar.
+  Pose3 T_base_lidar(double theta_rad) const;
 };
 
 }  // namespace rotolidar

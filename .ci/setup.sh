@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 
 # The one package list of the project.
 PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config git lld
   libeigen3-dev libceres-dev libpcl-dev libopencv-dev libpcap-dev libyaml-cpp-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev unzip
   libmujoco-dev libembree-dev libosmesa6-dev libgl-dev
@@ -50,10 +50,13 @@ core_only() {
   local dir=${BUILD_DIR}-core-sanitize
   BUILD_DIR=$dir build -DROTOLIDAR_CORE_ONLY=ON -DROTOLIDAR_SANITIZE=ON
   # Any sanitizer report fails its test: ASan and UBSan abort on the first error (the build sets
-  # -fno-sanitize-recover), LeakSanitizer reports leaks at exit.
+  # -fno-sanitize-recover), LeakSanitizer reports leaks at exit. To fit CI's time, it leaves out the seven slowest
+  # tests (1-3.5 min each under the sanitizers, 10-15x their Release time); the whole set runs clean under them
+  # too (docs/testing.md), and ROTOLIDAR_SANITIZE_EXCLUDE='' runs it.
+  local exclude=${ROTOLIDAR_SANITIZE_EXCLUDE-'^(LoopCloser\.(ClosesTheSquareAndRemovesTheDrift|RoundedRotationsAreKeptAndBrokenOnesDropped)|LoopCloserVisual\..*|Kitti00\.ConsecutivePairsAgreeWithBothStereoReferences|LoopVerification\.RejectsTwoDifferentPlaces)$'}
   ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1:check_initialization_order=1} \
   UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} \
-    ctest --test-dir "$dir" --output-on-failure -j "$JOBS"
+    ctest --test-dir "$dir" --output-on-failure -j "$JOBS" ${exclude:+-E "$exclude"}
   local bad
   bad=$(find "$dir" -type f -executable -name '*test*' -exec ldd {} \; | grep -i -E 'mujoco|embree|osmesa' || true)
   if [ -n "$bad" ]; then echo "[setup] core-only build links simulation libraries:"; echo "$bad"; exit 1; fi

@@ -40,8 +40,11 @@ inline std::vector<Eigen::Vector3d> MakeWorld(uint64_t seed) {
 // The points a sensor at T_world_base sees (within 25 m; no occlusion), base frame.
 inline std::vector<Eigen::Vector3f> Observe(const std::vector<Eigen::Vector3d>& world, const Pose3& T_world_base) {
   const Pose3 T_base_world = T_world_base.inverse();
+  const Eigen::Vector3d sensor = T_world_base.translation();
   std::vector<Eigen::Vector3f> out;
   for (const Eigen::Vector3d& p : world) {
+    // A cheap pre-check with a margin (the exact test below decides): most of the world is out of range.
+    if ((p - sensor).squaredNorm() > 26.0 * 26.0) continue;
     const Eigen::Vector3d q = T_base_world * p;
     if (q.norm() < 25.0) out.push_back(q.cast<float>());
   }

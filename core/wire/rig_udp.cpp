@@ -56,9 +56,10 @@ void RigSampleSource::ReceiveLoop() {
     if (n < 0) continue;
     const Status s = DecodeRigDatagram(buffer.data(), std::min<std::size_t>(n, buffer.size()), &datagram);
     if (!s) {
-      ++malformed_;
+      // The message first, then the count, both under the lock: whoever sees malformed() > 0 finds its message.
       std::lock_guard<std::mutex> lock(mutex_);
       last_error_ = s.message;
+      ++malformed_;
       continue;
     }
     ++datagrams_;

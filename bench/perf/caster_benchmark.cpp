@@ -70,9 +70,14 @@ std::vector<RayQuery> RayBatch(bool vlp16_order) {
   std::vector<RayQuery> q;
   for (int k = 0; k < kSequencesPerSecond; ++k) {
     for (int i = 0; i < 16; ++i) {
-      const Eigen::Vector3d d =
-          vlp16_order ? Vlp16RayDirection(intr.elevation_deg[i] * M_PI / 180.0, k * 2.0 * M_PI / 1808.4)
-                      : Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()).normalized();
+      Eigen::Vector3d d;
+      if (vlp16_order) {
+        d = Vlp16RayDirection(intr.elevation_deg[i] * M_PI / 180.0, k * 2.0 * M_PI / 1808.4);
+      } else {
+        // Separate declarations: the draws happen in this order with every compiler (function arguments have none).
+        const double x = rng.Normal(), y = rng.Normal(), z = rng.Normal();
+        d = Eigen::Vector3d(x, y, z).normalized();
+      }
       q.push_back({Eigen::Vector3d(0.0, 0.1, 1.4), d, 100.0});
     }
   }

@@ -1,6 +1,5 @@
 #include "sim/rig/path_files.hpp"
 
-#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -11,16 +10,9 @@
 namespace rotolidar::sim {
 namespace {
 
-std::string Trim(const std::string& s) {
-  size_t b = 0, e = s.size();
-  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
-  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
-  return s.substr(b, e - b);
-}
-
 /// Parses the whole of `token` as a finite double.
 bool ParseNumber(const std::string& token, double* value) {
-  const std::string t = Trim(token);
+  const std::string t = TrimSpace(token);
   if (t.empty()) return false;
   char* end = nullptr;
   const double v = std::strtod(t.c_str(), &end);
@@ -53,7 +45,7 @@ Status ReadLines(const std::string& path, bool comments, std::vector<std::pair<i
   std::string raw;
   for (int number = 1; std::getline(in, raw); ++number) {
     if (comments) raw = raw.substr(0, raw.find('#'));
-    const std::string line = Trim(raw);
+    const std::string line = TrimSpace(raw);
     if (!line.empty()) lines->emplace_back(number, line);
   }
   return Status::Ok();
@@ -69,20 +61,23 @@ Status LoadCarWaypointsCsv(const std::string& path, std::vector<CarWaypoint>* ou
   for (size_t i = 0; i < lines.size(); ++i) {
     const auto& [number, line] = lines[i];
     const std::vector<std::string> fields = Split(line, ',');
-    if (i == 0 && Trim(fields[0]) == "x_m") continue;  // header
+    if (i == 0 && TrimSpace(fields[0]) == "x_m") continue;  // header
     if (fields.size() != 2 && fields.size() != 3)
-      return Status::Error(FileLinePrefix(path, number) + "expected 2 or 3 comma-separated fields (x_m,y_m[,speed_mps]), got " +
+      return Status::Error(FileLinePrefix(path, number) +
+                           "expected 2 or 3 comma-separated fields (x_m,y_m[,speed_mps]), got " +
                            std::to_string(fields.size()));
     double v[3] = {0, 0, 0};
     for (size_t f = 0; f < fields.size(); ++f)
       if (!ParseNumber(fields[f], &v[f]))
         return Status::Error(FileLinePrefix(path, number) + "field '" + kFields[f] + "': cannot read number '" +
-                             Trim(fields[f]) + "'");
+                             TrimSpace(fields[f]) + "'");
     if (fields.size() == 3 && v[2] <= 0)
-      return Status::Error(FileLinePrefix(path, number) + "field 'speed_mps' must be > 0, got " + Trim(fields[2]));
+      return Status::Error(FileLinePrefix(path, number) + "field 'speed_mps' must be > 0, got " +
+                           TrimSpace(fields[2]));
     points.push_back({v[0], v[1], v[2], number});
   }
-  if (points.size() < 2) return Status::Error(path + ": need at least 2 waypoints, got " + std::to_string(points.size()));
+  if (points.size() < 2)
+    return Status::Error(path + ": need at least 2 waypoints, got " + std::to_string(points.size()));
   *out = std::move(points);
   return Status::Ok();
 }
@@ -125,7 +120,8 @@ Status LoadKittiTimes(const std::string& path, std::vector<double>* out) {
   times.reserve(lines.size());
   for (const auto& [number, line] : lines) {
     double t = 0;
-    if (!ParseNumber(line, &t)) return Status::Error(FileLinePrefix(path, number) + "field 't_s': cannot read number '" + line + "'");
+    if (!ParseNumber(line, &t))
+      return Status::Error(FileLinePrefix(path, number) + "field 't_s': cannot read number '" + line + "'");
     if (!times.empty() && !(t > times.back()))
       return Status::Error(FileLinePrefix(path, number) + "field 't_s': times must increase strictly (" + line +
                            " after " + std::to_string(times.back()) + ")");

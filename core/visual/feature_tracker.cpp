@@ -305,8 +305,11 @@ void FeatureTracker::AddNewFeatures(const cv::Mat& grey, const std::vector<cv::M
                                   roi_full.height >> level) & cv::Rect(0, 0, image.cols, image.rows);
     std::vector<cv::Point2f> corners;  // a quarter more than the quota: some fail the exact checks at full scale
     const int ask = level == 0 ? quota : quota + quota / 4 + 4;
-    cv::goodFeaturesToTrack(image(roi), corners, ask, config_.corner_quality, config_.min_distance_px / scale,
-                            mask(roi), config_.corner_block_px);
+    // A cell alone (a copy, not a view): on a view OpenCV's corner filter reads the pixels around the cell, and a
+    // strong edge just outside it would set the cell's quality threshold (seen: faint cells left empty).
+    const bool whole = roi.size() == image.size();
+    cv::goodFeaturesToTrack(whole ? image : image(roi).clone(), corners, ask, config_.corner_quality,
+                            config_.min_distance_px / scale, mask(roi), config_.corner_block_px);
     if (corners.empty()) return;
     for (cv::Point2f& c : corners) c = (c + cv::Point2f(float(roi.x), float(roi.y))) * scale;
     if (level > 0)

@@ -157,7 +157,7 @@ TEST(Coverage, TiledThreadedVisibilityEqualsTryingEveryViewpoint) {
     sim::Primitive crate;
     crate.type = sim::PrimitiveType::kBox;
     crate.name = "crate" + std::to_string(k);
-    crate.center_m = Eigen::Vector3d(-10 + 20 * rng.Uniform(), -6 + 12 * rng.Uniform(), 0.5);
+    crate.center_m = Eigen::Vector3d{-10 + 20 * rng.Uniform(), -6 + 12 * rng.Uniform(), 0.5};
     crate.size_m = Eigen::Vector3d(1.0, 1.5, 1.0);
     scene.primitives.push_back(crate);
   }
@@ -190,8 +190,8 @@ TEST(Coverage, CoveredEqualsTheNearestPointTestAcrossCellBorders) {
   std::vector<Eigen::Vector3f> map;
   for (int k = 0; k < 80; ++k) {
     const SurfaceSample& s = samples[size_t(rng.Uniform() * double(samples.size())) % samples.size()];
-    map.push_back(s.p_world + 0.08f * Eigen::Vector3f(float(rng.Uniform() - 0.5), float(rng.Uniform() - 0.5),
-                                                       float(rng.Uniform() - 0.5)));
+    map.push_back(s.p_world + 0.08f * Eigen::Vector3f{float(rng.Uniform() - 0.5), float(rng.Uniform() - 0.5),
+                                                       float(rng.Uniform() - 0.5)});
   }
   MarkCovered(map, 0.05, &samples);
   size_t covered = 0, mismatches = 0;
@@ -230,7 +230,7 @@ TEST(MapToTruth, PointsOffsetByAKnownDistance) {
   std::vector<double> offsets;
   for (int i = 0; i < 2000; ++i) {
     const double offset = 0.2 * rng.Uniform();
-    map.emplace_back(-1.7 + 3.4 * rng.Uniform(), -1.2 + 2.4 * rng.Uniform(), offset);
+    map.push_back(Eigen::Vector3d{-1.7 + 3.4 * rng.Uniform(), -1.2 + 2.4 * rng.Uniform(), offset}.cast<float>());
     offsets.push_back(offset);
   }
   MapMetricsConfig config;

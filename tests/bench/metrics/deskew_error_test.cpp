@@ -46,7 +46,7 @@ ScanReport SyntheticReport(double t0, const std::vector<float>& errors_m, uint64
     lp.x_m = float(10.0 * rng.Uniform() - 5.0), lp.y_m = float(10.0 * rng.Uniform() - 5.0);
     lp.z_m = float(2.0 * rng.Uniform() - 1.0);
     const Eigen::Vector3d p_true = T_base_world * LidarAt(lp.t_s) * Eigen::Vector3d(lp.x_m, lp.y_m, lp.z_m);
-    const Eigen::Vector3d dir = Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()).normalized();
+    const Eigen::Vector3d dir = Eigen::Vector3d{rng.Normal(), rng.Normal(), rng.Normal()}.normalized();
     r.deskew_source.push_back(lp);
     r.deskewed_base.push_back((p_true + double(errors_m[i]) * dir).cast<float>());
   }

@@ -16,7 +16,7 @@ void AddRect(const Eigen::Vector3d& origin, const Eigen::Vector3d& u, double su,
              RandomStream* rng, std::vector<Eigen::Vector3f>* out) {
   for (double s = 0; s <= su + 1e-9; s += 0.01)
     for (double t = 0; t <= tv + 1e-9; t += 0.01) {
-      const Eigen::Vector3d n(rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM));
+      const Eigen::Vector3d n{rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM)};
       out->push_back((origin + s * u + t * v + n).cast<float>());
     }
 }
@@ -129,7 +129,7 @@ std::vector<Eigen::Vector3f> Column(bool round, const Eigen::Vector3d& c, Random
         const Eigen::Vector3d faces[4] = {{0.25, s, z}, {-s, 0.25, z}, {-0.25, -s, z}, {s, -0.25, z}};
         p = faces[k / 40];
       }
-      pts.push_back((c + p + Eigen::Vector3d(rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM)))
+      pts.push_back((c + p + Eigen::Vector3d{rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM), rng->Normal(0, kNoiseM)})
                         .cast<float>());
     }
   const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY();

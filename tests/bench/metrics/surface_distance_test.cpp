@@ -17,7 +17,7 @@ TEST(SurfaceDistance, ClosestPointOnTriangleMatchesADenseSearch) {
   const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0.2), c(0.3, 0.8, -0.1);
   RandomStream rng(3, "closest_point_test");
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector3d p(3 * rng.Uniform() - 1, 3 * rng.Uniform() - 1, 2 * rng.Uniform() - 1);
+    const Eigen::Vector3d p{3 * rng.Uniform() - 1, 3 * rng.Uniform() - 1, 2 * rng.Uniform() - 1};
     double best = 1e9;
     for (int u = 0; u <= 400; ++u)  // barycentric grid with step 1/400: error < edge / 400 < 3 mm
       for (int v = 0; u + v <= 400; ++v)
@@ -47,7 +47,7 @@ TEST(SurfaceDistance, MatchesABruteForceSearchOverEveryTriangle) {
   RandomStream rng(5, "surface_distance_test");
   const Eigen::Vector3d lo = scene.bounds.min().array() - 1.0, hi = scene.bounds.max().array() + 1.0;
   for (int i = 0; i < 300; ++i) {
-    const Eigen::Vector3d u(rng.Uniform(), rng.Uniform(), rng.Uniform());
+    const Eigen::Vector3d u{rng.Uniform(), rng.Uniform(), rng.Uniform()};
     const Eigen::Vector3d p = lo + (hi - lo).cwiseProduct(u);
     const double expected = BruteForceDistance(mesh, p);
     int id = -1;

@@ -1,5 +1,7 @@
 // Pose factors: analytic Jacobians against Ceres' numeric differentiation (with the pose manifold), the base->imu
 // information transform, degenerate information, and Schur-complement marginalisation against the full problem.
+#include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <vector>
 
@@ -21,8 +23,8 @@ Eigen::Vector3d RandomVector(RandomStream& rng, double sigma) {
 }
 
 Pose3 RandomPose(RandomStream& rng, double sigma_t_m) {
-  return MakePose(RandomVector(rng, sigma_t_m),
-                  Eigen::Quaterniond(rng.Normal(), rng.Normal(), rng.Normal(), rng.Normal()));
+  const Eigen::Vector3d t = RandomVector(rng, sigma_t_m);  // drawn first: argument order is the compiler's choice
+  return MakePose(t, Eigen::Quaterniond{rng.Normal(), rng.Normal(), rng.Normal(), rng.Normal()});
 }
 
 /// T (+) xi = (t + dt, Exp(dtheta) R) in the world-left tangent [dt; dtheta].
@@ -62,7 +64,7 @@ TEST(PoseFactors, LidarAndRelativeJacobiansMatchNumeric) {
     worst = std::max(worst, JacobianError(lidar, {pose_i}));
     // A measurement near the blocks' relative pose (rotation errors ~0.5 rad, far from Log's cut at pi).
     const Pose3 T_i_j = UnpackImuPose(pose_i).inverse() * UnpackImuPose(pose_j);
-    const RelativePoseFactor relative(Perturb(T_i_j, RandomVector6(rng, 0.3)), RandomInformation(rng, 1.0));
+    const RelativePoseFactor relative{Perturb(T_i_j, RandomVector6(rng, 0.3)), RandomInformation(rng, 1.0)};
     EXPECT_GT(relative.Error(pose_i, pose_j).tail<3>().norm(), 1e-3);
     worst = std::max(worst, JacobianError(relative, {pose_i, pose_j}));
   }
@@ -99,7 +101,8 @@ TEST(PoseFactors, LinearizedPriorJacobiansMatchNumeric) {
 
 TEST(PoseFactors, BaseToImuConversionPreservesTheQuadraticForm) {
   RandomStream rng(23, "pose_factors_test.extrinsic");
-  double worst_rel = 0.0, best_naive_rel = 1e300;
+  double worst_rel = 0.0;
+  std::vector<double> naive_rel;
   for (int trial = 0; trial < 10; ++trial) {
     const Pose3 T_world_base = RandomPose(rng, 5.0), T_base_imu = RandomPose(rng, 0.3);
     const Matrix6d info_base = RandomInformation(rng, 100.0);
@@ -113,12 +116,17 @@ TEST(PoseFactors, BaseToImuConversionPreservesTheQuadraticForm) {
     const double cost_base = xi_b.dot(info_base * xi_b), cost_imu = e_imu.dot(m.information * e_imu);
     worst_rel = std::max(worst_rel, std::abs(cost_imu - cost_base) / cost_base);
     // Reusing the base information unchanged (ignoring the lever arm) is visibly wrong.
-    best_naive_rel = std::min(best_naive_rel, std::abs(e_imu.dot(info_base * e_imu) - cost_base) / cost_base);
+    naive_rel.push_back(std::abs(e_imu.dot(info_base * e_imu) - cost_base) / cost_base);
   }
   // Measured 7.0e-5 (second-order terms at |xi| ~ 1e-4); ignoring the lever arm errs by >= 5.1e-2
   // (measured minimum over the 10 trials).
+  std::sort(naive_rel.begin(), naive_rel.end());
+  const double naive_median = 0.5 * (naive_rel[4] + naive_rel[5]);
+  std::printf("[measured] conversion %.1e, ignoring the lever arm: median %.1e\n", worst_rel, naive_median);
+  // Measured over seeds 1-11: the conversion errs by at most 2.1e-4 (second-order terms at |xi| ~ 1e-4); ignoring
+  // the lever arm errs by a median of 5.7e-2 to 2.3e-1 (one trial in ten can come close by chance: 1.6e-3).
   EXPECT_LT(worst_rel, 1e-3);
-  EXPECT_GT(best_naive_rel, 1e-2);
+  EXPECT_GT(naive_median, 2e-2);
 }
 
 TEST(PoseFactors, DegenerateDirectionCarriesNoInformation) {
@@ -162,7 +170,8 @@ struct TwoStateProblem {
   TwoStateProblem(RandomStream& rng, const ImuNoise& noise) {
     PreintegratedImu pre(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), noise);
     for (int k = 0; k < 20; ++k) {
-      EXPECT_TRUE(pre.Integrate(RandomVector(rng, 0.5), -kGravity + RandomVector(rng, 1.0), 0.005).ok);
+      const Eigen::Vector3d gyro_radps = RandomVector(rng, 0.5), accel_mps2 = -kGravity + RandomVector(rng, 1.0);
+      EXPECT_TRUE(pre.Integrate(gyro_radps, accel_mps2, 0.005).ok);
     }
     NavState s0;
     s0.R_world_imu = RandomPose(rng, 1.0).linear();

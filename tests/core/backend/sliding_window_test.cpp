@@ -82,19 +82,19 @@ TEST(SlidingWindow, FusesBetterThanLidarOrImuAloneAndRecoversBiases) {
                 "bg %.2e ba %.2e | %.1f iterations, %.2f ms per solve\n",
                 fused.pos_rms_m, fused.rot_rms_rad, fused.vel_rms_mps, lidar.pos_rms_m, lidar.rot_rms_rad,
                 imu_only_m, bg_err, ba_err, run.iterations / (kStates - 1.0), 1e3 * run.solve_time_s / (kStates - 1));
-    // Measured (noisy / noise-free IMU), RMS over states 21..79 of the latest-state (real-time) estimate:
-    //   position 1.76 / 1.87 cm vs LiDAR-only 3.32 cm (3-axis RMS of 2 cm noise: 3.46 expected), rotation
-    //   2.9 / 2.8 mrad vs 9.8 mrad, velocity 2.3 / 2.5 cm/s; IMU-only dead reckoning is off by 15.4 m at 7.9 s.
-    //   Biases after 8 s: |bg error| 2.3e-4 / 1.7e-4 rad/s (the LiDAR rotations' slope over 8 s at 5 mrad per
-    //   scan predicts ~2.4e-4 per axis), |ba error| 5.8e-3 / 5.2e-3 m/s^2 (tilt-limited: g * 5 mrad / sqrt(80)
-    //   = 5.5e-3). Bounds keep ~30 % margin on the ratios and ~4x on the biases.
+    // Measured over the LiDAR noise seeds 1-11 (noisy and noise-free IMU, 22 runs), RMS over states 21..79 of the
+    //   latest-state (real-time) estimate: position 1.6-2.2 cm vs LiDAR-only 3.2-3.9 cm (3-axis RMS of 2 cm noise:
+    //   3.46 expected), rotation 1.8-3.1 mrad vs 7.9-9.5 mrad, velocity 2.7-4.0 cm/s; IMU-only dead reckoning is
+    //   off by 15.4 m at 7.9 s. Biases after 8 s: |bg error| 1.3e-4 to 5.6e-4 rad/s, |ba error| 5.1e-3 to
+    //   3.5e-2 m/s^2 (median 1.6e-2: the accelerometer bias is only as good as the tilt, 5 mrad per scan).
+    //   Bounds: the worst ratio plus ~15 % on position and rotation, 1.25x the worst velocity, ~1.7x on the biases.
     EXPECT_TRUE(run.all_converged);
     EXPECT_LT(fused.pos_rms_m, 0.7 * lidar.pos_rms_m);
     EXPECT_LT(fused.rot_rms_rad, 0.5 * lidar.rot_rms_rad);
     EXPECT_LT(fused.pos_rms_m, 0.01 * imu_only_m);
     EXPECT_LT(fused.vel_rms_mps, 0.05);
     EXPECT_LT(bg_err, 1e-3);
-    EXPECT_LT(ba_err, 0.02);
+    EXPECT_LT(ba_err, 0.06);
   }
 }
 

@@ -87,8 +87,9 @@ inline std::vector<ImuSample> MakeImu(double duration_s, bool noisy, uint64_t se
 inline LidarPoseMeasurement MakeLidar(double t, RandomStream& rng, double noise_scale = 1.0) {
   const NavState truth = Motion::State(t);
   LidarPoseMeasurement m;
-  m.T_world_imu = MakePose(truth.p_world_m + Noise(rng, noise_scale * kLidarSigmaM),
-                           Eigen::Quaterniond(ExpSO3(Noise(rng, noise_scale * kLidarSigmaRad)) * truth.R_world_imu));
+  const Eigen::Vector3d p_world_m = truth.p_world_m + Noise(rng, noise_scale * kLidarSigmaM);  // drawn first
+  const Eigen::Matrix3d R_noise = ExpSO3(Noise(rng, noise_scale * kLidarSigmaRad));
+  m.T_world_imu = MakePose(p_world_m, Eigen::Quaterniond(R_noise * truth.R_world_imu));
   m.information.setZero();
   m.information.diagonal() << Eigen::Vector3d::Constant(1.0 / (kLidarSigmaM * kLidarSigmaM)),
       Eigen::Vector3d::Constant(1.0 / (kLidarSigmaRad * kLidarSigmaRad));

@@ -63,8 +63,8 @@ SyntheticScan MakeScan(const KnownMotion& m, double t0, double t1, int n) {
   SyntheticScan s;
   for (int i = 0; i < n; ++i) {
     const double t = t0 + (t1 - t0) * i / (n - 1);
-    const Eigen::Vector3d p_world = m.p0 + Eigen::Vector3d(40 * rng.Uniform() - 20, 40 * rng.Uniform() - 20,
-                                                           8 * rng.Uniform() - 3);
+    const Eigen::Vector3d p_world = m.p0 + Eigen::Vector3d{40 * rng.Uniform() - 20, 40 * rng.Uniform() - 20,
+                                                           8 * rng.Uniform() - 3};
     s.t_s.push_back(t);
     s.p_base.push_back(m.T_world_base(t).inverse() * p_world);
     s.p_truth.push_back(m.T_world_base(t0).inverse() * p_world);
@@ -220,13 +220,13 @@ TEST(MotionInterpolator, EqualsPlainTablePoseTimesPoint) {
     table.t_s.push_back(2.0 + 0.004 * k);
     table.T_start_t.push_back(T);
     const double step = k % 10 == 9 ? 0.5 : 0.004;  // mostly IMU-sized steps, some far above the series' range
-    R = R * ExpSO3(step * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()).normalized());
+    R = R * ExpSO3(step * Eigen::Vector3d{rng.Normal(), rng.Normal(), rng.Normal()}.normalized());
   }
   std::vector<Seconds> t;
   std::vector<Eigen::Vector3d> p;
   for (int i = 0; i < 2000; ++i) {
     t.push_back(i % 40 == 0 ? table.t_s[i % table.t_s.size()] : 1.99 + 0.14 * rng.Uniform());
-    p.emplace_back(10 * rng.Normal(), 10 * rng.Normal(), rng.Normal());
+    p.push_back(Eigen::Vector3d{10 * rng.Normal(), 10 * rng.Normal(), rng.Normal()});
   }
   size_t expected_outside = 0, outside = 0;
   const std::vector<Eigen::Vector3d> out = Deskew(table, t, p, &outside);

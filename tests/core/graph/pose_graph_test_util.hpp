@@ -21,8 +21,8 @@ inline Pose3 RightPerturb(const Pose3& T, const Vector6d& e) {
 }
 
 inline Pose3 RandomPose(RandomStream& rng, double sigma_t_m) {
-  return MakePose(Eigen::Vector3d(rng.Normal(0, sigma_t_m), rng.Normal(0, sigma_t_m), rng.Normal(0, sigma_t_m)),
-                  Eigen::Quaterniond(rng.Normal(), rng.Normal(), rng.Normal(), rng.Normal()));
+  const Eigen::Vector3d t{rng.Normal(0, sigma_t_m), rng.Normal(0, sigma_t_m), rng.Normal(0, sigma_t_m)};
+  return MakePose(t, Eigen::Quaterniond{rng.Normal(), rng.Normal(), rng.Normal(), rng.Normal()});
 }
 
 inline Matrix6d DiagonalInformation(double sigma_t_m, double sigma_r_rad) {

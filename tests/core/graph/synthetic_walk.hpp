@@ -29,8 +29,8 @@ inline std::vector<Eigen::Vector3d> MakeWorld(uint64_t seed) {
       }
   };
   for (int i = 0; i < 60; ++i) {
-    const Eigen::Vector3d c(-10.0 + 60.0 * rng.Uniform(), -10.0 + 60.0 * rng.Uniform(), 0.0);
-    add_box(c, Eigen::Vector3d(0.3 + 1.5 * rng.Uniform(), 0.3 + 1.5 * rng.Uniform(), 0.5 + 1.5 * rng.Uniform()));
+    const Eigen::Vector3d c{-10.0 + 60.0 * rng.Uniform(), -10.0 + 60.0 * rng.Uniform(), 0.0};
+    add_box(c, Eigen::Vector3d{0.3 + 1.5 * rng.Uniform(), 0.3 + 1.5 * rng.Uniform(), 0.5 + 1.5 * rng.Uniform()});
   }
   for (double x = -15.0; x <= 55.0; x += 0.5)  // ground
     for (double y = -15.0; y <= 55.0; y += 0.5) world.emplace_back(x, y, -1.0);

@@ -203,7 +203,8 @@ TEST(PreintegratedImu, CovarianceMatchesMonteCarlo) {
   for (int r = 0; r < runs; ++r) {
     PreintegratedImu noisy(traj.bias_gyro, traj.bias_accel, noise);
     for (int k = 0; k < steps; ++k) {
-      const Eigen::Vector3d ng(rng.Normal(), rng.Normal(), rng.Normal()), na(rng.Normal(), rng.Normal(), rng.Normal());
+      const Eigen::Vector3d ng{rng.Normal(), rng.Normal(), rng.Normal()};
+      const Eigen::Vector3d na{rng.Normal(), rng.Normal(), rng.Normal()};
       const ImuSample& a = samples[k];
       const ImuSample& b = samples[k + 1];
       ASSERT_TRUE(noisy.Integrate(0.5 * (a.gyro_radps + b.gyro_radps) + sg * ng,

@@ -39,8 +39,8 @@ std::vector<Pose3> RandomPoses(size_t n) {
   std::vector<Pose3> poses;
   for (size_t i = 0; i < n; ++i) {
     Pose3 T = Pose3::Identity();
-    T.linear() = ExpSO3(Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()));
-    T.translation() = Eigen::Vector3d(rng.Normal(0, 1e3), rng.Normal(0, 1e-3), rng.Normal());
+    T.linear() = ExpSO3(Eigen::Vector3d{rng.Normal(), rng.Normal(), rng.Normal()});
+    T.translation() = Eigen::Vector3d{rng.Normal(0, 1e3), rng.Normal(0, 1e-3), rng.Normal()};
     poses.push_back(T);
   }
   return poses;

@@ -61,7 +61,7 @@ std::vector<Eigen::Vector3d> Submap(const std::vector<Box>& boxes, const Pose3& 
           p[u] += rng->Uniform() * e[u];
           p[v] += rng->Uniform() * e[v];
           if ((p - T_world_kf.translation()).norm() > radius_m) continue;
-          points.push_back(T_kf_world * p + noise_m * Eigen::Vector3d(rng->Normal(), rng->Normal(), rng->Normal()));
+          points.push_back(T_kf_world * p + noise_m * Eigen::Vector3d{rng->Normal(), rng->Normal(), rng->Normal()});
         }
       }
     }
@@ -242,7 +242,7 @@ TEST(LoopVerification, ReportsBadInputs) {
   // A 1 m flat square: 25 fine voxels, 9 coarse ones (too few for GICP's 20 neighbours): no crash, and rejected
   // (no vertical structure).
   std::vector<Eigen::Vector3d> square;
-  for (int i = 0; i < 2000; ++i) square.emplace_back(rng.Uniform(), rng.Uniform(), 0.0);
+  for (int i = 0; i < 2000; ++i) square.push_back(Eigen::Vector3d{rng.Uniform(), rng.Uniform(), 0.0});
   LoopVerificationConfig few;
   few.min_points = 20;
   const LoopVerification flat = VerifyLoop(square, square, Pose3::Identity(), few);

@@ -27,16 +27,22 @@ inline cv::Mat MakePlace(const std::string& name) {
     image += up(cv::Rect(0, 0, 640, 480)) * 0.5;
   }
   image.convertTo(image, CV_8U, 1.0, 128.0);
-  auto point = [&] { return cv::Point(UniformInt(&rng, 0, 639), UniformInt(&rng, 0, 479)); };
+  auto point = [&] { return cv::Point{UniformInt(&rng, 0, 639), UniformInt(&rng, 0, 479)}; };
   for (int i = 0; i < 30; ++i) {
     const cv::Point a = point();
-    cv::rectangle(image, a, a + cv::Point(UniformInt(&rng, 10, 100), UniformInt(&rng, 10, 100)),
-                  cv::Scalar(UniformInt(&rng, 0, 255)), cv::FILLED);
+    const cv::Point size{UniformInt(&rng, 10, 100), UniformInt(&rng, 10, 100)};
+    cv::rectangle(image, a, a + size, cv::Scalar(UniformInt(&rng, 0, 255)), cv::FILLED);
   }
-  for (int i = 0; i < 20; ++i)
-    cv::circle(image, point(), UniformInt(&rng, 5, 40), cv::Scalar(UniformInt(&rng, 0, 255)), cv::FILLED);
-  for (int i = 0; i < 15; ++i)
-    cv::line(image, point(), point(), cv::Scalar(UniformInt(&rng, 0, 255)), UniformInt(&rng, 1, 4));
+  for (int i = 0; i < 20; ++i) {  // one draw per statement: the order of a call's arguments is unspecified
+    const cv::Point c = point();
+    const int radius_px = UniformInt(&rng, 5, 40);
+    cv::circle(image, c, radius_px, cv::Scalar(UniformInt(&rng, 0, 255)), cv::FILLED);
+  }
+  for (int i = 0; i < 15; ++i) {
+    const cv::Point a = point(), b = point();
+    const int grey = UniformInt(&rng, 0, 255);
+    cv::line(image, a, b, cv::Scalar(grey), UniformInt(&rng, 1, 4));
+  }
   return image;
 }
 

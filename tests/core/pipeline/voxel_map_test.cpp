@@ -53,7 +53,7 @@ TEST(VoxelMap, FullVoxelFilterKeepsTheReferencePointsAcrossBlocksAndScans) {
     std::vector<Eigen::Vector3d> all;
     for (int scan = 0; scan < 5; ++scan) {
       std::vector<Eigen::Vector3d> batch;
-      for (int i = 0; i < 20000; ++i) batch.emplace_back(u(rng), u(rng), 0.1 * u(rng));
+      for (int i = 0; i < 20000; ++i) batch.push_back(Eigen::Vector3d{u(rng), u(rng), 0.1 * u(rng)});
       map.Add(batch);
       all.insert(all.end(), batch.begin(), batch.end());
     }

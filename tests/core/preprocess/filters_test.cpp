@@ -255,9 +255,11 @@ TEST(VoxelFilter, KeepsOneRealPointPerVoxelNearestItsCentroid) {
   RandomStream rng(11, "filters_test.voxel");
   // 10 voxels of 0.5 m along x, 100 random points in each.
   for (int v = 0; v < 10; ++v)
-    for (int k = 0; k < 100; ++k)
-      pts.push_back(At(0.5f * v + 0.5f * float(rng.Uniform()), 0.5f * float(rng.Uniform()),
-                       0.5f * float(rng.Uniform()), uint8_t(v), double(pts.size())));
+    for (int k = 0; k < 100; ++k) {
+      const Eigen::Vector3f p{0.5f * v + 0.5f * float(rng.Uniform()), 0.5f * float(rng.Uniform()),
+                              0.5f * float(rng.Uniform())};  // braces: drawn left to right
+      pts.push_back(At(p.x(), p.y(), p.z(), uint8_t(v), double(pts.size())));
+    }
   const std::vector<ScanPoint> input = pts;
   EXPECT_EQ(VoxelFilter(0.5, &pts), 990u);
   ASSERT_EQ(pts.size(), 10u);

@@ -68,7 +68,7 @@ inline Scene Corridor() {
 }
 
 inline Eigen::Vector3d Noise(RandomStream& rng, double sigma_m) {
-  return Eigen::Vector3d(rng.Normal(0, sigma_m), rng.Normal(0, sigma_m), rng.Normal(0, sigma_m));
+  return Eigen::Vector3d{rng.Normal(0, sigma_m), rng.Normal(0, sigma_m), rng.Normal(0, sigma_m)};
 }
 
 inline void Push(const Eigen::Vector3d& p, Cloud* c) {

@@ -17,12 +17,13 @@ namespace rotolidar {
 namespace {
 
 Eigen::Vector3d RandomVector(RandomStream& rng, double sigma) {
-  return Eigen::Vector3d(rng.Normal(0.0, sigma), rng.Normal(0.0, sigma), rng.Normal(0.0, sigma));
+  return Eigen::Vector3d{rng.Normal(0.0, sigma), rng.Normal(0.0, sigma), rng.Normal(0.0, sigma)};
 }
 
 Pose3 RandomPose(RandomStream& rng) {
   // Rotations up to ~pi (sigma 1 rad per axis) and translations of metres: far from identity on purpose.
-  return MakePose(RandomVector(rng, 5.0), Eigen::Quaterniond(ExpSO3(RandomVector(rng, 1.0))));
+  const Eigen::Vector3d t = RandomVector(rng, 5.0);  // drawn first: argument order is the compiler's choice
+  return MakePose(t, Eigen::Quaterniond(ExpSO3(RandomVector(rng, 1.0))));
 }
 
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
@@ -123,9 +124,9 @@ TEST(Residuals, GradientCheckerAcceptsBothResidualsAtRandomPoses) {
     const Pose3 T = RandomPose(rng);
     const PoseParameters x = PoseToParameters(T);
     const double* params[] = {x.data()};
-    const PointToPlaneResidual plane(RandomVector(rng, 10.0), RandomVector(rng, 1.0).normalized(), rng.Normal());
-    const PointToLineResidual line(RandomVector(rng, 10.0), RandomVector(rng, 10.0),
-                                   RandomVector(rng, 1.0).normalized());
+    const PointToPlaneResidual plane{RandomVector(rng, 10.0), RandomVector(rng, 1.0).normalized(), rng.Normal()};
+    const PointToLineResidual line{RandomVector(rng, 10.0), RandomVector(rng, 10.0),
+                                   RandomVector(rng, 1.0).normalized()};
     ceres::GradientChecker::ProbeResults results;
     // 1e-6 relative: Ceres' central differences on O(10 m) lever arms are accurate to ~1e-8 here; a wrong
     // Jacobian term (sign, factor 2, transposed skew) shows up as O(1) relative error.
@@ -184,8 +185,8 @@ TEST(Residuals, ValuesAreSignedPlaneDistanceAndLineDistance) {
 
 TEST(Residuals, ResetEqualsAFreshlyConstructedResidual) {
   RandomStream rng(11);
-  PointToLineResidual line(RandomVector(rng, 3.0), RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized());
-  PointToPlaneResidual plane(RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized(), 0.3);
+  PointToLineResidual line{RandomVector(rng, 3.0), RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized()};
+  PointToPlaneResidual plane{RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized(), 0.3};
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::Vector3d p = RandomVector(rng, 3.0), a = RandomVector(rng, 3.0);
     const Eigen::Vector3d u = RandomVector(rng, 1.0).normalized();

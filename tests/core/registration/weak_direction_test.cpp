@@ -77,7 +77,7 @@ TEST(WeakDirectionGate, CountsDegenerateAndStrayingWeakDirections) {
   std::vector<Eigen::Vector3d> levers;
   RandomStream rng(9, "test.registration.gate");
   for (int i = 0; i < 50; ++i)
-    levers.emplace_back(rng.Normal(0.0, 3.0), rng.Normal(0.0, 3.0), rng.Normal(0.0, 1.0));
+    levers.push_back(Eigen::Vector3d{rng.Normal(0.0, 3.0), rng.Normal(0.0, 3.0), rng.Normal(0.0, 1.0)});
   const Matrix6d G = DisplacementMetric(levers);
   Vector6d w;
   w << 1.0, 0.0, 0.0, 0.0, 0.0, 0.0;

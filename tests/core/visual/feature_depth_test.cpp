@@ -79,6 +79,14 @@ Eigen::Vector2d Feature(double az_deg, double el_deg, const Pose3& T_lidar_cam =
   return d.head<2>() / d.z();
 }
 
+/// A feature at azimuth az0 + daz * U and elevation el0 + del * U [deg], U uniform, drawn in that order.
+Eigen::Vector2d RandomFeature(RandomStream& rng, double az0_deg, double daz_deg, double el0_deg, double del_deg,
+                              const Pose3& T_lidar_cam = TLidarCam()) {
+  const double az_deg = az0_deg + daz_deg * rng.Uniform();
+  const double el_deg = el0_deg + del_deg * rng.Uniform();
+  return Feature(az_deg, el_deg, T_lidar_cam);
+}
+
 /// True depth (cam z) of a feature ray, and (when asked) the angle between the ray and the surface it hits [deg].
 double TrueDepth(const std::vector<Box>& scene, const Eigen::Vector2d& xy, double* incidence_deg = nullptr,
                  const Pose3& T = TLidarCam()) {
@@ -184,11 +192,11 @@ TEST(LidarDepth, WallAndFloorDepthsMatchTheTruth) {
   const LidarDepthMap map = MapOf(Scan(room, 0.03, 2));
   RandomStream rng(3, "feature-depth-wall-features");
   std::vector<Eigen::Vector2d> wall, floor, corner;
-  for (int i = 0; i < 400; ++i) wall.push_back(Feature(-30 + 60 * rng.Uniform(), -8 + 21 * rng.Uniform()));
+  for (int i = 0; i < 400; ++i) wall.push_back(RandomFeature(rng, -30, 60, -8, 21));
   // From the camera the floor's rings (LiDAR -15 and -13 deg) lie at -14.0 and -12.1 deg, the wall's lowest ring
   // at -10.2 deg; between the last two lies the floor-wall corner.
-  for (int i = 0; i < 100; ++i) floor.push_back(Feature(-30 + 60 * rng.Uniform(), -13.9 + 1.6 * rng.Uniform()));
-  for (int i = 0; i < 100; ++i) corner.push_back(Feature(-30 + 60 * rng.Uniform(), -12.1 + 1.9 * rng.Uniform()));
+  for (int i = 0; i < 100; ++i) floor.push_back(RandomFeature(rng, -30, 60, -13.9, 1.6));
+  for (int i = 0; i < 100; ++i) corner.push_back(RandomFeature(rng, -30, 60, -12.1, 1.9));
   // Measured (3 cm range noise): wall 400/400 valid, median 3.6 mm, p95 11 mm, max 18 mm; floor 100/100, median
   // 3.2 mm, max 15 mm. The fit averages 32 points, so the errors lie well below the 3 cm noise; bounds ~2x the
   // measured.
@@ -236,7 +244,7 @@ TEST(LidarDepth, DepthEdgesAreRejectedNotGivenAWrongDepth) {
   }
   // Anywhere around the box, no valid depth is wrong. Measured: 474/600 valid, max error 18 mm (the wall's bound).
   std::vector<Eigen::Vector2d> around;
-  for (int i = 0; i < 600; ++i) around.push_back(Feature(-20 + 40 * rng.Uniform(), -8 + 20 * rng.Uniform()));
+  for (int i = 0; i < 600; ++i) around.push_back(RandomFeature(rng, -20, 40, -8, 20));
   const std::vector<double> errors = DepthErrors("around the box", map, scene, around);
   EXPECT_GE(errors.size(), 400u);
   EXPECT_LT(Percentile(errors, 1.0), 0.04);
@@ -255,7 +263,7 @@ TEST(LidarDepth, RaysFarFromEveryPointHaveNoPoints) {
 TEST(LidarDepth, GrazingRaysAreRejected) {
   RandomStream rng(9, "feature-depth-floor-features");
   std::vector<Eigen::Vector2d> features;
-  for (int i = 0; i < 300; ++i) features.push_back(Feature(-20 + 40 * rng.Uniform(), -20 + 18 * rng.Uniform()));
+  for (int i = 0; i < 300; ++i) features.push_back(RandomFeature(rng, -20, 40, -20, 18));
   // A floor 1 m below the LiDAR, VLP-16 rings, nothing else: beyond ~5 m (incidence < 10 deg) the two rings around
   // a ray spread > 1 m, so the depth-edge gate rejects them before the plane is fitted. Measured: none valid.
   const std::vector<Box> far_floor = {{{-100, -100, -1.5}, {100, 100, -1.0}}};
@@ -310,7 +318,7 @@ TEST(LidarDepth, PointsInAnotherFrameGiveTheSameDepths) {
   RandomStream rng(11, "feature-depth-transform-features");
   std::vector<double> errors;
   for (int i = 0; i < 300; ++i) {
-    const Eigen::Vector2d xy = Feature(-10 + 50 * rng.Uniform(), -6 + 18 * rng.Uniform(), T_lidar_cam);
+    const Eigen::Vector2d xy = RandomFeature(rng, -10, 50, -6, 18, T_lidar_cam);
     const FeatureDepth a = in_lidar.Query(xy), b = in_cam.Query(xy);
     EXPECT_EQ(a.status, b.status);
     EXPECT_NEAR(a.depth_m, b.depth_m, 1e-9);
@@ -326,7 +334,7 @@ TEST(LidarDepth, CostPerImage) {
   const std::vector<Eigen::Vector3d> scan = Scan(BoxScene(), 0.03, 12);  // 16 rings x 900 azimuths
   RandomStream rng(13, "feature-depth-cost-features");
   std::vector<Eigen::Vector2d> features;
-  for (int i = 0; i < 100; ++i) features.push_back(Feature(-30 + 60 * rng.Uniform(), -20 + 40 * rng.Uniform()));
+  for (int i = 0; i < 100; ++i) features.push_back(RandomFeature(rng, -30, 60, -20, 40));
   const int repeats = 20;
   double build_ms = 0, query_ms = 0;
   size_t kept = 0, valid = 0;

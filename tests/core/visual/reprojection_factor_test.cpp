@@ -24,8 +24,8 @@ Eigen::Vector3d RandomVector(RandomStream& rng, double sigma) {
 }
 
 Pose3 RandomPose(RandomStream& rng, double sigma_t_m) {
-  return MakePose(RandomVector(rng, sigma_t_m),
-                  Eigen::Quaterniond(rng.Normal(), rng.Normal(), rng.Normal(), rng.Normal()));
+  const Eigen::Vector3d t = RandomVector(rng, sigma_t_m);  // drawn first: argument order is the compiler's choice
+  return MakePose(t, Eigen::Quaterniond{rng.Normal(), rng.Normal(), rng.Normal(), rng.Normal()});
 }
 
 Eigen::Vector2d Pi(const Eigen::Vector3d& p) { return p.head<2>() / p.z(); }
@@ -50,7 +50,7 @@ Scene RandomScene(RandomStream& rng) {
   s.T_wa = s.T_w_ca * s.T_ic.inverse();
   s.T_wj = s.T_w_cj * s.T_ic.inverse();
   for (;;) {
-    const Eigen::Vector3d u(rng.Uniform() * 1.2 - 0.6, rng.Uniform() * 1.2 - 0.6, 1.0);
+    const Eigen::Vector3d u{rng.Uniform() * 1.2 - 0.6, rng.Uniform() * 1.2 - 0.6, 1.0};
     s.p_world = s.T_w_ca * (u * (2.0 + 28.0 * rng.Uniform()));
     const Eigen::Vector3d p_cj = s.T_w_cj.inverse() * s.p_world;
     if (p_cj.z() > 1.0 && Pi(p_cj).cwiseAbs().maxCoeff() < 1.5) {
@@ -81,7 +81,7 @@ TEST(ReprojectionFactor, JacobiansMatchNumericForAllVariants) {
   double worst_fixed = 0.0, worst_extrinsic = 0.0, worst_td = 0.0;
   for (int trial = 0; trial < 200; ++trial) {
     const Scene s = RandomScene(rng);
-    const Eigen::Vector2d noise(rng.Normal(0.0, 0.01), rng.Normal(0.0, 0.01));  // a non-zero residual
+    const Eigen::Vector2d noise{rng.Normal(0.0, 0.01), rng.Normal(0.0, 0.01)};  // a non-zero residual
     const ReprojectionMeasurement m = Measure(s, s.u_j + noise);
     double pose_a[7], pose_j[7], extrinsic[7], rho[1] = {s.rho}, td[1] = {rng.Normal(0.0, 0.01)};
     PackImuPose(s.T_wa, pose_a);
@@ -211,7 +211,7 @@ Window MakeWindow(RandomStream& rng, int num_points) {
   }
   const Pose3 T_w_c0 = w.T_w_imu[0] * w.T_ic;
   for (int i = 0; i < num_points; ++i) {
-    const Eigen::Vector3d u(rng.Uniform() - 0.5, rng.Uniform() * 0.8 - 0.4, 1.0);
+    const Eigen::Vector3d u{rng.Uniform() - 0.5, rng.Uniform() * 0.8 - 0.4, 1.0};
     w.points.push_back(T_w_c0 * (u * (3.0 + 22.0 * rng.Uniform())));
   }
   return w;

@@ -38,9 +38,9 @@ inline cv::Mat MakeTexture(uint64_t seed, cv::Size size, double contrast = 1.0) 
   tex = tex(cv::Rect(0, 0, size.width, size.height)).clone();
   const int shapes = size.area() / 400;
   for (int i = 0; i < shapes; ++i) {
-    const cv::Point p(rng.uniform(0, size.width), rng.uniform(0, size.height));
+    const cv::Point p{rng.uniform(0, size.width), rng.uniform(0, size.height)};
     const cv::Scalar grey(rng.uniform(0, 256));
-    if (i % 2) cv::rectangle(tex, p, p + cv::Point(rng.uniform(4, 30), rng.uniform(4, 30)), grey, cv::FILLED);
+    if (i % 2) cv::rectangle(tex, p, p + cv::Point{rng.uniform(4, 30), rng.uniform(4, 30)}, grey, cv::FILLED);
     else cv::circle(tex, p, rng.uniform(3, 16), grey, cv::FILLED);
   }
   cv::GaussianBlur(tex, tex, cv::Size(0, 0), 1.2);

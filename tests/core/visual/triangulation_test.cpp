@@ -28,7 +28,7 @@ Eigen::Vector2d Observe(const Pose3& T_world_cam, const Eigen::Vector3d& p_world
                         RandomStream* rng = nullptr, double f_px = 460.0) {
   const Eigen::Vector3d p = T_world_cam.inverse() * p_world;
   Eigen::Vector2d xy = p.head<2>() / p.z();
-  if (rng) xy += Eigen::Vector2d(rng->Normal(), rng->Normal()) * sigma_px / f_px;
+  if (rng) xy += Eigen::Vector2d{rng->Normal(), rng->Normal()} * sigma_px / f_px;
   return xy;
 }
 
@@ -70,13 +70,14 @@ TEST(Triangulation, NoiseFreeViewsRecoverThePoint) {
     // Cameras spread over 2 m around (100, -50, 3) (far from the origin), looking at a point 2-30 m ahead.
     const Eigen::Vector3d base(100, -50, 3);
     const Eigen::Vector3d p =
-        base + Eigen::Vector3d(2 + 28 * rng.Uniform(), -3 + 6 * rng.Uniform(), -1 + 2 * rng.Uniform());
+        base + Eigen::Vector3d{2 + 28 * rng.Uniform(), -3 + 6 * rng.Uniform(), -1 + 2 * rng.Uniform()};
     const int views = 2 + trial % 5;
     std::vector<Pose3> poses;
     std::vector<Eigen::Vector2d> xy;
     for (int k = 0; k < views; ++k) {
-      poses.push_back(Camera(base + Eigen::Vector3d(rng.Uniform() - 0.5, 2 * rng.Uniform() - 1, 0.4 * rng.Uniform()),
-                             (rng.Uniform() - 0.5) * 0.3));
+      const Eigen::Vector3d c =
+          base + Eigen::Vector3d{rng.Uniform() - 0.5, 2 * rng.Uniform() - 1, 0.4 * rng.Uniform()};
+      poses.push_back(Camera(c, (rng.Uniform() - 0.5) * 0.3));
       xy.push_back(Observe(poses.back(), p));
     }
     TriangulationConfig any_parallax;
@@ -101,7 +102,7 @@ TEST(Triangulation, DepthErrorWithPixelNoiseMatchesTheory) {
   double rms = 0.0, worst_reprojection = 0.0;
   const int trials = 1000;
   for (int trial = 0; trial < trials; ++trial) {
-    const Eigen::Vector3d p(10.0, -2 + 4 * rng.Uniform(), -1 + 2 * rng.Uniform());
+    const Eigen::Vector3d p{10.0, -2 + 4 * rng.Uniform(), -1 + 2 * rng.Uniform()};
     const std::vector<Pose3> poses = {Camera({0, 0.5, 0}), Camera({0, -0.5, 0})};
     const std::vector<Eigen::Vector2d> xy = {Observe(poses[0], p, 0.5, &rng), Observe(poses[1], p, 0.5, &rng)};
     const Triangulation t = TriangulateFeature(xy, poses, config);

@@ -37,7 +37,7 @@ TEST(CameraModel, ProjectionEqualsOpenCvProjectPoints) {
   std::vector<cv::Point3d> points;
   for (int i = 0; i < 500; ++i) {  // inside the field of view, 0.3..20 m deep
     const double z = 0.3 + 19.7 * rng.Uniform();
-    points.emplace_back((rng.Uniform() - 0.5) * 1.3 * z, (rng.Uniform() - 0.5) * 1.0 * z, z);
+    points.push_back(cv::Point3d{(rng.Uniform() - 0.5) * 1.3 * z, (rng.Uniform() - 0.5) * 1.0 * z, z});
   }
   std::vector<cv::Point2d> expected;
   cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), CameraMatrix(k), DistCoeffs(k), expected);

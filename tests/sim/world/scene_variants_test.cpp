@@ -139,7 +139,7 @@ TEST(SceneVariants, FoliageAndGlassAreTransmissiveAndCrownsPorous) {
   RandomStream rng(5, "test.crown");
   int hits = 0, n = 2000;
   for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d o(-16.0, -12.0 + (1.6 * rng.Uniform() - 0.8), 4.1 + (2.0 * rng.Uniform() - 1.0));
+    const Eigen::Vector3d o{-16.0, -12.0 + (1.6 * rng.Uniform() - 0.8), 4.1 + (2.0 * rng.Uniform() - 1.0)};
     const RayHit hit = es->Intersect(o, -Eigen::Vector3d::UnitX(), 7.0);  // stops before the next crown
     hits += hit.hit;
   }

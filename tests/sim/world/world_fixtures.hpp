@@ -82,13 +82,13 @@ inline std::unique_ptr<EmbreeScene> MakeEmbree(const Scene& scene) {
 }
 
 inline Eigen::Vector3d RandomUnit(RandomStream* rng) {
-  const Eigen::Vector3d v(rng->Normal(), rng->Normal(), rng->Normal());
+  const Eigen::Vector3d v{rng->Normal(), rng->Normal(), rng->Normal()};
   return v.normalized();
 }
 
 inline Eigen::Vector3d RandomInside(const Eigen::AlignedBox3d& box, double margin_m, RandomStream* rng) {
   const Eigen::Vector3d lo = box.min().array() + margin_m, hi = box.max().array() - margin_m;
-  return lo + (hi - lo).cwiseProduct(Eigen::Vector3d(rng->Uniform(), rng->Uniform(), rng->Uniform()));
+  return lo + (hi - lo).cwiseProduct(Eigen::Vector3d{rng->Uniform(), rng->Uniform(), rng->Uniform()});
 }
 
 /// Height of the lowest surface at (x, y): an upward ray from 1 m below the scene's bounds (the floor or the

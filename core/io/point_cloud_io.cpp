@@ -1,5 +1,7 @@
 #include "core/io/point_cloud_io.hpp"
 
+#include "core/io/point_cloud_header.hpp"
+
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
@@ -31,6 +33,9 @@ Status SavePointCloud(const std::string& path, const std::vector<Eigen::Vector3d
 Status LoadPointCloud(const std::string& path, std::vector<Eigen::Vector3d>* points) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   int rc = -1;
+  if (!EndsWith(path, ".ply") && !EndsWith(path, ".pcd"))
+    return Status::Error(path + ": unknown point cloud extension (use .ply or .pcd)");
+  if (Status st = CheckPointCloudHeader(path); !st.ok) return st;
   if (EndsWith(path, ".ply"))
     rc = pcl::io::loadPLYFile(path, cloud);
   else if (EndsWith(path, ".pcd"))

@@ -94,7 +94,9 @@ bool Vlp16CasterConfig::Validate(std::string* error) const {
 }
 
 Status CheckCasterMaterials(const Vlp16CasterConfig& config, const std::vector<Material>& materials) {
-  for (const auto& [name, t] : config.material_transmittance) {
+  for (const auto& entry : config.material_transmittance) {
+    const std::string& name = entry.first;  // (C++17 lambdas cannot capture a structured binding)
+    const double t = entry.second;
     const auto it = std::find_if(materials.begin(), materials.end(), [&](const Material& m) { return m.name == name; });
     if (it == materials.end()) {
       return Status::Error("lidar.material_transmittance: material '" + name + "' is not in the scene");

@@ -1,5 +1,6 @@
 // Mesh files through PCL's readers, and the element truth file.
 #include "sim/world/mesh_io.hpp"
+#include "core/io/point_cloud_header.hpp"
 #include "core/util/log.hpp"
 
 #include <algorithm>
@@ -36,6 +37,9 @@ Status LoadMeshFile(const std::string& path, MeshAsset* mesh) {
   const std::string ext = LowerExtension(path);
   if (ext != "obj" && ext != "ply") return Status::Error(path + ": mesh files must be .obj or .ply");
   if (!std::ifstream(path)) return Status::Error(path + ": cannot open mesh file");
+  if (ext == "ply") {
+    if (Status st = CheckPointCloudHeader(path); !st.ok) return st;
+  }
   pcl::PolygonMesh polygon_mesh;
   const int rc = ext == "obj" ? pcl::io::loadOBJFile(path, polygon_mesh) : pcl::io::loadPLYFile(path, polygon_mesh);
   if (rc < 0) return Status::Error(path + ": PCL could not read the mesh (code " + std::to_string(rc) + ")");

@@ -1,0 +1,226 @@
+#include "core/io/point_cloud_header.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+namespace rotolidar {
+namespace {
+
+constexpr int kMaxHeaderLines = 4096;
+constexpr uint64_t kMaxLzfExpansion = 100;  // LZF stores a run of up to 264 bytes in 3: ~88x at most
+
+Status HeaderError(const std::string& path, int line, const std::string& what) {
+  return Status::Error(path + ": header line " + std::to_string(line) + ": " + what);
+}
+
+/// A whole number >= 0 of at most 18 digits (no sign, no exponent).
+bool ParseCount(const std::string& token, uint64_t* value) {
+  if (token.empty() || token.size() > 18) return false;
+  uint64_t v = 0;
+  for (char c : token) {
+    if (c < '0' || c > '9') return false;
+    v = 10 * v + uint64_t(c - '0');
+  }
+  *value = v;
+  return true;
+}
+
+/// a * b, saturating at UINT64_MAX.
+uint64_t SatMul(uint64_t a, uint64_t b) { return (b != 0 && a > UINT64_MAX / b) ? UINT64_MAX : a * b; }
+
+std::vector<std::string> Tokens(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> tokens;
+  for (std::string t; in >> t;) tokens.push_back(t);
+  return tokens;
+}
+
+/// Bytes of a PLY scalar type (PLY 1.0 names and the sized aliases); 0 if unknown.
+uint64_t PlyScalarBytes(const std::string& type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" || type == "float32")
+    return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+struct PlyElement {
+  std::string name;
+  uint64_t count = 0;
+  int line = 0;
+  uint64_t bytes = 0;       ///< binary: the smallest size of one element (a list counts its length field only)
+  uint64_t properties = 0;  ///< ASCII: at least one byte per property value
+};
+
+Status CheckPly(const std::string& path, std::ifstream& in, uint64_t file_size) {
+  std::string line;
+  std::getline(in, line);  // "ply", checked by the caller
+  bool ascii = false;
+  std::vector<PlyElement> elements;
+  for (int number = 2; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
+    const std::vector<std::string> t = Tokens(line);
+    if (t.empty()) continue;
+    if (t[0] == "end_header") {
+      const std::streamoff pos = in.tellg();
+      const uint64_t data = pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
+      for (const PlyElement& e : elements) {
+        const uint64_t per_element = std::max<uint64_t>(1, ascii ? e.properties : e.bytes);
+        const uint64_t need = SatMul(e.count, per_element);
+        if (need > data)
+          return HeaderError(path, e.line, "element " + e.name + " " + std::to_string(e.count) + " needs at least " +
+                                               std::to_string(need) + " bytes of data, the file has " +
+                                               std::to_string(data) + " after its header");
+      }
+      return Status::Ok();
+    }
+    if (t[0] == "format" && t.size() >= 2) ascii = t[1] == "ascii";
+    if (t[0] == "element") {
+      PlyElement e;
+      e.name = t.size() >= 2 ? t[1] : "";
+      e.line = number;
+      if (t.size() < 3 || !ParseCount(t[2], &e.count))
+        return HeaderError(path, number, "element " + e.name + ": the count '" + (t.size() >= 3 ? t[2] : "") +
+                                             "' is not a whole number >= 0");
+      elements.push_back(e);
+    }
+    if (t[0] == "property" && !elements.empty()) {
+      const bool list = t.size() >= 2 && t[1] == "list";
+      if (t.size() < (list ? 5u : 3u)) return Status::Ok();  // PCL rejects what it cannot parse
+      const uint64_t bytes = PlyScalarBytes(t[list ? 2 : 1]);
+      if (bytes == 0) return Status::Ok();
+      elements.back().bytes += bytes;
+      elements.back().properties += 1;
+    }
+  }
+  return Status::Ok();  // no end_header: PCL rejects the file
+}
+
+bool Fail(std::string* error, std::string message) {
+  *error = std::move(message);
+  return false;
+}
+
+/// The PCD header's fields as far as the size check needs them (PCD v0.7, pointclouds.org "The PCD file format").
+struct PcdHeader {
+  std::vector<std::string> fields, types;
+  std::vector<uint64_t> sizes, counts;
+  uint64_t width = 0, height = 1, points = 0;
+  bool have_width = false, have_points = false;
+};
+
+/// Reads one header line into `h`; false with *error set on a malformed value or an unknown keyword.
+bool ParsePcdLine(const std::vector<std::string>& t, PcdHeader* h, std::string* error) {
+  const std::string& key = t[0];
+  auto whole = [&](uint64_t* value) {
+    if (t.size() == 2 && ParseCount(t[1], value)) return true;
+    *error = key + ": '" + (t.size() >= 2 ? t[1] : "") + "' is not a whole number >= 0";
+    return false;
+  };
+  if (key == "VERSION" || key == "VIEWPOINT") return true;
+  if (key == "FIELDS" || key == "TYPE") {
+    (key == "FIELDS" ? h->fields : h->types).assign(t.begin() + 1, t.end());
+    return true;
+  }
+  if (key == "SIZE" || key == "COUNT") {
+    std::vector<uint64_t>& list = key == "SIZE" ? h->sizes : h->counts;
+    list.clear();
+    for (size_t i = 1; i < t.size(); ++i) {
+      uint64_t v = 0;
+      if (!ParseCount(t[i], &v)) return Fail(error, key + ": '" + t[i] + "' is not a whole number");
+      list.push_back(v);
+    }
+    return true;
+  }
+  if (key == "WIDTH") h->have_width = true;
+  if (key == "POINTS") h->have_points = true;
+  if (key == "WIDTH") return whole(&h->width);
+  if (key == "HEIGHT") return whole(&h->height);
+  if (key == "POINTS") return whole(&h->points);
+  *error = "unknown header keyword '" + key + "'";
+  return false;
+}
+
+/// The per-field lists agree, each SIZE and TYPE is one PCL reads, and POINTS = WIDTH x HEIGHT.
+bool ConsistentPcd(PcdHeader* h, std::string* error) {
+  const size_t n = h->fields.size();
+  if (n == 0) return Fail(error, "DATA before any FIELDS");
+  if (h->counts.empty()) h->counts.assign(n, 1);
+  if (h->sizes.size() != n || h->types.size() != n || h->counts.size() != n)
+    return Fail(error, "FIELDS names " + std::to_string(n) + " fields, but SIZE has " +
+                           std::to_string(h->sizes.size()) + ", TYPE " + std::to_string(h->types.size()) +
+                           " and COUNT " + std::to_string(h->counts.size()));
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t size = h->sizes[i];
+    if (size != 1 && size != 2 && size != 4 && size != 8)
+      return Fail(error, "SIZE of field " + h->fields[i] + " must be 1, 2, 4 or 8");
+    if (h->types[i] != "I" && h->types[i] != "U" && h->types[i] != "F")
+      return Fail(error, "TYPE of field " + h->fields[i] + " must be I, U or F");
+    if (h->counts[i] == 0 || h->counts[i] > (1u << 20))
+      return Fail(error, "COUNT of field " + h->fields[i] + " must be 1 to 2^20");
+  }
+  if (!h->have_width) return Fail(error, "no WIDTH before DATA");
+  if (!h->have_points) h->points = SatMul(h->width, h->height);
+  if (h->points != SatMul(h->width, h->height))
+    return Fail(error, "POINTS " + std::to_string(h->points) + " is not WIDTH x HEIGHT");
+  return true;
+}
+
+Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) {
+  PcdHeader h;
+  std::string line, error;
+  for (int number = 1; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
+    const std::vector<std::string> t = Tokens(line);
+    if (t.empty() || t[0][0] == '#') continue;
+    if (t[0] != "DATA") {
+      if (!ParsePcdLine(t, &h, &error)) return HeaderError(path, number, error);
+      continue;
+    }
+    if (!ConsistentPcd(&h, &error)) return HeaderError(path, number, error);
+    const std::string kind = t.size() == 2 ? t[1] : "";
+    if (kind != "ascii" && kind != "binary" && kind != "binary_compressed")
+      return HeaderError(path, number, "DATA must be ascii, binary or binary_compressed");
+    uint64_t step = 0, values = 0;
+    for (size_t i = 0; i < h.sizes.size(); ++i) step += h.sizes[i] * h.counts[i], values += h.counts[i];
+    const std::streamoff pos = in.tellg();
+    const uint64_t data = pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
+    uint64_t need = SatMul(h.points, kind == "ascii" ? values : step);
+    if (kind == "binary_compressed") need /= kMaxLzfExpansion;
+    if (need > data || (data == 0 && h.points > 0))
+      return HeaderError(path, number, "POINTS " + std::to_string(h.points) + " (" + kind + ") needs at least " +
+                                           std::to_string(need) + " bytes of data, the file has " +
+                                           std::to_string(data) + " after its header");
+    return Status::Ok();
+  }
+  return Status::Error(path + ": no DATA line in the first " + std::to_string(kMaxHeaderLines) +
+                       " lines: not a PCD header");
+}
+
+}  // namespace
+
+Status CheckPointCloudHeader(const std::string& path) {
+  std::error_code ec;
+  const uint64_t size = std::filesystem::file_size(path, ec);
+  if (ec) return Status::Error(path + ": cannot read the file (" + ec.message() + ")");
+  if (size == 0) return Status::Error(path + ": the file is empty");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error(path + ": cannot open the file");
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".pcd") return CheckPcd(path, in, size);
+  if (ext != ".ply") return Status::Error(path + ": unknown point cloud extension (use .ply or .pcd)");
+  std::string magic;
+  std::getline(in, magic);
+  if (!magic.empty() && magic.back() == '\r') magic.pop_back();
+  if (magic != "ply") return Status::Error(path + ": header line 1: not a PLY file (it must start with 'ply')");
+  in.seekg(0);
+  return CheckPly(path, in, size);
+}
+
+}  // namespace rotolidar

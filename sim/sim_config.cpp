@@ -21,7 +21,7 @@ void ReadTransmittance(const yaml::Section& at, const YAML::Node& m, std::vector
   if (!m.IsMap()) throw yaml::ParseError(yaml::Where(at.file, m) + at.path + ": a map name -> fraction");
   out->clear();
   for (const auto& kv : m) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = yaml::KeyName(at.file, kv.first, at.path);
     double fraction = 0.0;
     yaml::ReadAs(at.file, kv.second, at.Field(name), &fraction);
     out->emplace_back(name, fraction);
@@ -240,6 +240,8 @@ Status ParseSimConfig(const std::string& path, const YAML::Node& root, SimConfig
     c.lidar.return_mode = c.return_mode;  // the caster's echoes follow the encoder's mode
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
+  } catch (const YAML::Exception& e) {  // what a field reader did not foresee: still a message, never a crash
+    return Status::Error(path + ": " + e.what());
   }
   std::string why;
   if (!c.Validate(&why)) return Status::Error(path + ": invalid sim config: " + why);

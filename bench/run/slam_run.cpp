@@ -129,12 +129,14 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
 Status WriteSlamOutputs(const std::string& out_dir, const Estimator& estimator, const SlamRunResult& result) {
   const Trajectory& traj = result.trajectory;
   auto atomically = [](const std::string& path, auto write) { return WriteAtomically(path, write); };
-  for (const auto& [name, format] : {std::pair{"trajectory.tum", TrajectoryFormat::kTum},
-                                     std::pair{"trajectory.kitti", TrajectoryFormat::kKitti}})
+  for (const auto& [name, format_] : {std::pair{"trajectory.tum", TrajectoryFormat::kTum},
+                                      std::pair{"trajectory.kitti", TrajectoryFormat::kKitti}}) {
+    const TrajectoryFormat format = format_;  // (C++17 lambdas cannot capture a structured binding)
     if (Status s = atomically(out_dir + "/" + name,
                               [&](const std::string& part) { return WriteTrajectory(part, format, traj); });
         !s)
       return s;
+  }
   if (Status s = atomically(out_dir + "/trajectory_times.txt",
                             [&](const std::string& part) { return WriteKittiTimes(part, traj); });
       !s)

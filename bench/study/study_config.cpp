@@ -33,7 +33,7 @@ void ParseVariants(const std::string& file, const YAML::Node& n, const sim::SimC
   if (!n.IsMap() || n.size() == 0)
     throw yaml::ParseError(yaml::Where(file, n) + "sweep.variant: expected a mapping NAME: {sim config keys}");
   for (const auto& kv : n) {
-    StudyVariant v{kv.first.as<std::string>(), base};
+    StudyVariant v{yaml::KeyName(file, kv.first, "sweep.variant"), base};
     if (!ValidName(v.name))
       throw yaml::ParseError(yaml::Where(file, kv.first) + "sweep.variant: name '" + v.name +
                              "' must be letters, digits, '_', '-' or '.'");
@@ -48,7 +48,7 @@ void ParseSweep(const yaml::Section& at, const YAML::Node& n, const sim::SimConf
   StudySweep s;
   yaml::Parse(at, n, &s, {"variant"});
   for (const auto& kv : n) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = yaml::KeyName(at.file, kv.first, at.path);
     if (key != "variant" && (!kv.second.IsSequence() || kv.second.size() == 0))
       throw yaml::ParseError(yaml::Where(at.file, kv.second) + at.Field(key) + ": expected a non-empty list of values");
   }

@@ -178,6 +178,10 @@ Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) 
   for (int number = 1; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
     const std::vector<std::string> t = Tokens(line);
     if (t.empty() || t[0][0] == '#') continue;
+    // Printable ASCII only: PCL splits on whitespace alone, and a NUL inside a field name made it read past a
+    // buffer it had freed (found by fuzzing).
+    if (std::any_of(line.begin(), line.end(), [](char c) { return (c < 0x20 && c != '\t' && c != '\r') || c > 0x7e; }))
+      return HeaderError(path, number, "a control or non-ASCII byte in the header");
     if (t[0] != "DATA") {
       if (!ParsePcdLine(t, &h, &error)) return HeaderError(path, number, error);
       continue;

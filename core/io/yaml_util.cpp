@@ -10,12 +10,19 @@ std::string Where(const std::string& file, const YAML::Node& node) {
   return file + ":" + std::to_string(mark.line + 1) + ": ";
 }
 
+std::string KeyName(const std::string& file, const YAML::Node& key, const std::string& context) {
+  if (!key.IsScalar())
+    throw ParseError(Where(file, key) + context + ": a key must be a plain name, not a " +
+                     (key.IsMap() ? "mapping" : key.IsSequence() ? "list" : "null"));
+  return key.Scalar();
+}
+
 void CheckKeys(const std::string& file, const YAML::Node& node, const std::set<std::string>& allowed,
                const std::string& context) {
   if (!node) return;
   if (!node.IsMap()) throw ParseError(Where(file, node) + context + ": expected a mapping");
   for (const auto& kv : node) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = KeyName(file, kv.first, context);
     if (!allowed.count(key))
       throw ParseError(Where(file, kv.first) + "unknown key '" + key + "' in " + context);
   }

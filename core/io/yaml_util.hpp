@@ -23,6 +23,10 @@ struct ParseError : std::runtime_error {
 /// "file:line: " for a node (yaml-cpp lines are 0-based; we print 1-based).
 std::string Where(const std::string& file, const YAML::Node& node);
 
+/// A mapping key as text; a key that is itself a mapping or a list (`{a: 1}: x`, legal YAML) throws ParseError
+/// naming its line and `context`.
+std::string KeyName(const std::string& file, const YAML::Node& key, const std::string& context);
+
 /// Fails on any key of `node` not in `allowed`, naming the key and its line.
 void CheckKeys(const std::string& file, const YAML::Node& node, const std::set<std::string>& allowed,
                const std::string& context);

@@ -214,6 +214,8 @@ Status ParseEstimatorConfig(const std::string& f, const YAML::Node& n, Estimator
     yaml::Parse(yaml::Section{f, "slam"}, n, c);
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
+  } catch (const YAML::Exception& e) {  // what a field reader did not foresee: still a message, never a crash
+    return Status::Error(f + ": " + e.what());
   }
   std::string why;
   if (!c->Validate(&why)) return Status::Error(yaml::Where(f, n) + "slam: " + why);

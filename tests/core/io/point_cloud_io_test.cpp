@@ -104,6 +104,8 @@ TEST(PointCloudIo, PcdHeadersMustBeCompleteAndFitTheFile) {
   const std::string bad_points = "FIELDS x\nSIZE 4\nTYPE F\nWIDTH 2\nPOINTS 3\nDATA ascii\n1\n2\n3\n";
   st = CheckPointCloudHeader(Write("bad_points.pcd", bad_points));
   EXPECT_NE(st.message.find("POINTS 3 is not WIDTH x HEIGHT"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("nul.pcd", std::string("FIELDS x y \0z\nSIZE 4 4 4\n", 25)));
+  EXPECT_NE(st.message.find("header line 1: a control or non-ASCII byte"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("bad_key.pcd", "FIELDS x\nSIZES 4\n"));
   EXPECT_NE(st.message.find("header line 2: unknown header keyword 'SIZES'"), std::string::npos) << st.message;
 }

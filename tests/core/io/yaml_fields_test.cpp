@@ -93,6 +93,9 @@ TEST(YamlFields, ErrorsNameFileLineAndDottedField) {
       {"inner:\n  shape: square\n", "/cfg/t.yaml:2:", "missing required key 'size_m' in top.inner"},
       {"point: [1, 2]\n", "/cfg/t.yaml:1:", "field 'top.point': expected 3 numbers"},
       {"inner: 3\n", "/cfg/t.yaml:1:", "top.inner: expected a mapping"},
+      // A key that is itself a mapping is legal YAML (found by fuzzing: it once escaped as an exception).
+      {"count: 1\n{etd: 6}: b\n", "/cfg/t.yaml:2:", "top: a key must be a plain name, not a mapping"},
+      {"inner:\n  [1, 2]: b\n", "/cfg/t.yaml:2:", "top.inner: a key must be a plain name, not a list"},
   };
   for (const Case& k : cases) {
     const std::string e = ParseError(k.text, &c);

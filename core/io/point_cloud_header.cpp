@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -59,6 +60,41 @@ struct PlyElement {
   uint64_t properties = 0;  ///< ASCII: at least one byte per property value
 };
 
+/// True for a line of printable ASCII (tabs and a trailing CR allowed).
+bool Printable(const std::string& line) {
+  auto bad = [](char c) { return (c < 0x20 && c != '\t' && c != '\r') || c > 0x7e; };
+  return std::none_of(line.begin(), line.end(), bad);
+}
+
+/// One PLY header line (not the first, not end_header) into `elements`; an error names what is wrong.
+std::string ParsePlyLine(const std::vector<std::string>& t, bool* ascii, std::vector<PlyElement>* elements) {
+  if (t[0] == "comment" || t[0] == "obj_info") return "";
+  if (t[0] == "format") {
+    if (t.size() != 3 || (t[1] != "ascii" && t[1] != "binary_little_endian" && t[1] != "binary_big_endian"))
+      return "format: expected 'format ascii|binary_little_endian|binary_big_endian 1.0'";
+    *ascii = t[1] == "ascii";
+    return "";
+  }
+  if (t[0] == "element") {
+    PlyElement e;
+    e.name = t.size() >= 2 ? t[1] : "";
+    if (t.size() != 3 || !ParseCount(t[2], &e.count))
+      return "element " + e.name + ": the count '" + (t.size() >= 3 ? t[2] : "") + "' is not a whole number >= 0";
+    elements->push_back(e);
+    return "";
+  }
+  if (t[0] == "property") {
+    const bool list = t.size() >= 2 && t[1] == "list";
+    if (elements->empty()) return "property before any element";
+    if (t.size() != (list ? 5u : 3u) || PlyScalarBytes(t[list ? 2 : 1]) == 0 || (list && PlyScalarBytes(t[3]) == 0))
+      return "property: expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' with PLY types";
+    elements->back().bytes += PlyScalarBytes(t[list ? 2 : 1]);  // a list: its length field at least
+    elements->back().properties += 1;
+    return "";
+  }
+  return "unknown PLY header keyword '" + t[0] + "'";
+}
+
 Status CheckPly(const std::string& path, std::ifstream& in, uint64_t file_size) {
   std::string line;
   std::getline(in, line);  // "ply", checked by the caller
@@ -66,40 +102,34 @@ Status CheckPly(const std::string& path, std::ifstream& in, uint64_t file_size) 
   std::vector<PlyElement> elements;
   for (int number = 2; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
     const std::vector<std::string> t = Tokens(line);
-    if (t.empty()) continue;
-    if (t[0] == "end_header") {
-      const std::streamoff pos = in.tellg();
-      const uint64_t data = pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
-      for (const PlyElement& e : elements) {
-        const uint64_t per_element = std::max<uint64_t>(1, ascii ? e.properties : e.bytes);
-        const uint64_t need = SatMul(e.count, per_element);
-        if (need > data)
-          return HeaderError(path, e.line, "element " + e.name + " " + std::to_string(e.count) + " needs at least " +
-                                               std::to_string(need) + " bytes of data, the file has " +
-                                               std::to_string(data) + " after its header");
-      }
-      return Status::Ok();
+    // PCL skips lines it cannot parse and may then read the data as header, or the header as data: every line
+    // must be one this check understands (an unparsed element count once made PCL loop for ~10^17 elements).
+    if (t.empty()) return HeaderError(path, number, "an empty line (PLY headers have none)");
+    if (std::isspace(static_cast<unsigned char>(line[0])))
+      return HeaderError(path, number, "a header line must start with its keyword, not a blank");
+    if (t[0] != "comment" && t[0] != "obj_info" && !Printable(line))
+      return HeaderError(path, number, "a control or non-ASCII byte in the header");
+    if (t[0] != "end_header") {
+      const std::string error = ParsePlyLine(t, &ascii, &elements);
+      if (!error.empty()) return HeaderError(path, number, error);
+      if (t[0] == "element") elements.back().line = number;
+      continue;
     }
-    if (t[0] == "format" && t.size() >= 2) ascii = t[1] == "ascii";
-    if (t[0] == "element") {
-      PlyElement e;
-      e.name = t.size() >= 2 ? t[1] : "";
-      e.line = number;
-      if (t.size() < 3 || !ParseCount(t[2], &e.count))
-        return HeaderError(path, number, "element " + e.name + ": the count '" + (t.size() >= 3 ? t[2] : "") +
-                                             "' is not a whole number >= 0");
-      elements.push_back(e);
+    if (t.size() != 1) return HeaderError(path, number, "end_header: expected nothing after it");
+    const std::streamoff pos = in.tellg();
+    const uint64_t data = pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
+    for (const PlyElement& e : elements) {
+      const uint64_t per_element = std::max<uint64_t>(1, ascii ? e.properties : e.bytes);
+      const uint64_t need = SatMul(e.count, per_element);
+      if (need > data)
+        return HeaderError(path, e.line, "element " + e.name + " " + std::to_string(e.count) + " needs at least " +
+                                             std::to_string(need) + " bytes of data, the file has " +
+                                             std::to_string(data) + " after its header");
     }
-    if (t[0] == "property" && !elements.empty()) {
-      const bool list = t.size() >= 2 && t[1] == "list";
-      if (t.size() < (list ? 5u : 3u)) return Status::Ok();  // PCL rejects what it cannot parse
-      const uint64_t bytes = PlyScalarBytes(t[list ? 2 : 1]);
-      if (bytes == 0) return Status::Ok();
-      elements.back().bytes += bytes;
-      elements.back().properties += 1;
-    }
+    return Status::Ok();
   }
-  return Status::Ok();  // no end_header: PCL rejects the file
+  return Status::Error(path + ": no end_header line in the first " + std::to_string(kMaxHeaderLines) +
+                       " lines: not a PLY header");
 }
 
 bool Fail(std::string* error, std::string message) {
@@ -113,6 +143,7 @@ struct PcdHeader {
   std::vector<uint64_t> sizes, counts;
   uint64_t width = 0, height = 1, points = 0;
   bool have_width = false, have_points = false;
+  std::set<std::string> seen;  ///< keywords so far: each at most once
 };
 
 /// Reads one header line into `h`; false with *error set on a malformed value or an unknown keyword.
@@ -123,7 +154,9 @@ bool ParsePcdLine(const std::vector<std::string>& t, PcdHeader* h, std::string* 
     *error = key + ": '" + (t.size() >= 2 ? t[1] : "") + "' is not a whole number >= 0";
     return false;
   };
-  if (key == "VERSION" || key == "VIEWPOINT") return true;
+  if (!h->seen.insert(key).second) return Fail(error, key + " appears twice");
+  if (key == "VERSION") return true;
+  if (key == "VIEWPOINT") return t.size() == 8 || Fail(error, "VIEWPOINT: expected 7 numbers (tx ty tz qw qx qy qz)");
   if (key == "FIELDS" || key == "TYPE") {
     (key == "FIELDS" ? h->fields : h->types).assign(t.begin() + 1, t.end());
     return true;
@@ -141,7 +174,7 @@ bool ParsePcdLine(const std::vector<std::string>& t, PcdHeader* h, std::string* 
   if (key == "WIDTH") h->have_width = true;
   if (key == "POINTS") h->have_points = true;
   if (key == "WIDTH") return whole(&h->width);
-  if (key == "HEIGHT") return whole(&h->height);
+  if (key == "HEIGHT") return whole(&h->height) && (h->height > 0 || Fail(error, "HEIGHT must be >= 1"));
   if (key == "POINTS") return whole(&h->points);
   *error = "unknown header keyword '" + key + "'";
   return false;
@@ -177,11 +210,15 @@ Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) 
   std::string line, error;
   for (int number = 1; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
     const std::vector<std::string> t = Tokens(line);
-    if (t.empty() || t[0][0] == '#') continue;
+    if (line.empty()) continue;  // PCL skips empty lines
+    // PCL splits on whitespace and takes the first piece as the keyword: a line that starts with a blank has an
+    // empty keyword there, and PCL then read the data from the wrong place (a null-pointer crash found by fuzzing).
+    if (std::isspace(static_cast<unsigned char>(line[0])))
+      return HeaderError(path, number, "a header line must start with its keyword, not a blank");
+    if (t[0][0] == '#') continue;
     // Printable ASCII only: PCL splits on whitespace alone, and a NUL inside a field name made it read past a
     // buffer it had freed (found by fuzzing).
-    if (std::any_of(line.begin(), line.end(), [](char c) { return (c < 0x20 && c != '\t' && c != '\r') || c > 0x7e; }))
-      return HeaderError(path, number, "a control or non-ASCII byte in the header");
+    if (!Printable(line)) return HeaderError(path, number, "a control or non-ASCII byte in the header");
     if (t[0] != "DATA") {
       if (!ParsePcdLine(t, &h, &error)) return HeaderError(path, number, error);
       continue;

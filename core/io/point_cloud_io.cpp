@@ -36,12 +36,11 @@ Status LoadPointCloud(const std::string& path, std::vector<Eigen::Vector3d>* poi
   if (!EndsWith(path, ".ply") && !EndsWith(path, ".pcd"))
     return Status::Error(path + ": unknown point cloud extension (use .ply or .pcd)");
   if (Status st = CheckPointCloudHeader(path); !st.ok) return st;
-  if (EndsWith(path, ".ply"))
-    rc = pcl::io::loadPLYFile(path, cloud);
-  else if (EndsWith(path, ".pcd"))
-    rc = pcl::io::loadPCDFile(path, cloud);
-  else
-    return Status::Error(path + ": unknown point cloud extension (use .ply or .pcd)");
+  try {  // PCL throws on some inputs the header check lets through (std::length_error, pcl::IOException)
+    rc = EndsWith(path, ".ply") ? pcl::io::loadPLYFile(path, cloud) : pcl::io::loadPCDFile(path, cloud);
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": PCL could not read the file (" + e.what() + ")");
+  }
   if (rc != 0) return Status::Error(path + ": PCL could not read the file");
   points->clear();
   points->reserve(cloud.size());

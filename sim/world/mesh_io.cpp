@@ -41,7 +41,12 @@ Status LoadMeshFile(const std::string& path, MeshAsset* mesh) {
     if (Status st = CheckPointCloudHeader(path); !st.ok) return st;
   }
   pcl::PolygonMesh polygon_mesh;
-  const int rc = ext == "obj" ? pcl::io::loadOBJFile(path, polygon_mesh) : pcl::io::loadPLYFile(path, polygon_mesh);
+  int rc = -1;
+  try {  // PCL throws on some malformed files (std::length_error, pcl::IOException)
+    rc = ext == "obj" ? pcl::io::loadOBJFile(path, polygon_mesh) : pcl::io::loadPLYFile(path, polygon_mesh);
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": PCL could not read the mesh (" + e.what() + ")");
+  }
   if (rc < 0) return Status::Error(path + ": PCL could not read the mesh (code " + std::to_string(rc) + ")");
   pcl::PointCloud<pcl::PointXYZ> cloud;
   pcl::fromPCLPointCloud2(polygon_mesh.cloud, cloud);

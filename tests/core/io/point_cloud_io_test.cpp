@@ -72,6 +72,15 @@ TEST(PointCloudIo, PlyCountsMustFitTheFile) {
   const std::string ascii = "ply\nformat ascii 1.0\nelement vertex 4" + props;
   EXPECT_TRUE(CheckPointCloudHeader(Write("ascii.ply", ascii + "1 2 3\n4 5 6\n7 8 9\n1 1 1\n")).ok);
   EXPECT_FALSE(CheckPointCloudHeader(Write("ascii_short.ply", ascii + "1 2\n")).ok);
+  // PCL skips header lines it cannot parse: an element line it skipped made it read ~10^17 property-less elements
+  // (a hang found by fuzzing). Every line must be one the check understands, and end_header must come.
+  st = CheckPointCloudHeader(Write("garbled.ply", "ply\nformat binary_little_endian 1.0\nend_\xff\xffply\n"));
+  EXPECT_NE(st.message.find("header line 3: a control or non-ASCII byte"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("keyword.ply", "ply\nformat ascii 1.0\nelemental vertex 3\nend_header\n"));
+  EXPECT_NE(st.message.find("header line 3: unknown PLY header keyword 'elemental'"), std::string::npos)
+      << st.message;
+  st = CheckPointCloudHeader(Write("endless.ply", "ply\nformat ascii 1.0\nelement vertex 0\n"));
+  EXPECT_NE(st.message.find("no end_header line"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("not.ply", "plx\n"));
   EXPECT_NE(st.message.find("header line 1: not a PLY file"), std::string::npos) << st.message;
 }
@@ -106,6 +115,13 @@ TEST(PointCloudIo, PcdHeadersMustBeCompleteAndFitTheFile) {
   EXPECT_NE(st.message.find("POINTS 3 is not WIDTH x HEIGHT"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("nul.pcd", std::string("FIELDS x y \0z\nSIZE 4 4 4\n", 25)));
   EXPECT_NE(st.message.find("header line 1: a control or non-ASCII byte"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("zero_height.pcd", "FIELDS x\nSIZE 4\nTYPE F\nWIDTH 2\nHEIGHT 0\nDATA ascii\n"));
+  EXPECT_NE(st.message.find("header line 5: HEIGHT must be >= 1"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("twice.pcd", "FIELDS x\nSIZE 4\nSIZE 8\n"));
+  EXPECT_NE(st.message.find("header line 3: SIZE appears twice"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("blank.pcd", "\t\t\nFIELDS x\nSIZE 4\n"));
+  EXPECT_NE(st.message.find("header line 1: a header line must start with its keyword"), std::string::npos)
+      << st.message;
   st = CheckPointCloudHeader(Write("bad_key.pcd", "FIELDS x\nSIZES 4\n"));
   EXPECT_NE(st.message.find("header line 2: unknown header keyword 'SIZES'"), std::string::npos) << st.message;
 }

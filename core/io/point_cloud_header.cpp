@@ -198,6 +198,15 @@ bool ConsistentPcd(PcdHeader* h, std::string* error) {
     if (h->counts[i] == 0 || h->counts[i] > (1u << 20))
       return Fail(error, "COUNT of field " + h->fields[i] + " must be 1 to 2^20");
   }
+  // pcl::PointXYZ takes x, y, z as single 4-byte floats and copies each field's bytes as they are: another size,
+  // type or count overran the point (a heap-buffer-overflow in pcl::fromPCLPointCloud2, found by fuzzing).
+  for (const char* axis : {"x", "y", "z"}) {
+    const auto it = std::find(h->fields.begin(), h->fields.end(), axis);
+    const size_t i = size_t(it - h->fields.begin());
+    if (it == h->fields.end()) return Fail(error, std::string("FIELDS has no ") + axis);
+    if (h->sizes[i] != 4 || h->types[i] != "F" || h->counts[i] != 1)
+      return Fail(error, std::string("field ") + axis + " must be one 4-byte float (SIZE 4, TYPE F, COUNT 1)");
+  }
   if (!h->have_width) return Fail(error, "no WIDTH before DATA");
   if (!h->have_points) h->points = SatMul(h->width, h->height);
   if (h->points != SatMul(h->width, h->height))

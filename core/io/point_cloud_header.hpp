@@ -12,8 +12,9 @@ namespace rotolidar {
 /// Checks the header of the PLY or PCD file at `path` (by extension, any case: .ply or .pcd) against its size.
 /// Ok when the file is not empty and every element / point count is a whole number >= 0 whose data fits in the
 /// bytes after the header (binary: count x the element's size in bytes; ASCII: at least one byte per value;
-/// compressed PCD: LZF expands at most ~100x). Otherwise an error naming the file, the header line (1-based) and
-/// the field. A header this check cannot follow is left to PCL, which rejects it without allocating.
+/// compressed PCD: LZF expands at most ~100x), every header line is one this check understands (PCL skips the
+/// others and then misreads the file), and a PCD carries x, y, z as single 4-byte floats (what pcl::PointXYZ
+/// reads). Otherwise an error naming the file, the header line (1-based) and the field.
 Status CheckPointCloudHeader(const std::string& path);
 
 }  // namespace rotolidar

@@ -110,7 +110,7 @@ TEST(PointCloudIo, PcdHeadersMustBeCompleteAndFitTheFile) {
   st = CheckPointCloudHeader(Write("short_size.pcd", short_size));
   EXPECT_NE(st.message.find("FIELDS names 3 fields, but SIZE has 2, TYPE 3 and COUNT 3"), std::string::npos)
       << st.message;
-  const std::string bad_points = "FIELDS x\nSIZE 4\nTYPE F\nWIDTH 2\nPOINTS 3\nDATA ascii\n1\n2\n3\n";
+  const std::string bad_points = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nPOINTS 3\nDATA ascii\n1 1 1\n";
   st = CheckPointCloudHeader(Write("bad_points.pcd", bad_points));
   EXPECT_NE(st.message.find("POINTS 3 is not WIDTH x HEIGHT"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("nul.pcd", std::string("FIELDS x y \0z\nSIZE 4 4 4\n", 25)));
@@ -122,6 +122,10 @@ TEST(PointCloudIo, PcdHeadersMustBeCompleteAndFitTheFile) {
   st = CheckPointCloudHeader(Write("blank.pcd", "\t\t\nFIELDS x\nSIZE 4\n"));
   EXPECT_NE(st.message.find("header line 1: a header line must start with its keyword"), std::string::npos)
       << st.message;
+  st = CheckPointCloudHeader(Write("count2.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 2 1 1\nWIDTH 1\n"
+                                                 "DATA ascii\n1 2 3 4\n"));
+  EXPECT_NE(st.message.find("header line 6: field x must be one 4-byte float (SIZE 4, TYPE F, COUNT 1)"),
+            std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("bad_key.pcd", "FIELDS x\nSIZES 4\n"));
   EXPECT_NE(st.message.find("header line 2: unknown header keyword 'SIZES'"), std::string::npos) << st.message;
 }

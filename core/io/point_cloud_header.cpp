@@ -173,7 +173,8 @@ bool ParsePcdLine(const std::vector<std::string>& t, PcdHeader* h, std::string* 
   }
   if (key == "WIDTH") h->have_width = true;
   if (key == "POINTS") h->have_points = true;
-  if (key == "WIDTH") return whole(&h->width);
+  // WIDTH 0 crashed PCL's reader (found by fuzzing); a cloud without points is refused anyway.
+  if (key == "WIDTH") return whole(&h->width) && (h->width > 0 || Fail(error, "WIDTH must be >= 1"));
   if (key == "HEIGHT") return whole(&h->height) && (h->height > 0 || Fail(error, "HEIGHT must be >= 1"));
   if (key == "POINTS") return whole(&h->points);
   *error = "unknown header keyword '" + key + "'";

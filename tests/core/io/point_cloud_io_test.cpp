@@ -117,6 +117,8 @@ TEST(PointCloudIo, PcdHeadersMustBeCompleteAndFitTheFile) {
   EXPECT_NE(st.message.find("header line 1: a control or non-ASCII byte"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("zero_height.pcd", "FIELDS x\nSIZE 4\nTYPE F\nWIDTH 2\nHEIGHT 0\nDATA ascii\n"));
   EXPECT_NE(st.message.find("header line 5: HEIGHT must be >= 1"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("zero_width.pcd", "FIELDS x\nSIZE 4\nTYPE F\nWIDTH 0\nHEIGHT 50\nDATA ascii\n"));
+  EXPECT_NE(st.message.find("header line 4: WIDTH must be >= 1"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("twice.pcd", "FIELDS x\nSIZE 4\nSIZE 8\n"));
   EXPECT_NE(st.message.find("header line 3: SIZE appears twice"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("blank.pcd", "\t\t\nFIELDS x\nSIZE 4\n"));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -215,6 +216,37 @@ bool ConsistentPcd(PcdHeader* h, std::string* error) {
   return true;
 }
 
+/// DATA ascii: exactly `points` lines of `values` numbers each (blank lines skipped, as PCL does). PCL's own ASCII
+/// reader left a cloud shorter than its header on a line of text, and pcl::fromPCLPointCloud2 then read past it
+/// (found by fuzzing).
+Status CheckPcdAscii(const std::string& path, std::ifstream& in, int data_line, uint64_t points, uint64_t values) {
+  auto error = [&](int number, const std::string& what) {
+    return Status::Error(path + ": line " + std::to_string(number) + ": " + what);
+  };
+  std::string line;
+  uint64_t rows = 0;
+  int number = data_line;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (rows == points) return error(number, "more data lines than POINTS " + std::to_string(points));
+    if (!Printable(line)) return error(number, "a control or non-ASCII byte in the data");
+    const std::vector<std::string> t = Tokens(line);
+    if (t.size() != values)
+      return error(number, "expected " + std::to_string(values) + " numbers, found " + std::to_string(t.size()));
+    for (const std::string& token : t) {
+      char* end = nullptr;
+      std::strtod(token.c_str(), &end);
+      if (end == token.c_str() || *end != '\0') return error(number, "'" + token + "' is not a number");
+    }
+    ++rows;
+  }
+  if (rows != points)
+    return error(number,
+                 "POINTS is " + std::to_string(points) + " but the data has " + std::to_string(rows) + " lines");
+  return Status::Ok();
+}
+
 Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) {
   PcdHeader h;
   std::string line, error;
@@ -247,7 +279,7 @@ Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) 
       return HeaderError(path, number, "POINTS " + std::to_string(h.points) + " (" + kind + ") needs at least " +
                                            std::to_string(need) + " bytes of data, the file has " +
                                            std::to_string(data) + " after its header");
-    return Status::Ok();
+    return kind == "ascii" ? CheckPcdAscii(path, in, number, h.points, values) : Status::Ok();
   }
   return Status::Error(path + ": no DATA line in the first " + std::to_string(kMaxHeaderLines) +
                        " lines: not a PCD header");

@@ -170,8 +170,8 @@ MovingCase MakeMovingCase(int n, double sigma_m, double sigma_rad, bool noisy, c
   const Pose3 T_odom_world = MakePose(Eigen::Vector3d(0.5, -1.0, 0.2), Eigen::Quaterniond(c.R_odom_world));
   for (int k = 0; k < n; ++k) {
     const double t = 0.1 * k;
-    const Pose3 T_world_imu = MakePose(Motion::P(t) + Noise(lidar, sigma_m),
-                                       Eigen::Quaterniond(ExpSO3(Noise(lidar, sigma_rad)) * Motion::R(t)));
+    const Eigen::Vector3d p_world_m = Motion::P(t) + Noise(lidar, sigma_m);  // drawn first, then the rotation
+    const Pose3 T_world_imu = MakePose(p_world_m, Eigen::Quaterniond(ExpSO3(Noise(lidar, sigma_rad)) * Motion::R(t)));
     c.T_odom_imu.push_back(T_odom_world * T_world_imu);
     if (k + 1 == n) break;
     PreintegratedImu pre(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), ImuNoise{});
@@ -226,14 +226,16 @@ TEST(ImuInit, MovingRecoversVelocityGravityAndGyroBias) {
   EXPECT_LT(ee.vel_rms_mps, 3e-5);
   EXPECT_LT(ee.bg_err, 4e-6);
   // Noisy (20 poses over 1.9 s, LiDAR 1 cm / 3 mrad, Kalibr IMU noise). Gravity is the quadratic term of the
-  // positions: sigma_g = 2 * 0.01 m / sqrt(sum P2(t_k)^2) = 0.015 m/s^2 per axis -> tilt ~1.5 mrad per axis; the gyro
-  // bias is the slope of the rotation errors: 3 mrad / sqrt(sum (t_k - mean)^2) = 1.2e-3 rad/s per axis.
-  // Measured: tilt 2.1e-3 rad, velocity RMS 7.6e-2 m/s, |bg error| 4.8e-3 rad/s, ||g_lsq| - 9.81| 1.7e-2.
+  // positions: sigma_g = 2 * 0.01 m / sqrt(sum P2(t_k)^2) = 0.015 m/s^2 per axis -> tilt ~1.5 mrad per axis from the
+  // positions alone; the 3 mrad rotation noise of every pose adds to it. The gyro bias is the slope of the rotation
+  // errors: 3 mrad / sqrt(sum (t_k - mean)^2) = 1.2e-3 rad/s per axis.
+  // Measured over seeds 1-11: tilt 3.4e-3 to 1.33e-2 rad (median 7.4e-3), velocity RMS 7.7e-2 to 9.3e-2 m/s,
+  // |bg error| 1.3e-3 to 4.9e-3 rad/s, ||g_lsq| - 9.81| 1.3e-2 to 0.17 m/s^2. Bounds ~1.5x the worst.
   // (With 10 poses over 0.9 s the same noise gives tilt 8.6e-3 rad, velocity RMS 0.12 m/s: the init wants ~2 s.)
-  EXPECT_LT(en.tilt_rad, 6e-3);
-  EXPECT_LT(en.vel_rms_mps, 0.2);
-  EXPECT_LT(en.bg_err, 0.01);
-  EXPECT_LT(rn.gravity_residual_mps2, 0.1);
+  EXPECT_LT(en.tilt_rad, 0.02);
+  EXPECT_LT(en.vel_rms_mps, 0.15);
+  EXPECT_LT(en.bg_err, 0.008);
+  EXPECT_LT(rn.gravity_residual_mps2, 0.25);
   // The world states are consistent with the result's rotations.
   ASSERT_EQ(rn.states.size(), 20u);
   EXPECT_LT((rn.states[0].R_world_imu - rn.R_world_imu).norm(), 1e-12);

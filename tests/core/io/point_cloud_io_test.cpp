@@ -128,6 +128,15 @@ TEST(PointCloudIo, PcdHeadersMustBeCompleteAndFitTheFile) {
                                                  "DATA ascii\n1 2 3 4\n"));
   EXPECT_NE(st.message.find("header line 6: field x must be one 4-byte float (SIZE 4, TYPE F, COUNT 1)"),
             std::string::npos) << st.message;
+  // ASCII data: POINTS lines of numbers, nothing else.
+  const std::string xyz = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nDATA ascii\n";
+  EXPECT_TRUE(CheckPointCloudHeader(Write("ascii_ok.pcd", xyz + "1 2 3\n\n4.5 nan -6e-3\n")).ok);
+  st = CheckPointCloudHeader(Write("ascii_text.pcd", xyz + "1 2 3\nFIELDS 0\n"));
+  EXPECT_NE(st.message.find("ascii_text.pcd: line 7: expected 3 numbers, found 2"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("ascii_word.pcd", xyz + "1 2 3\nx 0 1\n"));
+  EXPECT_NE(st.message.find("line 7: 'x' is not a number"), std::string::npos) << st.message;
+  st = CheckPointCloudHeader(Write("ascii_short.pcd", xyz + "1 2 3\n"));
+  EXPECT_NE(st.message.find("POINTS is 2 but the data has 1 lines"), std::string::npos) << st.message;
   st = CheckPointCloudHeader(Write("bad_key.pcd", "FIELDS x\nSIZES 4\n"));
   EXPECT_NE(st.message.find("header line 2: unknown header keyword 'SIZES'"), std::string::npos) << st.message;
 }

@@ -48,7 +48,7 @@ build() {
 
 core_only() {
   local dir=${BUILD_DIR}-core-sanitize
-  # clang builds the instrumented core and its tests in ~60 % of gcc's time (docs/testing.md);
+  # clang builds the instrumented core and its tests in ~60 % of gcc's time (docs/testing.md, "Sanitizers");
   # ROTOLIDAR_SANITIZE_CXX=g++ (with ROTOLIDAR_SANITIZE_CC=gcc) uses gcc instead.
   BUILD_DIR=$dir build -DROTOLIDAR_CORE_ONLY=ON -DROTOLIDAR_SANITIZE=ON \
     -DCMAKE_C_COMPILER="${ROTOLIDAR_SANITIZE_CC:-clang}" -DCMAKE_CXX_COMPILER="${ROTOLIDAR_SANITIZE_CXX:-clang++}"

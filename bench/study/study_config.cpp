@@ -265,7 +265,7 @@ Status LoadStudyConfig(const std::string& path, StudyConfig* config) {
     yaml::Parse(yaml::Section(path, "", "study"), root, &c);
   } catch (const yaml::ParseError& e) {
     return Status::Error(e.what());
-  } catch (const YAML::Exception& e) {  // e.g. a map key that is not a scalar
+  } catch (const YAML::Exception& e) {  // anything a field reader did not foresee: still a message
     return Status::Error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
   std::string why;

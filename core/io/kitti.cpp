@@ -7,7 +7,6 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
-#include <sstream>
 #include <type_traits>
 
 #include "core/io/kitti_text.hpp"
@@ -45,14 +44,6 @@ Status ReadLines(const std::string& path, std::vector<std::string>* lines) {
   while (std::getline(in, line)) lines->push_back(line);
   if (in.bad()) return Status::Error(path + ": read error");
   return Status::Ok();
-}
-
-std::vector<std::string> Tokens(const std::string& line) {
-  std::istringstream ss(line);
-  std::vector<std::string> out;
-  std::string t;
-  while (ss >> t) out.push_back(t);
-  return out;
 }
 
 Status ParseNumbers(const std::string& path, int line, const std::vector<std::string>& tokens, size_t first,
@@ -102,9 +93,9 @@ Status WriteText(const std::string& path, const std::string& text) {
 /// Number of lines that count: trailing empty lines are dropped; an empty line before the last content line is an
 /// error naming it.
 Status ContentLines(const std::string& path, std::vector<std::string>* lines) {
-  while (!lines->empty() && Tokens(lines->back()).empty()) lines->pop_back();
+  while (!lines->empty() && SplitWhitespace(lines->back()).empty()) lines->pop_back();
   for (size_t i = 0; i < lines->size(); ++i)
-    if (Tokens((*lines)[i]).empty())
+    if (SplitWhitespace((*lines)[i]).empty())
       return Status::Error(Where(path, int(i) + 1) + "empty line (line k must be frame k)");
   if (lines->empty()) return Status::Error(path + ": no data");
   return Status::Ok();
@@ -147,7 +138,7 @@ Status ReadKittiCalib(const std::string& path, KittiCalib* calib) {
   bool seen[5] = {false, false, false, false, false};
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = int(i) + 1;
-    const std::vector<std::string> tokens = Tokens(lines[i]);
+    const std::vector<std::string> tokens = SplitWhitespace(lines[i]);
     if (tokens.empty()) continue;
     const std::string& head = tokens[0];
     if (head.size() < 2 || head.back() != ':')
@@ -186,7 +177,7 @@ Status ReadKittiPoses(const std::string& path, std::vector<Pose3>* poses) {
   std::vector<Pose3> out(lines.size());
   for (size_t i = 0; i < lines.size(); ++i) {
     std::vector<double> v;
-    if (Status s = ParseNumbers(path, int(i) + 1, Tokens(lines[i]), 0, 12, "pose", &v); !s) return s;
+    if (Status s = ParseNumbers(path, int(i) + 1, SplitWhitespace(lines[i]), 0, 12, "pose", &v); !s) return s;
     if (Status s = ToPose(path, int(i) + 1, "pose", ToMatrix34(v), &out[i]); !s) return s;
   }
   *poses = std::move(out);
@@ -206,7 +197,7 @@ Status ReadKittiTimeList(const std::string& path, std::vector<Seconds>* times) {
   std::vector<Seconds> out(lines.size());
   for (size_t i = 0; i < lines.size(); ++i) {
     std::vector<double> v;
-    if (Status s = ParseNumbers(path, int(i) + 1, Tokens(lines[i]), 0, 1, "time", &v); !s) return s;
+    if (Status s = ParseNumbers(path, int(i) + 1, SplitWhitespace(lines[i]), 0, 1, "time", &v); !s) return s;
     out[i] = v[0];
     if (i > 0 && out[i] < out[i - 1])
       return Status::Error(Where(path, int(i) + 1) + "time " + lines[i] + " is earlier than the line before");

@@ -4,6 +4,7 @@
 
 #include "core/io/kitti.hpp"
 #include "core/io/kitti_text.hpp"
+#include "core/util/text.hpp"
 
 namespace rotolidar {
 
@@ -17,7 +18,7 @@ Status ReadKittiImuCalib(const std::string& path, KittiImuCalib* calib) {
   bool has_time = false;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = int(i) + 1;
-    const std::vector<std::string> tokens = Tokens(lines[i]);
+    const std::vector<std::string> tokens = SplitWhitespace(lines[i]);
     if (tokens.empty()) continue;
     const std::string& head = tokens[0];
     std::vector<double>* target = head == "R:" ? &R : head == "T:" ? &T : nullptr;

@@ -13,7 +13,6 @@ std::string Where(const std::string& path, int line);  ///< "path:line: "
 bool ParseNumber(const std::string& token, double* value);
 std::string FormatNumber(double value);  ///< shortest form that reads back to the identical double
 Status ReadLines(const std::string& path, std::vector<std::string>* lines);
-std::vector<std::string> Tokens(const std::string& line);  ///< whitespace-separated
 /// tokens[first..] must be exactly `count` finite numbers; errors name path:line, `what` and the field index.
 Status ParseNumbers(const std::string& path, int line, const std::vector<std::string>& tokens, size_t first,
                     size_t count, const std::string& what, std::vector<double>* values);

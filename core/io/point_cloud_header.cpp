@@ -1,15 +1,17 @@
 #include "core/io/point_cloud_header.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <sstream>
 #include <utility>
 #include <vector>
+
+#include "core/util/text.hpp"
 
 namespace rotolidar {
 namespace {
@@ -21,27 +23,21 @@ Status HeaderError(const std::string& path, int line, const std::string& what) {
   return Status::Error(path + ": header line " + std::to_string(line) + ": " + what);
 }
 
-/// A whole number >= 0 of at most 18 digits (no sign, no exponent).
+/// The whole of `token` as a whole number >= 0 that fits 64 bits (digits only: no sign, no exponent).
 bool ParseCount(const std::string& token, uint64_t* value) {
-  if (token.empty() || token.size() > 18) return false;
-  uint64_t v = 0;
-  for (char c : token) {
-    if (c < '0' || c > '9') return false;
-    v = 10 * v + uint64_t(c - '0');
-  }
-  *value = v;
-  return true;
+  const char* end = token.data() + token.size();
+  const std::from_chars_result r = std::from_chars(token.data(), end, *value);
+  return !token.empty() && r.ec == std::errc() && r.ptr == end;
+}
+
+/// Bytes of the file after the stream's read position (the data after a header).
+uint64_t BytesAfter(std::ifstream& in, uint64_t file_size) {
+  const std::streamoff pos = in.tellg();
+  return pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
 }
 
 /// a * b, saturating at UINT64_MAX.
 uint64_t SatMul(uint64_t a, uint64_t b) { return (b != 0 && a > UINT64_MAX / b) ? UINT64_MAX : a * b; }
-
-std::vector<std::string> Tokens(const std::string& line) {
-  std::istringstream in(line);
-  std::vector<std::string> tokens;
-  for (std::string t; in >> t;) tokens.push_back(t);
-  return tokens;
-}
 
 /// Bytes of a PLY scalar type (PLY 1.0 names and the sized aliases); 0 if unknown.
 uint64_t PlyScalarBytes(const std::string& type) {
@@ -102,7 +98,7 @@ Status CheckPly(const std::string& path, std::ifstream& in, uint64_t file_size) 
   bool ascii = false;
   std::vector<PlyElement> elements;
   for (int number = 2; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
-    const std::vector<std::string> t = Tokens(line);
+    const std::vector<std::string> t = SplitWhitespace(line);
     // PCL skips lines it cannot parse and may then read the data as header, or the header as data: every line
     // must be one this check understands (an unparsed element count once made PCL loop for ~10^17 elements).
     if (t.empty()) return HeaderError(path, number, "an empty line (PLY headers have none)");
@@ -117,8 +113,7 @@ Status CheckPly(const std::string& path, std::ifstream& in, uint64_t file_size) 
       continue;
     }
     if (t.size() != 1) return HeaderError(path, number, "end_header: expected nothing after it");
-    const std::streamoff pos = in.tellg();
-    const uint64_t data = pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
+    const uint64_t data = BytesAfter(in, file_size);
     for (const PlyElement& e : elements) {
       const uint64_t per_element = std::max<uint64_t>(1, ascii ? e.properties : e.bytes);
       const uint64_t need = SatMul(e.count, per_element);
@@ -231,7 +226,7 @@ Status CheckPcdAscii(const std::string& path, std::ifstream& in, int data_line, 
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     if (rows == points) return error(number, "more data lines than POINTS " + std::to_string(points));
     if (!Printable(line)) return error(number, "a control or non-ASCII byte in the data");
-    const std::vector<std::string> t = Tokens(line);
+    const std::vector<std::string> t = SplitWhitespace(line);
     if (t.size() != values)
       return error(number, "expected " + std::to_string(values) + " numbers, found " + std::to_string(t.size()));
     for (const std::string& token : t) {
@@ -251,7 +246,7 @@ Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) 
   PcdHeader h;
   std::string line, error;
   for (int number = 1; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
-    const std::vector<std::string> t = Tokens(line);
+    const std::vector<std::string> t = SplitWhitespace(line);
     if (line.empty()) continue;  // PCL skips empty lines
     // PCL splits on whitespace and takes the first piece as the keyword: a line that starts with a blank has an
     // empty keyword there, and PCL then read the data from the wrong place (a null-pointer crash found by fuzzing).
@@ -271,8 +266,7 @@ Status CheckPcd(const std::string& path, std::ifstream& in, uint64_t file_size) 
       return HeaderError(path, number, "DATA must be ascii, binary or binary_compressed");
     uint64_t step = 0, values = 0;
     for (size_t i = 0; i < h.sizes.size(); ++i) step += h.sizes[i] * h.counts[i], values += h.counts[i];
-    const std::streamoff pos = in.tellg();
-    const uint64_t data = pos < 0 ? 0 : file_size - std::min<uint64_t>(file_size, uint64_t(pos));
+    const uint64_t data = BytesAfter(in, file_size);
     uint64_t need = SatMul(h.points, kind == "ascii" ? values : step);
     if (kind == "binary_compressed") need /= kMaxLzfExpansion;
     if (need > data || (data == 0 && h.points > 0))

@@ -1,6 +1,7 @@
 #pragma once
 // Small text helpers shared by the file parsers.
 #include <string>
+#include <vector>
 
 namespace rotolidar {
 
@@ -15,5 +16,8 @@ inline std::string TrimSpace(const std::string& s) {
   if (b == std::string::npos) return "";
   return s.substr(b, s.find_last_not_of(" \t\r\n") - b + 1);
 }
+
+/// The whitespace-separated tokens of `line` (spaces, tabs, CR, LF, VT, FF), in order.
+std::vector<std::string> SplitWhitespace(const std::string& line);
 
 }  // namespace rotolidar

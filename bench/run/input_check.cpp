@@ -96,36 +96,65 @@ bool NoReturns(const LidarPacket& p) {
 }
 
 // Gaps are counted in timestamp order (after the core's own reordering), so reordered packets are not "lost".
-void CheckLidar(const Recording& rec, std::vector<InputWarning>* out) {
-  PacketOrderer orderer;
-  std::vector<LidarPacket> ordered;
-  for (const LidarPacket& p : rec.lidar_packets) orderer.Push(p, &ordered);
-  orderer.Flush(&ordered);
-  Vlp16GapCounter gaps;
-  std::size_t blind_runs = 0;
-  double blind_start = 0.0, longest_blind = 0.0, last_t = 0.0;
-  bool in_blind = false;
-  for (const LidarPacket& p : ordered) {
+class LidarStreamCheck {
+ public:
+  void Push(const LidarPacket& packet) {
+    orderer_.Push(packet, &ordered_);
+    Drain();
+  }
+  void Finish(const std::string& dir, std::vector<InputWarning>* out) {
+    orderer_.Flush(&ordered_);
+    Drain();
+    if (in_blind_) EndBlind();
+    if (gaps_.lost() > 0)
+      out->push_back({"lidar.lost_packets", dir + "/lidar.pcap: " + std::to_string(gaps_.lost()) +
+                                                " data packet(s) missing from the timestamp sequence", gaps_.lost()});
+    if (blind_runs_ > 0)
+      out->push_back({"lidar.blind", dir + "/lidar.pcap: " + std::to_string(blind_runs_) + " stretch(es) of " +
+                                         Fmt("%.1f s", kBlindS) + " or more without a single return (the longest " +
+                                         Fmt("%.2f s", longest_blind_) + "): a covered or failed sensor",
+                      blind_runs_});
+  }
+
+ private:
+  void Drain() {
+    for (const LidarPacket& p : ordered_) Add(p);
+    ordered_.clear();
+  }
+  void Add(const LidarPacket& p) {
     uint32_t stamp = 0;
     uint8_t mode = 0;
     if (p.udp_port == kVlp16PositionPort || !Vlp16DataTimestamp(p.payload.data(), p.payload.size(), &stamp, &mode))
-      continue;
-    gaps.Add(stamp, mode);
+      return;
+    gaps_.Add(stamp, mode);
     const bool blind = NoReturns(p);
-    if (blind && !in_blind) blind_start = p.t_capture_s;
-    if (!blind && in_blind && last_t - blind_start >= kBlindS) ++blind_runs, longest_blind = std::max(longest_blind, last_t - blind_start);
-    in_blind = blind;
-    last_t = p.t_capture_s;
+    if (blind && !in_blind_) blind_start_ = p.t_capture_s;
+    if (!blind && in_blind_) EndBlind();
+    in_blind_ = blind;
+    last_t_ = p.t_capture_s;
   }
-  if (in_blind && last_t - blind_start >= kBlindS) ++blind_runs, longest_blind = std::max(longest_blind, last_t - blind_start);
-  if (gaps.lost() > 0)
-    out->push_back({"lidar.lost_packets", rec.dir + "/lidar.pcap: " + std::to_string(gaps.lost()) +
-                                              " data packet(s) missing from the timestamp sequence", gaps.lost()});
-  if (blind_runs > 0)
-    out->push_back({"lidar.blind", rec.dir + "/lidar.pcap: " + std::to_string(blind_runs) + " stretch(es) of " +
-                                       Fmt("%.1f s", kBlindS) + " or more without a single return (the longest " +
-                                       Fmt("%.2f s", longest_blind) + "): a covered or failed sensor",
-                    blind_runs});
+  void EndBlind() {
+    if (last_t_ - blind_start_ < kBlindS) return;
+    ++blind_runs_;
+    longest_blind_ = std::max(longest_blind_, last_t_ - blind_start_);
+  }
+
+  PacketOrderer orderer_;
+  std::vector<LidarPacket> ordered_;
+  Vlp16GapCounter gaps_;
+  std::size_t blind_runs_ = 0;
+  double blind_start_ = 0.0, longest_blind_ = 0.0, last_t_ = 0.0;
+  bool in_blind_ = false;
+};
+
+Status CheckLidar(const Recording& rec, std::vector<InputWarning>* out) {
+  LidarPacketSource source;
+  if (Status s = source.Open(rec); !s) return s;
+  LidarStreamCheck check;
+  while (const LidarPacket* p = source.Next()) check.Push(*p);
+  if (!source.status()) return source.status();
+  check.Finish(rec.dir, out);
+  return Status::Ok();
 }
 
 // Runs of one unchanged count while the rotor should turn: a frozen encoder (or a stalled motor).
@@ -170,14 +199,21 @@ void CheckImuSaturation(const Recording& rec, std::vector<InputWarning>* out) {
 
 }  // namespace
 
+Status CheckRecording(const Recording& recording, const InputCheckConfig& config, std::vector<InputWarning>* out) {
+  CheckImu(recording, config, out);
+  CheckEncoder(recording, config, out);
+  CheckCalibKeys(recording, out);
+  if (Status s = CheckLidar(recording, out); !s) return s;
+  CheckFrozenEncoder(recording, out);
+  CheckImuSaturation(recording, out);
+  return Status::Ok();
+}
+
 std::vector<InputWarning> CheckRecording(const Recording& recording, const InputCheckConfig& config) {
   std::vector<InputWarning> out;
-  CheckImu(recording, config, &out);
-  CheckEncoder(recording, config, &out);
-  CheckCalibKeys(recording, &out);
-  CheckLidar(recording, &out);
-  CheckFrozenEncoder(recording, &out);
-  CheckImuSaturation(recording, &out);
+  // Packets in memory were read whole by LoadRecording; only a streamed lidar.pcap can fail here.
+  if (Status s = CheckRecording(recording, config, &out); !s)
+    out.push_back({"lidar.unreadable", s.message, 1});
   return out;
 }
 

@@ -16,6 +16,7 @@
 //   lidar.blind              0.5 s or more of data packets without a single return (a covered or failed sensor)
 //   encoder.frozen           the count unchanged for 0.25 s or more while calib.yaml says the rotor turns
 //   imu.saturated            an axis sits at its extreme value on 3 or more samples (a clipped sensor)
+//   lidar.unreadable         (the overload without a Status only) a streamed lidar.pcap failed to read
 #include <string>
 #include <vector>
 
@@ -35,8 +36,12 @@ struct InputWarning {
   std::size_t count = 0;
 };
 
-/// Inspects a loaded recording (and its calib.yaml's text for the keys it gives). Never fails: findings come
-/// back as warnings.
+/// Inspects a loaded recording (and its calib.yaml's text for the keys it gives), appending its findings to *out.
+/// Reads a streamed lidar.pcap (PacketLoading::kStreamed) once, one packet at a time; fails only where that file
+/// cannot be read (a malformed record, no VLP-16 data: LoadRecording's errors for packets in memory).
+Status CheckRecording(const Recording& recording, const InputCheckConfig& config, std::vector<InputWarning>* out);
+/// The same for a recording whose packets are in memory. Never fails: findings come back as warnings (an
+/// unreadable streamed lidar.pcap as "lidar.unreadable").
 std::vector<InputWarning> CheckRecording(const Recording& recording, const InputCheckConfig& config = {});
 
 /// "N warnings" summary lines for a terminal, one per warning.

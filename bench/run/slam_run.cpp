@@ -33,23 +33,31 @@ void Keep(ScanReport report, SlamRunResult* result) {
   result->scans.push_back(std::move(report));
 }
 
+/// The recording's time span [s], from its encoder (LoadRecording guarantees 2 samples or more): known before the
+/// streamed LiDAR packets are read.
+double DataSpanS(const Recording& rec) { return rec.encoder.back().t_s - rec.encoder.front().t_s; }
+
 /// Feeds every message to the estimator in time order (packets by capture time, camera frames kCameraFrameLeadS
-/// early), as a live rig would.
+/// early), as a live rig would; the packets come one at a time (LidarPacketSource), so a streamed recording of any
+/// length costs the memory of one packet.
 /// With `snapshots`, polled after each scan (a failed write stops the snapshots and is returned at the end).
 Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* result,
                 const std::function<void(double)>& progress, LoopSnapshotWriter* snapshots,
                 const std::atomic<bool>* stop) {
   Status snapshot_status = Status::Ok();
   size_t i_imu = 0, i_enc = 0, i_cam = 0;
-  const size_t n = rec.lidar_packets.size();
-  size_t next_report = n / 10;
-  for (size_t i = 0; i < n; ++i) {
+  LidarPacketSource source;
+  if (Status s = source.Open(rec); !s) return s;
+  const double t_begin = rec.encoder.front().t_s, span_s = std::max(DataSpanS(rec), 1e-9);
+  double next_report = 0.1, t_first = 0.0;
+  while (const LidarPacket* next = source.Next()) {
+    const LidarPacket& packet = *next;
+    if (source.count() == 1) t_first = packet.t_capture_s;
     if (stop && *stop) {  // asked to stop: finish what was fed, mark the outputs partial
       result->stopped = true;
-      result->data_fed_s = rec.lidar_packets[i].t_capture_s - rec.lidar_packets.front().t_capture_s;
+      result->data_fed_s = packet.t_capture_s - t_first;
       break;
     }
-    const LidarPacket& packet = rec.lidar_packets[i];
     while (i_enc < rec.encoder.size() && rec.encoder[i_enc].t_s <= packet.t_capture_s)
       estimator->Feed(rec.encoder[i_enc++]);
     while (i_imu < rec.imu.size() && rec.imu[i_imu].t_s <= packet.t_capture_s) estimator->Feed(rec.imu[i_imu++]);
@@ -57,14 +65,15 @@ Status Playback(const Recording& rec, Estimator* estimator, SlamRunResult* resul
     // packets, not after a scan), so that the tracker's thread works while the estimator handles the scan.
     while (i_cam < rec.camera.size() && rec.camera[i_cam].t_s <= packet.t_capture_s + kCameraFrameLeadS)
       estimator->Feed(rec.camera[i_cam++]);  // decoded only when kept (in the tracker's thread)
-    if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << i << ": " << s.message);
+    if (Status s = estimator->Feed(packet); !s) LOG_WARN("packet " << source.count() - 1 << ": " << s.message);
     for (ScanReport& r : estimator->Process()) Keep(std::move(r), result);
     if (snapshots && snapshot_status) snapshot_status = snapshots->Poll(*estimator);
-    if (progress && i >= next_report) {
-      progress(double(i) / double(n));
-      next_report += n / 10;
+    if (progress && (packet.t_capture_s - t_begin) / span_s >= next_report) {
+      progress(std::min(1.0, (packet.t_capture_s - t_begin) / span_s));
+      next_report += 0.1;
     }
   }
+  if (!source.status()) return source.status();  // a streamed lidar.pcap that went bad after the input check
   while (!result->stopped && i_enc < rec.encoder.size()) estimator->Feed(rec.encoder[i_enc++]);
   while (!result->stopped && i_imu < rec.imu.size()) estimator->Feed(rec.imu[i_imu++]);
   for (ScanReport& r : estimator->Finish()) Keep(std::move(r), result);
@@ -213,9 +222,10 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
                SlamRunResult* result, const SlamRunOptions& options) {
   std::string why;
   if (!config.Validate(&why)) return Status::Error("slam config: " + why);
-  Recording rec;
-  if (Status s = LoadRecording(recording_dir, &rec); !s) return s;
-  std::vector<InputWarning> warnings = CheckRecording(rec);
+  Recording rec;  // the LiDAR packets stay on disk: memory does not grow with the recording's length
+  if (Status s = LoadRecording(recording_dir, PacketLoading::kStreamed, &rec); !s) return s;
+  std::vector<InputWarning> warnings;
+  if (Status s = CheckRecording(rec, InputCheckConfig{}, &warnings); !s) return s;
   for (const InputWarning& w : warnings) LOG_WARN("[" << w.code << "] " << w.message);
   if (options.strict && !warnings.empty())
     return Status::Error("--strict: the recording has " + std::to_string(warnings.size()) + " problem(s):\n" +
@@ -227,9 +237,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
 
   *result = SlamRunResult{};
   result->input_warnings = std::move(warnings);
-  if (config.keep_deskewed && !rec.lidar_packets.empty())
-    result->deskew_scan_stride =
-        DeskewScanStride(rec.lidar_packets.back().t_capture_s - rec.lidar_packets.front().t_capture_s);
+  if (config.keep_deskewed) result->deskew_scan_stride = DeskewScanStride(DataSpanS(rec));
   Estimator estimator(rec.calib, config);
   if (graph::LoopCloser* loops = estimator.loop_closer(); loops && !config.loop_closure.vocabulary.empty()) {
     if (Status s = loops->LoadVocabulary(config.loop_closure.vocabulary); !s)

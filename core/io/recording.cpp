@@ -91,11 +91,22 @@ Status SaveImuCsv(const std::string& path, const std::vector<ImuSample>& samples
 
 
 Status LoadRecording(const std::string& dir, Recording* recording) {
+  return LoadRecording(dir, PacketLoading::kInMemory, recording);
+}
+
+Status LoadRecording(const std::string& dir, PacketLoading packets, Recording* recording) {
   Recording r;
   r.dir = dir;
   if (!fs::is_directory(dir)) return Status::Error(dir + ": not a recording folder (no such directory)");
   if (Status s = LoadCalibYaml(dir + "/" + RecordingLayout::kCalib, &r.calib); !s) return s;
-  if (Status s = LoadPackets(dir + "/" + RecordingLayout::kLidar, r.calib.epoch_unix_s, &r.lidar_packets); !s) return s;
+  const std::string pcap = dir + "/" + RecordingLayout::kLidar;
+  if (packets == PacketLoading::kInMemory) {
+    if (Status s = LoadPackets(pcap, r.calib.epoch_unix_s, &r.lidar_packets); !s) return s;
+  } else {
+    PcapReader reader;  // fail now, not mid-run, when the file is missing or not a capture
+    if (Status s = reader.Open(pcap, r.calib.epoch_unix_s); !s) return s;
+    r.lidar_packets_streamed = true;
+  }
   if (Status s = LoadImuCsv(dir + "/" + RecordingLayout::kImu, &r.imu); !s) return s;
   if (Status s = LoadEncoder(dir + "/" + RecordingLayout::kEncoder, r.calib.encoder.counts_per_rev, &r.encoder); !s)
     return s;
@@ -103,6 +114,36 @@ Status LoadRecording(const std::string& dir, Recording* recording) {
   if (r.encoder.size() < 2) return Status::Error(dir + "/" + RecordingLayout::kEncoder + ": fewer than 2 samples");
   *recording = std::move(r);
   return Status::Ok();
+}
+
+struct LidarPacketSource::Impl {
+  const Recording* recording = nullptr;
+  PcapReader reader;  // streamed
+  LidarPacket packet;
+};
+
+LidarPacketSource::LidarPacketSource() : impl_(std::make_unique<Impl>()) {}
+LidarPacketSource::~LidarPacketSource() = default;
+
+Status LidarPacketSource::Open(const Recording& recording) {
+  impl_ = std::make_unique<Impl>();
+  impl_->recording = &recording;
+  count_ = 0;
+  status_ = Status::Ok();
+  if (recording.lidar_packets_streamed)
+    status_ = impl_->reader.Open(recording.dir + "/" + RecordingLayout::kLidar, recording.calib.epoch_unix_s);
+  return status_;
+}
+
+const LidarPacket* LidarPacketSource::Next() {
+  const Recording* rec = impl_->recording;
+  if (!rec || !status_) return nullptr;
+  if (!rec->lidar_packets_streamed)
+    return count_ < rec->lidar_packets.size() ? &rec->lidar_packets[count_++] : nullptr;
+  if (impl_->reader.Next(&impl_->packet, &status_)) return ++count_, &impl_->packet;
+  // The end (or a malformed record): a capture without VLP-16 data is LoadPackets' error too.
+  if (status_ && impl_->reader.traffic().vlp16_data == 0) status_ = impl_->reader.NoVlp16DataError();
+  return nullptr;
 }
 
 Status LoadCameraIndex(const std::string& dir, std::vector<CameraFrameRef>* out) {

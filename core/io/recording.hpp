@@ -33,11 +33,13 @@ struct CameraFrameRef {
   std::string image_path;
 };
 
-/// A whole recording in memory (packets are ~0.9 MB/s of LiDAR data: minutes fit easily).
+/// A recording in memory (packets are ~1 MB/s of LiDAR data: minutes fit easily; for longer recordings the loader
+/// can leave them in lidar.pcap, and LidarPacketSource streams them from there).
 struct Recording {
   std::string dir;
   RigCalib calib;
-  std::vector<LidarPacket> lidar_packets;  ///< in capture order
+  std::vector<LidarPacket> lidar_packets;  ///< in capture order; empty when lidar_packets_streamed
+  bool lidar_packets_streamed = false;     ///< the packets stay in dir/lidar.pcap (LidarPacketSource reads them)
   std::vector<ImuSample> imu;              ///< strictly increasing t_s
   std::vector<EncoderSample> encoder;      ///< strictly increasing t_s
   std::vector<CameraFrameRef> camera;      ///< strictly increasing t_s; may be empty
@@ -48,6 +50,39 @@ struct Recording {
 /// A lidar.pcap without VLP-16 data packets (position packets alone included) is an error that names the UDP
 /// ports and payload sizes it holds (PcapReader::NoVlp16DataError).
 Status LoadRecording(const std::string& dir, Recording* recording);
+
+/// What LoadRecording keeps in memory.
+enum class PacketLoading {
+  kInMemory,  ///< every LiDAR packet into Recording::lidar_packets
+  kStreamed,  ///< none: lidar.pcap is only opened (its errors come from LidarPacketSource while reading)
+};
+/// LoadRecording with a choice for the packets: kStreamed keeps the memory of a run independent of its length.
+Status LoadRecording(const std::string& dir, PacketLoading packets, Recording* recording);
+
+/// A recording's LiDAR packets in capture order, from memory or streamed from its lidar.pcap (one packet in memory
+/// at a time). The recording must outlive the source. Not thread-safe.
+class LidarPacketSource {
+ public:
+  LidarPacketSource();
+  ~LidarPacketSource();
+  LidarPacketSource(const LidarPacketSource&) = delete;
+  LidarPacketSource& operator=(const LidarPacketSource&) = delete;
+
+  /// Starts at the first packet. Fails (naming the file) when a streamed lidar.pcap cannot be opened.
+  Status Open(const Recording& recording);
+  /// The next packet, valid until the next call; nullptr at the end, or at a malformed pcap record (status() then
+  /// names the file, the record and the byte offset) or when a streamed file held no VLP-16 data packet at all
+  /// (status() says what it held).
+  const LidarPacket* Next();
+  const Status& status() const { return status_; }
+  std::size_t count() const { return count_; }  ///< packets returned so far
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Status status_ = Status::Ok();
+  std::size_t count_ = 0;
+};
 
 /// Reads an imu.csv (the columns above; strictly increasing t_s) and appends its samples to *samples. Errors name
 /// the file, the line and the column.

@@ -8,6 +8,7 @@
 
 #include "bench/run/input_check.hpp"
 #include "core/io/calib_yaml.hpp"
+#include "core/wire/pcap.hpp"
 #include "core/wire/vlp16.hpp"
 
 namespace rotolidar::bench {
@@ -99,6 +100,40 @@ TEST(InputCheck, FrozenEncoderSaturatedImuAndBlindLidarAreNamed) {
   EXPECT_EQ(Find(w, "imu.saturated")->count, 20u);
   ASSERT_NE(Find(w, "lidar.blind"), nullptr) << InputWarningsText(w);
   EXPECT_EQ(Find(w, "lidar.blind")->count, 1u);
+}
+
+TEST(InputCheck, AStreamedRecordingGivesTheSameWarnings) {
+  Recording rec = CleanRecording("streamed");
+  for (int i = 3000; i < 3000 + 754; ++i) {  // 1 s without a return
+    Vlp16RawPacket raw;
+    ASSERT_TRUE(ParseVlp16DataPacket(rec.lidar_packets[i].payload.data(), kVlp16PacketBytes, &raw).ok);
+    for (Vlp16RawBlock& block : raw.blocks) block.distance_2mm.fill(0);
+    rec.lidar_packets[i].payload = SerializeVlp16DataPacket(raw);
+  }
+  rec.lidar_packets.erase(rec.lidar_packets.begin() + 100, rec.lidar_packets.begin() + 105);  // 5 lost
+  PcapWriter pcap;
+  ASSERT_TRUE(pcap.Open(rec.dir + "/lidar.pcap").ok);
+  for (const LidarPacket& p : rec.lidar_packets) ASSERT_TRUE(pcap.Write(p).ok);
+  ASSERT_TRUE(pcap.Close().ok);
+  Recording streamed = rec;
+  streamed.lidar_packets.clear();
+  streamed.lidar_packets_streamed = true;
+
+  const std::vector<InputWarning> in_memory = CheckRecording(rec);
+  std::vector<InputWarning> from_disk;
+  ASSERT_TRUE(CheckRecording(streamed, InputCheckConfig{}, &from_disk).ok);
+  ASSERT_NE(Find(in_memory, "lidar.lost_packets"), nullptr) << InputWarningsText(in_memory);
+  EXPECT_EQ(Find(in_memory, "lidar.lost_packets")->count, 5u);
+  ASSERT_NE(Find(in_memory, "lidar.blind"), nullptr) << InputWarningsText(in_memory);
+  EXPECT_EQ(InputWarningsText(from_disk), InputWarningsText(in_memory));
+
+  // A file that goes bad is an error of the Status overload, and a warning of the other.
+  { std::ofstream truncate(rec.dir + "/lidar.pcap", std::ios::binary | std::ios::trunc); truncate << "not a pcap"; }
+  std::vector<InputWarning> none;
+  const Status bad = CheckRecording(streamed, InputCheckConfig{}, &none);
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.message.find(rec.dir + "/lidar.pcap"), std::string::npos) << bad.message;
+  EXPECT_NE(Find(CheckRecording(streamed), "lidar.unreadable"), nullptr);
 }
 
 }  // namespace

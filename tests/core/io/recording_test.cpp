@@ -141,6 +141,77 @@ TEST(Recording, NonIncreasingTimeIsNamed) {
 
 // A lidar.pcap of another sensor (Ouster-like: lidar data on UDP 7502, IMU on 7503) with a position packet that
 // looks like a VLP-16's: no data packet, so no points; loading names what the capture holds.
+/// Every packet a source gives, copied.
+std::vector<LidarPacket> Drain(const Recording& rec, Status* status) {
+  LidarPacketSource source;
+  *status = source.Open(rec);
+  std::vector<LidarPacket> out;
+  while (const LidarPacket* p = source.Next()) out.push_back(*p);
+  if (status->ok) *status = source.status();
+  EXPECT_EQ(source.count(), out.size());
+  return out;
+}
+
+TEST(Recording, StreamedPacketsAreTheSameAsPacketsInMemory) {
+  const std::string dir = TempDir("streamed");
+  RigCalib calib = TestCalib();
+  calib.epoch_unix_s = 1.7e9;
+  WriteSmallRecording(dir, calib);
+  Recording in_memory, streamed;
+  ASSERT_TRUE(LoadRecording(dir, &in_memory).ok);
+  const Status loaded = LoadRecording(dir, PacketLoading::kStreamed, &streamed);
+  ASSERT_TRUE(loaded.ok) << loaded.message;
+  EXPECT_TRUE(streamed.lidar_packets.empty());  // left on disk
+  EXPECT_TRUE(streamed.lidar_packets_streamed);
+  EXPECT_EQ(streamed.imu.size(), in_memory.imu.size());
+  EXPECT_EQ(streamed.encoder.size(), in_memory.encoder.size());
+  Status a, b;
+  const std::vector<LidarPacket> from_memory = Drain(in_memory, &a), from_disk = Drain(streamed, &b);
+  ASSERT_TRUE(a.ok && b.ok) << a.message << b.message;
+  ASSERT_EQ(from_memory.size(), 2u);
+  ASSERT_EQ(from_disk.size(), from_memory.size());
+  for (size_t i = 0; i < from_disk.size(); ++i) {
+    EXPECT_EQ(from_disk[i].t_capture_s, from_memory[i].t_capture_s);  // the same epoch applied
+    EXPECT_EQ(from_disk[i].udp_port, from_memory[i].udp_port);
+    EXPECT_EQ(from_disk[i].payload, from_memory[i].payload);
+  }
+}
+
+TEST(Recording, AStreamedMalformedRecordGivesLoadRecordingsError) {
+  const std::string dir = TempDir("streamed_bad");
+  WriteSmallRecording(dir, TestCalib());
+  Recording good;
+  ASSERT_TRUE(LoadRecording(dir, &good).ok);
+  PcapWriter pcap;  // the two good packets, then a data-port datagram of the wrong size
+  ASSERT_TRUE(pcap.Open(dir + "/lidar.pcap").ok);
+  for (const LidarPacket& p : good.lidar_packets) ASSERT_TRUE(pcap.Write(p).ok);
+  LidarPacket bad;
+  bad.t_capture_s = 0.01;
+  bad.payload.assign(100, 0);
+  ASSERT_TRUE(pcap.Write(bad).ok);
+  ASSERT_TRUE(pcap.Close().ok);
+
+  Recording in_memory, streamed;
+  const Status whole = LoadRecording(dir, &in_memory);
+  ASSERT_FALSE(whole.ok);
+  EXPECT_NE(whole.message.find(dir + "/lidar.pcap: record 2: "), std::string::npos) << whole.message;
+  ASSERT_TRUE(LoadRecording(dir, PacketLoading::kStreamed, &streamed).ok);  // only opened so far
+  Status status;
+  EXPECT_EQ(Drain(streamed, &status).size(), 2u);  // what came before the bad record
+  EXPECT_FALSE(status.ok);
+  EXPECT_EQ(status.message, whole.message);
+}
+
+TEST(Recording, StreamingAMissingPcapFailsAtLoad) {
+  const std::string dir = TempDir("streamed_missing");
+  WriteSmallRecording(dir, TestCalib());
+  fs::remove(dir + "/lidar.pcap");
+  Recording rec;
+  const Status s = LoadRecording(dir, PacketLoading::kStreamed, &rec);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find(dir + "/lidar.pcap"), std::string::npos) << s.message;
+}
+
 TEST(Recording, LidarPcapWithoutVlp16DataNamesWhatItHolds) {
   const std::string dir = TempDir("foreign_pcap");
   WriteSmallRecording(dir, TestCalib());
@@ -163,6 +234,12 @@ TEST(Recording, LidarPcapWithoutVlp16DataNamesWhatItHolds) {
                            "512 B)"),
             std::string::npos)
       << s.message;
+  // Streamed, the same error comes at the end of the packets (the position packet is a packet).
+  Recording streamed;
+  ASSERT_TRUE(LoadRecording(dir, PacketLoading::kStreamed, &streamed).ok);
+  Status status;
+  EXPECT_EQ(Drain(streamed, &status).size(), 1u);
+  EXPECT_EQ(status.message, s.message);
 }
 
 TEST(CalibYaml, UnknownKeyIsAnErrorWithLine) {

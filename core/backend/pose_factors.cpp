@@ -7,6 +7,7 @@
 #include <Eigen/QR>
 #include <Eigen/Geometry>
 
+#include "core/backend/pose_jacobians.hpp"
 #include "core/imu/pose_block_view.hpp"
 #include "core/imu/preintegration.hpp"
 #include "core/util/log.hpp"
@@ -22,27 +23,11 @@ using Eigen::Vector3d;
 using Eigen::VectorXd;
 using RowMajorXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+using detail::LeftJacobianInverse;
 using detail::PoseView;
+using detail::QuaternionPlusJacobian;
 using detail::ReadPose;
-
-/// Jl^-1(phi) = Jr^-1(-phi): Log(Exp(d) Exp(phi)) ~= phi + Jl^-1(phi) d.
-Matrix3d LeftJacobianInverse(const Vector3d& phi) { return so3::RightJacobianInverse(-phi); }
-
-/// The EigenQuaternionManifold's PlusJacobian at unit q (x y z w): orthonormal columns, all orthogonal to q.
-Eigen::Matrix<double, 4, 3> QuaternionPlusJacobian(const Quaterniond& q) {
-  Eigen::Matrix<double, 4, 3> P;
-  P.topRows<3>() = q.w() * Matrix3d::Identity() - so3::Hat(q.vec());
-  P.bottomRows<1>() = -q.vec().transpose();
-  return P;
-}
-
-/// Writes [J_t, 2 J_theta P^T] (rows x 7, row-major) from tangent Jacobians J_t (rows x 3) and J_theta (rows x 3):
-/// the exact derivative of r(t, q / |q|) (see the header).
-void WriteAmbientPoseJacobian(const MatrixXd& J_t, const MatrixXd& J_theta, const Quaterniond& q, double* out) {
-  Eigen::Map<RowMajorXd> J(out, J_t.rows(), kImuPoseBlockSize);
-  J.leftCols<3>() = J_t;
-  J.rightCols<4>() = 2.0 * J_theta * QuaternionPlusJacobian(q).transpose();
-}
+using detail::WriteAmbientPoseJacobian;
 
 Matrix6d Symmetrize(const Matrix6d& M) { return 0.5 * (M + M.transpose()); }
 

@@ -41,6 +41,9 @@ struct LidarPoseMeasurement {
   /// units 1/m^2 (translation), 1/rad^2 (rotation), 1/(m rad) (cross). Symmetric positive SEMI-definite: a zero
   /// (or tiny) eigenvalue leaves that direction to the IMU (a degenerate registration).
   Matrix6d information = Matrix6d::Identity();
+  /// The rotor-angle offset [rad] already removed from this scan's encoder angles by the deskew (the window's
+  /// estimate at that time; core/backend/rotor_offset_factor.hpp). Used only where the window estimates the offset.
+  double rotor_offset_applied_rad = 0.0;
 };
 
 /// Information of a scan-to-map result: P^T (H / sigma^2) P, symmetrised. H = J^T J of the point residuals [m]

@@ -59,6 +59,11 @@ bool SlidingWindowConfig::Validate(std::string* error) const {
   if (!(max_dt_mismatch_s >= 0.0)) return fail("max_dt_mismatch_s must be >= 0");
   if (!positive(gravity_random_walk_rad_per_sqrt_s)) return fail("gravity_random_walk_rad_per_sqrt_s must be > 0");
   if (!positive(initial_gravity_sigma_rad)) return fail("initial_gravity_sigma_rad must be > 0");
+  if (!positive(rotor_offset_random_walk_rad_per_sqrt_s))
+    return fail("rotor_offset_random_walk_rad_per_sqrt_s must be > 0");
+  if (!positive(initial_rotor_offset_sigma_rad)) return fail("initial_rotor_offset_sigma_rad must be > 0");
+  if (!(std::abs(motor_in_imu.axis.norm() - 1.0) < 1e-6) || !motor_in_imu.origin_m.allFinite())
+    return fail("motor_in_imu: the axis must be a unit vector and the origin finite");
   std::string ceres_error;
   if (!SolverOptions().IsValid(&ceres_error)) return fail("linear_solver: " + ceres_error);
   return true;
@@ -86,7 +91,8 @@ struct SlidingWindow::State {
   double speed_bias[kImuSpeedBiasBlockSize];
   std::optional<PreintegratedImu> imu;     ///< [previous state, this state]; unused for the oldest state
   std::unique_ptr<ceres::CostFunction> imu_factor;  ///< built from `imu` (MakeImuFactor)
-  std::unique_ptr<LidarPoseFactor> lidar;  ///< null when the state has no LiDAR measurement
+  /// LidarPoseFactor, or LidarRotorFactor with estimate_rotor_offset; null when the state has no LiDAR measurement
+  std::unique_ptr<ceres::CostFunction> lidar;
   BlockRef PoseRef() { return {pose, BlockKind::kPose, kImuPoseBlockSize}; }
   BlockRef SpeedBiasRef() { return {speed_bias, BlockKind::kVector, kImuSpeedBiasBlockSize}; }
 };
@@ -106,6 +112,7 @@ void SlidingWindow::Reset() {
   states_.clear();
   num_marginalized_ = 0;
   Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
+  rotor_[0] = 0.0;
   if (visual_) visual_->Clear();
 }
 
@@ -121,6 +128,22 @@ std::unique_ptr<ceres::CostFunction> SlidingWindow::MakeImuFactor(const Preinteg
   return std::make_unique<ImuFactor>(imu, config_.gravity_world_mps2);
 }
 
+std::unique_ptr<ceres::CostFunction> SlidingWindow::MakeLidarFactor(const LidarPoseMeasurement& m) const {
+  if (config_.estimate_rotor_offset)
+    return std::make_unique<LidarRotorFactor>(m, config_.motor_in_imu, m.rotor_offset_applied_rad);
+  return std::make_unique<LidarPoseFactor>(m);
+}
+
+std::unique_ptr<LinearizedPriorFactor> SlidingWindow::RandomWalk(const BlockRef& past, const BlockRef& now,
+                                                                 double sigma) {
+  const int n = now.size;
+  const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(now.values, n);
+  Eigen::MatrixXd J(n, 2 * n);
+  J << -Eigen::MatrixXd::Identity(n, n) / sigma, Eigen::MatrixXd::Identity(n, n) / sigma;
+  return std::make_unique<LinearizedPriorFactor>(std::vector<BlockRef>{past, now}, std::vector<Eigen::VectorXd>{x, x},
+                                                 std::move(J), Eigen::VectorXd::Zero(n));
+}
+
 Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
                                  const std::optional<LidarPoseMeasurement>& lidar) {
   if (initialized()) return Status::Error("SlidingWindow::Initialize: already initialised (call Reset first)");
@@ -130,11 +153,12 @@ Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
   auto s = std::make_unique<State>();
   s->t_s = t_s;
   PackImuState(initial_state, s->pose, s->speed_bias);
-  if (lidar) s->lidar = std::make_unique<LidarPoseFactor>(*lidar);
+  if (lidar) s->lidar = MakeLidarFactor(*lidar);
   // Gaussian prior on [pose (6); speed-bias (9); gravity (3, ambient)] around the initial state, diagonal sqrt
   // information 1 / sigma (gravity's radial axis carries no error: the sphere keeps |g|).
   Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
-  const int n = config_.estimate_gravity ? 18 : 15;
+  rotor_[0] = 0.0;
+  const int n = 15 + (config_.estimate_gravity ? 3 : 0) + (config_.estimate_rotor_offset ? 1 : 0);
   Eigen::VectorXd inv_sigma(n);
   inv_sigma.head<15>() << Eigen::Vector3d::Constant(1.0 / config_.initial_position_sigma_m),
       Eigen::Vector3d::Constant(1.0 / config_.initial_rotation_sigma_rad),
@@ -146,9 +170,14 @@ Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
                                      Eigen::Map<const Eigen::VectorXd>(s->speed_bias, kImuSpeedBiasBlockSize)};
   if (config_.estimate_gravity) {
     const double g = config_.gravity_world_mps2.norm();
-    inv_sigma.tail<3>().setConstant(1.0 / (config_.initial_gravity_sigma_rad * g));
+    inv_sigma.segment<3>(15).setConstant(1.0 / (config_.initial_gravity_sigma_rad * g));
     blocks.push_back(GravityRef());
     x0.push_back(Eigen::Map<const Eigen::VectorXd>(gravity_, kGravityBlockSize));
+  }
+  if (config_.estimate_rotor_offset) {
+    inv_sigma(n - 1) = 1.0 / config_.initial_rotor_offset_sigma_rad;
+    blocks.push_back(RotorRef());
+    x0.push_back(Eigen::VectorXd::Zero(kRotorOffsetBlockSize));
   }
   prior_ = std::make_unique<LinearizedPriorFactor>(std::move(blocks), std::move(x0),
                                                    Eigen::MatrixXd(inv_sigma.asDiagonal()), Eigen::VectorXd::Zero(n));
@@ -181,7 +210,7 @@ Status SlidingWindow::AddState(Seconds t_s, const PreintegratedImu& imu_from_pre
   PackImuState(imu_from_previous.Predict(latest_state(), gravity_world_mps2()), s->pose, s->speed_bias);
   s->imu.emplace(imu_from_previous);
   s->imu_factor = MakeImuFactor(*s->imu);
-  if (lidar) s->lidar = std::make_unique<LidarPoseFactor>(*lidar);
+  if (lidar) s->lidar = MakeLidarFactor(*lidar);
   states_.push_back(std::move(s));
   return Status::Ok();
 }
@@ -209,17 +238,24 @@ void SlidingWindow::SlideOut() {
 // and gravity_past_ is marginalised with the oldest state. The prior thus carries gravity (and its correlation
 // with the kept state), and information older by T is diluted by q^2 T, so gravity can follow the map's tilt.
 std::vector<MarginalizationTerm> SlidingWindow::TermsOfOldest() {
-  const bool g_block = config_.estimate_gravity;
+  const bool g_block = config_.estimate_gravity, r_block = config_.estimate_rotor_offset;
   const BlockRef past{gravity_past_, BlockKind::kVector, kGravityBlockSize};
+  const BlockRef rotor_past{rotor_past_, BlockKind::kVector, kRotorOffsetBlockSize};
   auto to_past = [&](std::vector<BlockRef> blocks) {
-    for (BlockRef& b : blocks)
+    for (BlockRef& b : blocks) {
       if (b.values == gravity_) b = past;
+      if (b.values == rotor_) b = rotor_past;
+    }
     return blocks;
   };
   std::vector<MarginalizationTerm> terms;
   State& oldest = *states_[0];
   if (prior_) terms.push_back({prior_.get(), nullptr, to_past(prior_->blocks())});
-  if (oldest.lidar) terms.push_back({oldest.lidar.get(), lidar_loss_.get(), {oldest.PoseRef()}});
+  if (oldest.lidar) {
+    std::vector<BlockRef> blocks = {oldest.PoseRef()};
+    if (r_block) blocks.push_back(RotorRef());
+    terms.push_back({oldest.lidar.get(), lidar_loss_.get(), to_past(std::move(blocks))});
+  }
   State& next = *states_[1];
   std::vector<BlockRef> imu_blocks = {oldest.PoseRef(), oldest.SpeedBiasRef(), next.PoseRef(), next.SpeedBiasRef()};
   if (g_block) imu_blocks.push_back(GravityRef());
@@ -228,12 +264,14 @@ std::vector<MarginalizationTerm> SlidingWindow::TermsOfOldest() {
     std::copy(gravity_, gravity_ + kGravityBlockSize, gravity_past_);
     const Eigen::VectorXd g = Eigen::Map<const Eigen::VectorXd>(gravity_, kGravityBlockSize);
     const double sigma_mps2 = config_.gravity_random_walk_rad_per_sqrt_s * g.norm() * std::sqrt(next.t_s - oldest.t_s);
-    Eigen::MatrixXd J(3, 6);
-    J << -Eigen::Matrix3d::Identity() / sigma_mps2, Eigen::Matrix3d::Identity() / sigma_mps2;
-    gravity_walk_ = std::make_unique<LinearizedPriorFactor>(std::vector<BlockRef>{past, GravityRef()},
-                                                            std::vector<Eigen::VectorXd>{g, g}, std::move(J),
-                                                            Eigen::VectorXd::Zero(3));
+    gravity_walk_ = RandomWalk(past, GravityRef(), sigma_mps2);
     terms.push_back({gravity_walk_.get(), nullptr, {past, GravityRef()}});
+  }
+  if (r_block) {  // the same random walk for the rotor offset
+    rotor_past_[0] = rotor_[0];
+    const double sigma_rad = config_.rotor_offset_random_walk_rad_per_sqrt_s * std::sqrt(next.t_s - oldest.t_s);
+    rotor_walk_ = RandomWalk(rotor_past, RotorRef(), sigma_rad);
+    terms.push_back({rotor_walk_.get(), nullptr, {rotor_past, RotorRef()}});
   }
   return terms;
 }
@@ -242,6 +280,7 @@ Status SlidingWindow::MarginalizeOldest() {
   State& oldest = *states_[0];
   std::vector<const double*> dropped = {oldest.pose, oldest.speed_bias};
   if (config_.estimate_gravity) dropped.push_back(gravity_past_);
+  if (config_.estimate_rotor_offset) dropped.push_back(rotor_past_);
   std::vector<MarginalizationTerm> terms = TermsOfOldest();
   if (visual_) {  // the landmarks anchored at the oldest state leave with it (VINS-Mono's marginalisation)
     std::vector<MarginalizationTerm> visual = visual_->TermsOf(oldest.pose, &dropped);
@@ -249,6 +288,7 @@ Status SlidingWindow::MarginalizeOldest() {
   }
   MarginalizationResult m = Marginalize(terms, dropped);
   gravity_walk_.reset();
+  rotor_walk_.reset();
   if (!m.success) return Status::Error("SlidingWindow: marginalisation failed: " + m.message);
   prior_ = std::move(m.prior);
   return Status::Ok();
@@ -271,10 +311,12 @@ WindowResult SlidingWindow::Optimize() {
     problem.AddParameterBlock(s->speed_bias, kImuSpeedBiasBlockSize);
   }
   if (config_.estimate_gravity) problem.AddParameterBlock(gravity_, kGravityBlockSize, gravity_manifold_.get());
+  if (config_.estimate_rotor_offset) problem.AddParameterBlock(rotor_, kRotorOffsetBlockSize);
   if (prior_) problem.AddResidualBlock(prior_.get(), nullptr, prior_->block_values());
   for (size_t k = 0; k < states_.size(); ++k) {
     State& s = *states_[k];
-    if (s.lidar) problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose);
+    if (s.lidar && config_.estimate_rotor_offset) problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose, rotor_);
+    else if (s.lidar) problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose);
     if (k == 0) continue;
     State& prev = *states_[k - 1];
     std::vector<double*> blocks = {prev.pose, prev.speed_bias, s.pose, s.speed_bias};

@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "core/backend/pose_factors.hpp"
+#include "core/backend/rotor_offset_factor.hpp"
 #include "core/backend/visual_landmarks.hpp"
 #include "core/imu/imu_factor.hpp"
 #include "core/imu/preintegration.hpp"
@@ -60,6 +61,20 @@ struct SlidingWindowConfig {
   /// Prior on gravity's direction at Initialize (1-sigma per axis) [rad]: the initialisation's tilt error,
   /// dominated by the accelerometer bias it does not estimate (|ba| / g).
   double initial_gravity_sigma_rad = 0.01;
+
+  /// Estimate the rotor-angle offset phi (core/backend/rotor_offset_factor.hpp: an encoder zero error, or an
+  /// encoder clock that drifts against the LiDAR's) as one block shared by the LiDAR factors (LidarRotorFactor),
+  /// a random walk between the marginalised past and the window as gravity is. The IMU observes it (gravity and
+  /// rotation rates see the base, the LiDAR sees the scan turned by phi); the Estimator removes the estimate from
+  /// the encoder angles of the scans that follow. Off: every LiDAR factor is a LidarPoseFactor.
+  bool estimate_rotor_offset = false;
+  /// Random walk of phi [rad/sqrt(s)]. A 20 ppm encoder clock at 2.6 rad/s drifts 5.2e-5 rad/s; 5e-4 lets the
+  /// estimate follow that (5 mrad per 100 s) while a window's worth of data moves it little.
+  double rotor_offset_random_walk_rad_per_sqrt_s = 5e-4;
+  double initial_rotor_offset_sigma_rad = 0.05;  ///< prior on phi at Initialize (around 0) [rad]
+  /// The motor axis and origin in the imu frame (the Estimator derives it from calib.yaml's T_base_motor and
+  /// T_base_imu); used with estimate_rotor_offset.
+  MotorAxisInImu motor_in_imu;
 
   // Ceres (Levenberg-Marquardt; a window is ~150 tangent dimensions).
   /// Per Optimize(); >= 1. Each scan adds one state to a window already at its optimum, so a few steps converge
@@ -151,6 +166,8 @@ class SlidingWindow {
   std::vector<WindowStateEstimate> states() const;  ///< oldest first
   /// The state at the end of imu_since_latest (which starts at latest_time_s()): for deskewing the next scan.
   NavState PredictFromLatest(const PreintegratedImu& imu_since_latest) const;
+  /// The rotor-angle offset estimate [rad] (config.estimate_rotor_offset; 0 otherwise).
+  double rotor_offset_rad() const { return rotor_[0]; }
   /// Gravity in world [m/s^2]: the estimate (config.estimate_gravity) or config.gravity_world_mps2.
   Eigen::Vector3d gravity_world_mps2() const { return Eigen::Map<const Eigen::Vector3d>(gravity_); }
   /// The current prior (first-state or marginalisation prior), or null.
@@ -176,6 +193,11 @@ class SlidingWindow {
   std::vector<MarginalizationTerm> TermsOfOldest();
   std::unique_ptr<ceres::CostFunction> MakeImuFactor(const PreintegratedImu& imu) const;
   BlockRef GravityRef() { return {gravity_, BlockKind::kVector, kGravityBlockSize}; }
+  BlockRef RotorRef() { return {rotor_, BlockKind::kVector, kRotorOffsetBlockSize}; }
+  std::unique_ptr<ceres::CostFunction> MakeLidarFactor(const LidarPoseMeasurement& m) const;
+  /// The random-walk term past -> window of one shared block (gravity, rotor offset), for a slide of dt_s.
+  static std::unique_ptr<LinearizedPriorFactor> RandomWalk(const BlockRef& past, const BlockRef& now,
+                                                           double sigma);
 
   SlidingWindowConfig config_;
   std::unique_ptr<ceres::Manifold> pose_manifold_;
@@ -183,6 +205,9 @@ class SlidingWindow {
   double gravity_[kGravityBlockSize];            ///< the gravity block (constant without estimate_gravity)
   double gravity_past_[kGravityBlockSize];       ///< gravity of the marginalised past, during a slide only
   std::unique_ptr<LinearizedPriorFactor> gravity_walk_;  ///< random-walk term past -> window, during a slide
+  double rotor_[kRotorOffsetBlockSize] = {0.0};       ///< the rotor-offset block (0 without estimate_rotor_offset)
+  double rotor_past_[kRotorOffsetBlockSize] = {0.0};  ///< the marginalised past's, during a slide only
+  std::unique_ptr<LinearizedPriorFactor> rotor_walk_;  ///< random-walk term past -> window, during a slide
   std::unique_ptr<ceres::LossFunction> lidar_loss_;
   std::deque<std::unique_ptr<State>> states_;
   std::unique_ptr<LinearizedPriorFactor> prior_;

@@ -27,7 +27,7 @@ RotorSegment RotorAngleInterpolator::SegmentAt(Seconds t_s, size_t hint) const {
   RotorSegment g;
   g.lo = hi == 0 ? 0 : hi - 1;
   g.t_lo_s = t_s_[g.lo], g.t_hi_s = t_s_[hi];
-  g.theta_lo_rad = theta_rad_[g.lo];
+  g.theta_lo_rad = theta_rad_[g.lo] - angle_offset_rad_;
   g.rate_radps = hi == g.lo ? 0.0 : (theta_rad_[hi] - theta_rad_[g.lo]) / (t_s_[hi] - t_s_[g.lo]);
   return g;
 }
@@ -36,12 +36,12 @@ double RotorAngleInterpolator::AngleAt(Seconds t_s, RotorAngleSource* source) co
   const double w = calib_.motor_speed_radps;
   if (t_s_.empty()) {
     if (source) *source = RotorAngleSource::kUniformFallback;
-    return w * t_s;
+    return w * t_s - angle_offset_rad_;
   }
   if (!Covers(t_s)) {
     if (source) *source = RotorAngleSource::kUniformFallback;
     const size_t i = t_s < t_s_.front() ? 0 : t_s_.size() - 1;
-    return theta_rad_[i] + w * (t_s - t_s_[i]);
+    return theta_rad_[i] - angle_offset_rad_ + w * (t_s - t_s_[i]);
   }
   if (source) *source = RotorAngleSource::kEncoder;
   const RotorSegment g = SegmentAt(t_s);

@@ -49,9 +49,14 @@ class RotorAngleInterpolator {
   /// Time of the newest sample (-inf when empty).
   Seconds last_time_s() const { return t_s_.empty() ? -1e300 : t_s_.back(); }
   const RigCalib& calib() const { return calib_; }
+  /// An online correction of the encoder zero [rad] (core/backend/rotor_offset_factor.hpp): subtracted from every
+  /// angle this class gives (AngleAt, SegmentAt) from now on. Default 0.
+  void set_angle_offset_rad(double offset_rad) { angle_offset_rad_ = offset_rad; }
+  double angle_offset_rad() const { return angle_offset_rad_; }
 
  private:
   RigCalib calib_;
+  double angle_offset_rad_ = 0.0;
   std::vector<Seconds> t_s_;
   std::vector<double> theta_rad_;  // unwrapped
 };

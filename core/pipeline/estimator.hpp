@@ -85,6 +85,9 @@ struct ScanReport {
   bool imu_initialized = false;   ///< the sliding window ran for this scan
   bool imu_deskew = false;        ///< carrier motion came from the IMU (false: constant velocity / none)
   bool held_static = false;       ///< static start: the IMU was still, the pose was held (no registration)
+  /// The window's rotor-angle offset estimate after this scan [rad] (window.estimate_rotor_offset; else 0),
+  /// removed from the encoder angles of the scans that follow.
+  double rotor_offset_rad = 0.0;
   bool keyframe = false;          ///< the scan's features went into the local map (UpdateMap)
   /// Free-space test (core/pipeline/free_space.hpp): keyframe features that earlier scans saw through (kept out
   /// of the local map), and the dense-map points released at this scan (those of the scan delay_s earlier):

@@ -121,6 +121,9 @@ void Visit(V& v, SlidingWindowConfig& c) {
   v("estimate_gravity", &c.estimate_gravity);
   v("gravity_random_walk_rad_per_sqrt_s", &c.gravity_random_walk_rad_per_sqrt_s);
   v("initial_gravity_sigma_rad", &c.initial_gravity_sigma_rad);
+  v("estimate_rotor_offset", &c.estimate_rotor_offset);
+  v("rotor_offset_random_walk_rad_per_sqrt_s", &c.rotor_offset_random_walk_rad_per_sqrt_s);
+  v("initial_rotor_offset_sigma_rad", &c.initial_rotor_offset_sigma_rad);
   v("max_iterations", &c.max_iterations), v("initial_trust_region_radius", &c.initial_trust_region_radius);
   v("max_solver_time_s", &c.max_solver_time_s), v("function_tolerance", &c.function_tolerance);
   v("gradient_tolerance", &c.gradient_tolerance), v("parameter_tolerance", &c.parameter_tolerance);

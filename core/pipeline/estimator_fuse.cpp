@@ -213,7 +213,10 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
   Pose3 T_world_base = T_world_base_lidar;
   if (imu_initialized() && prediction.imu_since_latest) {
     std::optional<LidarPoseMeasurement> lidar;
-    if (information_base.norm() > 0) lidar = LidarMeasurementInImuFrame(T_world_base_lidar, information_base, T_bi);
+    if (information_base.norm() > 0) {
+      lidar = LidarMeasurementInImuFrame(T_world_base_lidar, information_base, T_bi);
+      lidar->rotor_offset_applied_rad = rotor_.angle_offset_rad();  // what this scan's deskew removed
+    }
     if (Status st = window_->AddState(t_s, *prediction.imu_since_latest, lidar); st) {
       if (visual_) {
         const Status v =
@@ -221,6 +224,9 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
         if (!v) LOG_WARN("estimator: camera observations at " << t_s << " s not used: " << v.message);
       }
       window_->Optimize();
+      // The next scans' encoder angles lose the estimated offset (0 unless the window estimates it).
+      rotor_.set_angle_offset_rad(window_->rotor_offset_rad());
+      report->rotor_offset_rad = window_->rotor_offset_rad();
       const NavState x = window_->latest_state();
       T_world_base = PoseOf(x) * T_bi.inverse();
       report->v_world_mps = x.v_world_mps;

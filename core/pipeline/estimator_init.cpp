@@ -54,6 +54,7 @@ void Estimator::TryInitializeImu() {
 bool Estimator::StartWindow(const Eigen::Vector3d& gravity_world_mps2, const NavState& state) {
   SlidingWindowConfig wc = config_.window;
   wc.gravity_world_mps2 = gravity_world_mps2;
+  wc.motor_in_imu = MotorAxisInImu::From(calib_.T_base_motor, calib_.T_base_imu);
   std::string why;
   if (!wc.Validate(&why)) return false;
   auto window = std::make_unique<SlidingWindow>(wc);

@@ -1,0 +1,80 @@
+// The window's rotor-offset block: LiDAR poses measured through a scan turned about the motor axis (an encoder
+// zero error or a drifting encoder clock) are explained, the offset is found from the IMU, and removing the
+// estimate from later scans (as the Estimator does) converges to the true offset.
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "tests/core/backend/window_test_sim.hpp"
+
+namespace rotolidar {
+namespace {
+
+using namespace window_test;
+
+struct OffsetRun {
+  double final_offset_rad = 0.0;
+  double rms_rotation_error_rad = 0.0;  ///< latest state's attitude against the truth, second half
+  double rms_position_error_m = 0.0;
+};
+
+/// 15 s of the analytic motion; each LiDAR measurement is the truth turned by B(phi_true - applied), applied = the
+/// window's estimate after the previous state (0 when `estimate` is off).
+OffsetRun RunWithOffset(double phi_true_rad, bool estimate) {
+  constexpr int kStates = 150;
+  SlidingWindowConfig config;
+  config.gravity_world_mps2 = kGravity;
+  config.estimate_rotor_offset = estimate;
+  // A horizontal motor axis (the default rig's) 10 cm from the IMU.
+  config.motor_in_imu.axis = Eigen::Vector3d::UnitY();
+  config.motor_in_imu.origin_m = Eigen::Vector3d(0.05, 0.0, 0.1);
+  SlidingWindow window(config);
+  const std::vector<ImuSample> imu = MakeImu(StateTime(kStates) + 0.1, true, 7);
+  RandomStream rng(8, "rotor_offset_window_test.lidar");
+  auto measure = [&](int k, double applied) {
+    LidarPoseMeasurement m = MakeLidar(StateTime(k), rng);
+    m.T_world_imu = m.T_world_imu * config.motor_in_imu.B(phi_true_rad - applied);
+    m.rotor_offset_applied_rad = applied;
+    return m;
+  };
+  EXPECT_TRUE(window.Initialize(0.0, InitialGuess(), measure(0, 0.0)).ok);
+  OffsetRun out;
+  double sum_r2 = 0.0, sum_p2 = 0.0;
+  int n = 0;
+  for (int k = 1; k < kStates; ++k) {
+    const double applied = window.rotor_offset_rad();
+    const Status st = window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), measure(k, applied));
+    EXPECT_TRUE(st.ok) << st.message;
+    window.Optimize();
+    if (k < kStates / 2) continue;
+    const NavState x = window.latest_state(), truth = Motion::State(StateTime(k));
+    sum_r2 += LogSO3(x.R_world_imu * truth.R_world_imu.transpose()).squaredNorm();
+    sum_p2 += (x.p_world_m - truth.p_world_m).squaredNorm();
+    ++n;
+  }
+  out.final_offset_rad = window.rotor_offset_rad();
+  out.rms_rotation_error_rad = std::sqrt(sum_r2 / n);
+  out.rms_position_error_m = std::sqrt(sum_p2 / n);
+  return out;
+}
+
+TEST(RotorOffsetWindow, FindsTheOffsetAndKeepsTheAttitude) {
+  constexpr double kPhi = 0.05;  // 2.9 deg: 19 ms of encoder clock at 2.6 rad/s
+  const OffsetRun estimated = RunWithOffset(kPhi, true);
+  const OffsetRun ignored = RunWithOffset(kPhi, false);
+  const OffsetRun none = RunWithOffset(0.0, true);
+  std::printf("[measured] rotor offset %.4f rad: estimated %.5f rad; attitude rms %.4f rad (ignored: %.4f), "
+              "position rms %.4f m (ignored: %.4f); without an offset the estimate is %.5f rad\n",
+              kPhi, estimated.final_offset_rad, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
+              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset_rad);
+  // Measured: 0.05033 rad (0.33 mrad off), 0.36 mrad without an offset; attitude rms 2.9 mrad against 39.7 mrad
+  // when the offset is ignored (the window then splits it between the LiDAR and the gyro). Bounds: a tenth of the
+  // offset, and a quarter of the ignored attitude error.
+  EXPECT_NEAR(estimated.final_offset_rad, kPhi, 0.005);
+  EXPECT_NEAR(none.final_offset_rad, 0.0, 0.005);
+  EXPECT_LT(estimated.rms_rotation_error_rad, 0.25 * ignored.rms_rotation_error_rad);
+}
+
+}  // namespace
+}  // namespace rotolidar

@@ -315,8 +315,10 @@ WindowResult SlidingWindow::Optimize() {
   if (prior_) problem.AddResidualBlock(prior_.get(), nullptr, prior_->block_values());
   for (size_t k = 0; k < states_.size(); ++k) {
     State& s = *states_[k];
-    if (s.lidar && config_.estimate_rotor_offset) problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose, rotor_);
-    else if (s.lidar) problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose);
+    if (s.lidar && config_.estimate_rotor_offset)
+      problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose, rotor_);
+    else if (s.lidar)
+      problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose);
     if (k == 0) continue;
     State& prev = *states_[k - 1];
     std::vector<double*> blocks = {prev.pose, prev.speed_bias, s.pose, s.speed_bias};

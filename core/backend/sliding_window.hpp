@@ -2,7 +2,9 @@
 // Sliding-window LiDAR-inertial back end (seed paper "LV-SLAM", Sec. 3.3): a window of the most recent IMU states
 // x_k = {T_world_imu, v_world, bg, ba}, optimised jointly with Ceres over
 //   - one ImuFactor per interval between consecutive states (core/imu/imu_factor.hpp),
-//   - one LidarPoseFactor per state that has a scan-to-map measurement (core/backend/pose_factors.hpp),
+//   - one LidarPoseFactor per state that has a scan-to-map measurement (core/backend/pose_factors.hpp), or with
+//     config.estimate_rotor_offset a LidarRotorFactor that also sees one shared rotor-angle offset block
+//     (core/backend/rotor_offset_factor.hpp; rotor_offset_rad() is the estimate),
 //   - one LinearizedPriorFactor: the first state's prior, later the Schur-complement marginalisation prior.
 // The seed's visual reprojection factors attach later to the same pose blocks (a landmark block is a BlockRef
 // of kind kVector, and Marginalize() already handles any block set). docs/backend.md has the equations.

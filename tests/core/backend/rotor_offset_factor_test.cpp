@@ -85,7 +85,8 @@ TEST(LidarRotorFactor, TheOffsetIsRecoveredFromPosesTheImuKnows) {
   // A horizontal motor axis (the default rig) and a base that yaws: poses known (as the IMU would give them), the
   // scans deskewed with a 0.09 rad offset encoder (36 ms at 2.6 rad/s), of which 0.02 rad were already removed.
   RandomStream rng(33, "rotor_offset_factor_test.solve");
-  const Pose3 T_base_motor = MakePose({0.05, 0.0, 0.1}, Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY())));
+  const Pose3 T_base_motor =
+      MakePose({0.05, 0.0, 0.1}, Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY())));
   const Pose3 T_base_imu = MakePose({0.0, 0.02, -0.05}, Eigen::Quaterniond::Identity());
   const double phi_true = 0.09, applied = 0.02;
   ceres::Problem::Options options;
@@ -94,7 +95,8 @@ TEST(LidarRotorFactor, TheOffsetIsRecoveredFromPosesTheImuKnows) {
   std::vector<std::array<double, 7>> poses(8);
   double phi[1] = {0.0};
   for (size_t k = 0; k < poses.size(); ++k) {
-    const Pose3 T_world_base = MakePose({0.5 * k, 0.1 * k, 0.0}, Eigen::Quaterniond(Eigen::AngleAxisd(0.4 * k, Eigen::Vector3d::UnitZ())));
+    const Pose3 T_world_base =
+        MakePose({0.5 * k, 0.1 * k, 0.0}, Eigen::Quaterniond(Eigen::AngleAxisd(0.4 * k, Eigen::Vector3d::UnitZ())));
     LidarPoseMeasurement m = LidarMeasurementInImuFrame(
         T_world_base * ScanTurn(T_base_motor, phi_true - applied).inverse(), Matrix6d::Identity() * 1e4, T_base_imu);
     m.T_world_imu.translation() += RandomVector(rng, 0.002);  // registration noise

@@ -44,7 +44,8 @@ OffsetRun RunWithOffset(double phi_true_rad, bool estimate) {
   int n = 0;
   for (int k = 1; k < kStates; ++k) {
     const double applied = window.rotor_offset_rad();
-    const Status st = window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), measure(k, applied));
+    const Status st =
+        window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), measure(k, applied));
     EXPECT_TRUE(st.ok) << st.message;
     window.Optimize();
     if (k < kStates / 2) continue;

@@ -34,15 +34,22 @@ std::vector<size_t> All(const KittiSequence& seq) {
   return picked;
 }
 
+/// The default paths of a sequence folder.
+KittiSequencePaths PathsOf(const std::string& dir) {
+  KittiSequencePaths paths;
+  paths.dir = dir;
+  return paths;
+}
+
 TEST(KittiFrameCheck, ACompleteSequenceGivesNoWarning) {
   KittiSequence seq;
-  ASSERT_TRUE(OpenKittiSequence({MakeSequence("complete", {0, 1, 2, 3}, {})}, &seq));
+  ASSERT_TRUE(OpenKittiSequence(PathsOf(MakeSequence("complete", {0, 1, 2, 3}, {})), &seq));
   EXPECT_TRUE(CheckKittiFrames(seq, All(seq)).empty());
 }
 
 TEST(KittiFrameCheck, NamesMissingIdsAndEmptyBins) {
   KittiSequence seq;
-  ASSERT_TRUE(OpenKittiSequence({MakeSequence("gaps", {0, 1, 4, 6, 9}, {5})}, &seq));
+  ASSERT_TRUE(OpenKittiSequence(PathsOf(MakeSequence("gaps", {0, 1, 4, 6, 9}, {5})), &seq));
   const std::vector<InputWarning> w = CheckKittiFrames(seq, All(seq));
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].code, "kitti.missing_frames");

@@ -2,7 +2,6 @@
 #include "core/backend/rotor_offset_factor.hpp"
 
 #include "core/backend/pose_jacobians.hpp"
-#include "core/imu/pose_block_view.hpp"
 #include "core/imu/preintegration.hpp"
 
 namespace rotolidar {
@@ -30,11 +29,17 @@ LidarRotorFactor::LidarRotorFactor(const LidarPoseMeasurement& measurement, cons
       sqrt_information_(SqrtInformation(measurement.information)) {}
 
 Vector6d LidarRotorFactor::Error(const double* pose7, double phi_rad) const {
-  const detail::PoseView p = detail::ReadPose(pose7);
-  const Pose3 B = motor_.B(phi_rad - phi_applied_rad_);
+  detail::PoseView p;
+  Pose3 B;
+  return Error(pose7, phi_rad, &p, &B);
+}
+
+Vector6d LidarRotorFactor::Error(const double* pose7, double phi_rad, detail::PoseView* pose, Pose3* B) const {
+  const detail::PoseView& p = *pose = detail::ReadPose(pose7);
+  *B = motor_.B(phi_rad - phi_applied_rad_);
   Vector6d e;
-  e.head<3>() = p.t + p.R * B.translation() - measurement_.T_world_imu.translation();
-  e.tail<3>() = LogSO3(p.R * B.linear() * measurement_.T_world_imu.linear().transpose());
+  e.head<3>() = p.t + p.R * B->translation() - measurement_.T_world_imu.translation();
+  e.tail<3>() = LogSO3(p.R * B->linear() * measurement_.T_world_imu.linear().transpose());
   return e;
 }
 
@@ -43,11 +48,11 @@ Vector6d LidarRotorFactor::Error(const double* pose7, double phi_rad) const {
 //   phi: R_p Exp(-dphi a) = Exp(-dphi R a) R_p (R_B a = a), so d e_R = -Jl^-1(e_R) R a dphi, and
 //        d t_B / d psi = [a]x R_B m, so d e_t = R (a x R_B m) dphi.
 bool LidarRotorFactor::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
-  const Vector6d e = Error(parameters[0], parameters[1][0]);
+  detail::PoseView p;
+  Pose3 B;
+  const Vector6d e = Error(parameters[0], parameters[1][0], &p, &B);
   Eigen::Map<Vector6d>{residuals} = sqrt_information_ * e;
   if (jacobians == nullptr) return true;
-  const detail::PoseView p = detail::ReadPose(parameters[0]);
-  const Pose3 B = motor_.B(parameters[1][0] - phi_applied_rad_);
   const Eigen::Matrix3d Jl_inv = detail::LeftJacobianInverse(e.tail<3>());
   const Eigen::Matrix<double, 6, 3> S_t = sqrt_information_.leftCols<3>(), S_r = sqrt_information_.rightCols<3>();
   if (jacobians[0] != nullptr) {

@@ -21,6 +21,7 @@
 
 #include "core/backend/pose_factors.hpp"
 #include "core/imu/imu_factor.hpp"
+#include "core/imu/pose_block_view.hpp"
 #include "core/types/geometry.hpp"
 
 namespace rotolidar {
@@ -44,6 +45,9 @@ class LidarRotorFactor final : public ceres::SizedCostFunction<6, kImuPoseBlockS
   Vector6d Error(const double* pose7, double phi_rad) const;
 
  private:
+  /// The error at a pose and phi, with the pose as read and B(phi - phi_applied) for the Jacobians.
+  Vector6d Error(const double* pose7, double phi_rad, detail::PoseView* pose, Pose3* B) const;
+
   LidarPoseMeasurement measurement_;
   MotorAxisInImu motor_;
   double phi_applied_rad_;

@@ -55,18 +55,6 @@ Status LoadEncoder(const std::string& path, uint32_t counts_per_rev, std::vector
   return reader.status();
 }
 
-Status LoadPackets(const std::string& path, double epoch_unix_s, std::vector<LidarPacket>* out) {
-  PcapReader reader;
-  if (Status s = reader.Open(path, epoch_unix_s); !s) return s;  // record time - epoch = rig time
-  LidarPacket packet;
-  Status status;
-  while (reader.Next(&packet, &status)) out->push_back(packet);
-  if (!status) return status;
-  // Position packets alone give no points: a capture of another sensor must not read as an empty recording.
-  if (reader.traffic().vlp16_data == 0) return reader.NoVlp16DataError();
-  return Status::Ok();
-}
-
 }  // namespace
 
 Status LoadImuCsv(const std::string& path, std::vector<ImuSample>* out) {
@@ -99,13 +87,15 @@ Status LoadRecording(const std::string& dir, PacketLoading packets, Recording* r
   r.dir = dir;
   if (!fs::is_directory(dir)) return Status::Error(dir + ": not a recording folder (no such directory)");
   if (Status s = LoadCalibYaml(dir + "/" + RecordingLayout::kCalib, &r.calib); !s) return s;
-  const std::string pcap = dir + "/" + RecordingLayout::kLidar;
+  // Packets are read through the streaming source either way (one place for a capture's errors): opening it
+  // fails now, not mid-run, when lidar.pcap is missing or not a capture; kInMemory then keeps every packet.
+  r.lidar_packets_streamed = true;
+  LidarPacketSource source;
+  if (Status s = source.Open(r); !s) return s;
   if (packets == PacketLoading::kInMemory) {
-    if (Status s = LoadPackets(pcap, r.calib.epoch_unix_s, &r.lidar_packets); !s) return s;
-  } else {
-    PcapReader reader;  // fail now, not mid-run, when the file is missing or not a capture
-    if (Status s = reader.Open(pcap, r.calib.epoch_unix_s); !s) return s;
-    r.lidar_packets_streamed = true;
+    while (const LidarPacket* p = source.Next()) r.lidar_packets.push_back(*p);
+    if (!source.status()) return source.status();
+    r.lidar_packets_streamed = false;
   }
   if (Status s = LoadImuCsv(dir + "/" + RecordingLayout::kImu, &r.imu); !s) return s;
   if (Status s = LoadEncoder(dir + "/" + RecordingLayout::kEncoder, r.calib.encoder.counts_per_rev, &r.encoder); !s)
@@ -141,7 +131,7 @@ const LidarPacket* LidarPacketSource::Next() {
   if (!rec->lidar_packets_streamed)
     return count_ < rec->lidar_packets.size() ? &rec->lidar_packets[count_++] : nullptr;
   if (impl_->reader.Next(&impl_->packet, &status_)) return ++count_, &impl_->packet;
-  // The end (or a malformed record): a capture without VLP-16 data is LoadPackets' error too.
+  // The end (or a malformed record): a capture without VLP-16 data gives no points and is an error too.
   if (status_ && impl_->reader.traffic().vlp16_data == 0) status_ = impl_->reader.NoVlp16DataError();
   return nullptr;
 }

@@ -41,9 +41,14 @@ struct LidarPoseMeasurement {
   /// units 1/m^2 (translation), 1/rad^2 (rotation), 1/(m rad) (cross). Symmetric positive SEMI-definite: a zero
   /// (or tiny) eigenvalue leaves that direction to the IMU (a degenerate registration).
   Matrix6d information = Matrix6d::Identity();
-  /// The rotor-angle offset [rad] already removed from this scan's encoder angles by the deskew (the window's
-  /// estimate at that time; core/backend/rotor_offset_factor.hpp). Used only where the window estimates the offset.
+  // Used only where the window estimates an offset (core/backend/lidar_offset_factor.hpp):
+  /// the rotor-angle offset [rad] already removed from this scan's encoder angles by the deskew (the window's
+  /// estimate at that time);
   double rotor_offset_applied_rad = 0.0;
+  /// the IMU time offset [s] already removed from the IMU stamps (IMU stamp = rig time + td);
+  double time_offset_applied_s = 0.0;
+  /// the body rate at the measurement's time (gyro less its bias estimate), imu frame [rad/s].
+  Eigen::Vector3d angular_velocity_imu_radps = Eigen::Vector3d::Zero();
 };
 
 /// Information of a scan-to-map result: P^T (H / sigma^2) P, symmetrised. H = J^T J of the point residuals [m]

@@ -62,6 +62,9 @@ bool SlidingWindowConfig::Validate(std::string* error) const {
   if (!positive(rotor_offset_random_walk_rad_per_sqrt_s))
     return fail("rotor_offset_random_walk_rad_per_sqrt_s must be > 0");
   if (!positive(initial_rotor_offset_sigma_rad)) return fail("initial_rotor_offset_sigma_rad must be > 0");
+  if (!positive(time_offset_random_walk_s_per_sqrt_s))
+    return fail("time_offset_random_walk_s_per_sqrt_s must be > 0");
+  if (!positive(initial_time_offset_sigma_s)) return fail("initial_time_offset_sigma_s must be > 0");
   if (!(std::abs(motor_in_imu.axis.norm() - 1.0) < 1e-6) || !motor_in_imu.origin_m.allFinite())
     return fail("motor_in_imu: the axis must be a unit vector and the origin finite");
   std::string ceres_error;
@@ -91,7 +94,7 @@ struct SlidingWindow::State {
   double speed_bias[kImuSpeedBiasBlockSize];
   std::optional<PreintegratedImu> imu;     ///< [previous state, this state]; unused for the oldest state
   std::unique_ptr<ceres::CostFunction> imu_factor;  ///< built from `imu` (MakeImuFactor)
-  /// LidarPoseFactor, or LidarRotorFactor with estimate_rotor_offset; null when the state has no LiDAR measurement
+  /// LidarPoseFactor, or LidarOffsetFactor with an offset estimated; null when the state has no LiDAR measurement
   std::unique_ptr<ceres::CostFunction> lidar;
   BlockRef PoseRef() { return {pose, BlockKind::kPose, kImuPoseBlockSize}; }
   BlockRef SpeedBiasRef() { return {speed_bias, BlockKind::kVector, kImuSpeedBiasBlockSize}; }
@@ -113,6 +116,7 @@ void SlidingWindow::Reset() {
   num_marginalized_ = 0;
   Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
   rotor_[0] = 0.0;
+  time_[0] = 0.0;
   if (visual_) visual_->Clear();
 }
 
@@ -129,9 +133,16 @@ std::unique_ptr<ceres::CostFunction> SlidingWindow::MakeImuFactor(const Preinteg
 }
 
 std::unique_ptr<ceres::CostFunction> SlidingWindow::MakeLidarFactor(const LidarPoseMeasurement& m) const {
-  if (config_.estimate_rotor_offset)
-    return std::make_unique<LidarRotorFactor>(m, config_.motor_in_imu, m.rotor_offset_applied_rad);
+  if (EstimatedOffsets().any()) return std::make_unique<LidarOffsetFactor>(m, config_.motor_in_imu, EstimatedOffsets());
   return std::make_unique<LidarPoseFactor>(m);
+}
+
+std::vector<BlockRef> SlidingWindow::LidarBlocks(State& s) {
+  std::vector<BlockRef> blocks = {s.PoseRef()};
+  if (config_.estimate_time_offset) blocks.push_back(s.SpeedBiasRef());
+  if (config_.estimate_rotor_offset) blocks.push_back(RotorRef());
+  if (config_.estimate_time_offset) blocks.push_back(TimeRef());
+  return blocks;
 }
 
 std::unique_ptr<LinearizedPriorFactor> SlidingWindow::RandomWalk(const BlockRef& past, const BlockRef& now,
@@ -158,7 +169,9 @@ Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
   // information 1 / sigma (gravity's radial axis carries no error: the sphere keeps |g|).
   Eigen::Vector3d::Map(gravity_) = config_.gravity_world_mps2;
   rotor_[0] = 0.0;
-  const int n = 15 + (config_.estimate_gravity ? 3 : 0) + (config_.estimate_rotor_offset ? 1 : 0);
+  time_[0] = 0.0;
+  const int n = 15 + (config_.estimate_gravity ? 3 : 0) + (config_.estimate_rotor_offset ? 1 : 0) +
+                (config_.estimate_time_offset ? 1 : 0);
   Eigen::VectorXd inv_sigma(n);
   inv_sigma.head<15>() << Eigen::Vector3d::Constant(1.0 / config_.initial_position_sigma_m),
       Eigen::Vector3d::Constant(1.0 / config_.initial_rotation_sigma_rad),
@@ -174,10 +187,16 @@ Status SlidingWindow::Initialize(Seconds t_s, const NavState& initial_state,
     blocks.push_back(GravityRef());
     x0.push_back(Eigen::Map<const Eigen::VectorXd>(gravity_, kGravityBlockSize));
   }
+  int next = 15 + (config_.estimate_gravity ? 3 : 0);
   if (config_.estimate_rotor_offset) {
-    inv_sigma(n - 1) = 1.0 / config_.initial_rotor_offset_sigma_rad;
+    inv_sigma(next++) = 1.0 / config_.initial_rotor_offset_sigma_rad;
     blocks.push_back(RotorRef());
     x0.push_back(Eigen::VectorXd::Zero(kRotorOffsetBlockSize));
+  }
+  if (config_.estimate_time_offset) {
+    inv_sigma(next++) = 1.0 / config_.initial_time_offset_sigma_s;
+    blocks.push_back(TimeRef());
+    x0.push_back(Eigen::VectorXd::Zero(kImuTimeOffsetBlockSize));
   }
   prior_ = std::make_unique<LinearizedPriorFactor>(std::move(blocks), std::move(x0),
                                                    Eigen::MatrixXd(inv_sigma.asDiagonal()), Eigen::VectorXd::Zero(n));
@@ -237,43 +256,45 @@ void SlidingWindow::SlideOut() {
 // copy gravity_past_, tied to the window's gravity by (g - g_past) / (q |g| sqrt(dt)) over the oldest interval,
 // and gravity_past_ is marginalised with the oldest state. The prior thus carries gravity (and its correlation
 // with the kept state), and information older by T is diluted by q^2 T, so gravity can follow the map's tilt.
+// The rotor and time offsets are random walks in the same way.
 std::vector<MarginalizationTerm> SlidingWindow::TermsOfOldest() {
-  const bool g_block = config_.estimate_gravity, r_block = config_.estimate_rotor_offset;
   const BlockRef past{gravity_past_, BlockKind::kVector, kGravityBlockSize};
-  const BlockRef rotor_past{rotor_past_, BlockKind::kVector, kRotorOffsetBlockSize};
   auto to_past = [&](std::vector<BlockRef> blocks) {
     for (BlockRef& b : blocks) {
       if (b.values == gravity_) b = past;
-      if (b.values == rotor_) b = rotor_past;
+      if (b.values == rotor_) b.values = rotor_past_;
+      if (b.values == time_) b.values = time_past_;
     }
     return blocks;
   };
   std::vector<MarginalizationTerm> terms;
   State& oldest = *states_[0];
   if (prior_) terms.push_back({prior_.get(), nullptr, to_past(prior_->blocks())});
-  if (oldest.lidar) {
-    std::vector<BlockRef> blocks = {oldest.PoseRef()};
-    if (r_block) blocks.push_back(RotorRef());
-    terms.push_back({oldest.lidar.get(), lidar_loss_.get(), to_past(std::move(blocks))});
-  }
+  if (oldest.lidar) terms.push_back({oldest.lidar.get(), lidar_loss_.get(), to_past(LidarBlocks(oldest))});
   State& next = *states_[1];
   std::vector<BlockRef> imu_blocks = {oldest.PoseRef(), oldest.SpeedBiasRef(), next.PoseRef(), next.SpeedBiasRef()};
-  if (g_block) imu_blocks.push_back(GravityRef());
+  if (config_.estimate_gravity) imu_blocks.push_back(GravityRef());
   terms.push_back({next.imu_factor.get(), nullptr, to_past(std::move(imu_blocks))});
-  if (g_block) {
-    std::copy(gravity_, gravity_ + kGravityBlockSize, gravity_past_);
-    const Eigen::VectorXd g = Eigen::Map<const Eigen::VectorXd>(gravity_, kGravityBlockSize);
-    const double sigma_mps2 = config_.gravity_random_walk_rad_per_sqrt_s * g.norm() * std::sqrt(next.t_s - oldest.t_s);
-    gravity_walk_ = RandomWalk(past, GravityRef(), sigma_mps2);
-    terms.push_back({gravity_walk_.get(), nullptr, {past, GravityRef()}});
-  }
-  if (r_block) {  // the same random walk for the rotor offset
-    rotor_past_[0] = rotor_[0];
-    const double sigma_rad = config_.rotor_offset_random_walk_rad_per_sqrt_s * std::sqrt(next.t_s - oldest.t_s);
-    rotor_walk_ = RandomWalk(rotor_past, RotorRef(), sigma_rad);
-    terms.push_back({rotor_walk_.get(), nullptr, {rotor_past, RotorRef()}});
-  }
+  AddRandomWalkTerms(next.t_s - oldest.t_s, &terms);
   return terms;
+}
+
+void SlidingWindow::AddRandomWalkTerms(double dt_s, std::vector<MarginalizationTerm>* terms) {
+  auto walk = [&](const BlockRef& now, double* past_values, double sigma, std::unique_ptr<LinearizedPriorFactor>* f) {
+    std::copy(now.values, now.values + now.size, past_values);
+    const BlockRef past{past_values, BlockKind::kVector, now.size};
+    *f = RandomWalk(past, now, sigma);
+    terms->push_back({f->get(), nullptr, {past, now}});
+  };
+  const double sqrt_dt = std::sqrt(dt_s);
+  if (config_.estimate_gravity) {
+    const double g = Eigen::Map<const Eigen::Vector3d>(gravity_).norm();
+    walk(GravityRef(), gravity_past_, config_.gravity_random_walk_rad_per_sqrt_s * g * sqrt_dt, &gravity_walk_);
+  }
+  if (config_.estimate_rotor_offset)
+    walk(RotorRef(), rotor_past_, config_.rotor_offset_random_walk_rad_per_sqrt_s * sqrt_dt, &rotor_walk_);
+  if (config_.estimate_time_offset)
+    walk(TimeRef(), time_past_, config_.time_offset_random_walk_s_per_sqrt_s * sqrt_dt, &time_walk_);
 }
 
 Status SlidingWindow::MarginalizeOldest() {
@@ -281,6 +302,7 @@ Status SlidingWindow::MarginalizeOldest() {
   std::vector<const double*> dropped = {oldest.pose, oldest.speed_bias};
   if (config_.estimate_gravity) dropped.push_back(gravity_past_);
   if (config_.estimate_rotor_offset) dropped.push_back(rotor_past_);
+  if (config_.estimate_time_offset) dropped.push_back(time_past_);
   std::vector<MarginalizationTerm> terms = TermsOfOldest();
   if (visual_) {  // the landmarks anchored at the oldest state leave with it (VINS-Mono's marginalisation)
     std::vector<MarginalizationTerm> visual = visual_->TermsOf(oldest.pose, &dropped);
@@ -289,6 +311,7 @@ Status SlidingWindow::MarginalizeOldest() {
   MarginalizationResult m = Marginalize(terms, dropped);
   gravity_walk_.reset();
   rotor_walk_.reset();
+  time_walk_.reset();
   if (!m.success) return Status::Error("SlidingWindow: marginalisation failed: " + m.message);
   prior_ = std::move(m.prior);
   return Status::Ok();
@@ -312,13 +335,15 @@ WindowResult SlidingWindow::Optimize() {
   }
   if (config_.estimate_gravity) problem.AddParameterBlock(gravity_, kGravityBlockSize, gravity_manifold_.get());
   if (config_.estimate_rotor_offset) problem.AddParameterBlock(rotor_, kRotorOffsetBlockSize);
+  if (config_.estimate_time_offset) problem.AddParameterBlock(time_, kImuTimeOffsetBlockSize);
   if (prior_) problem.AddResidualBlock(prior_.get(), nullptr, prior_->block_values());
   for (size_t k = 0; k < states_.size(); ++k) {
     State& s = *states_[k];
-    if (s.lidar && config_.estimate_rotor_offset)
-      problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose, rotor_);
-    else if (s.lidar)
-      problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), s.pose);
+    if (s.lidar) {
+      std::vector<double*> blocks;
+      for (const BlockRef& b : LidarBlocks(s)) blocks.push_back(b.values);
+      problem.AddResidualBlock(s.lidar.get(), lidar_loss_.get(), blocks);
+    }
     if (k == 0) continue;
     State& prev = *states_[k - 1];
     std::vector<double*> blocks = {prev.pose, prev.speed_bias, s.pose, s.speed_bias};

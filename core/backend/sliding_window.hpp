@@ -3,8 +3,9 @@
 // x_k = {T_world_imu, v_world, bg, ba}, optimised jointly with Ceres over
 //   - one ImuFactor per interval between consecutive states (core/imu/imu_factor.hpp),
 //   - one LidarPoseFactor per state that has a scan-to-map measurement (core/backend/pose_factors.hpp), or with
-//     config.estimate_rotor_offset a LidarRotorFactor that also sees one shared rotor-angle offset block
-//     (core/backend/rotor_offset_factor.hpp; rotor_offset_rad() is the estimate),
+//     config.estimate_rotor_offset / estimate_time_offset a LidarOffsetFactor that also sees one shared
+//     rotor-angle offset block and / or one shared IMU time-offset block (core/backend/lidar_offset_factor.hpp;
+//     rotor_offset_rad() and time_offset_s() are the estimates),
 //   - one LinearizedPriorFactor: the first state's prior, later the Schur-complement marginalisation prior.
 // The seed's visual reprojection factors attach later to the same pose blocks (a landmark block is a BlockRef
 // of kind kVector, and Marginalize() already handles any block set). docs/backend.md has the equations.
@@ -27,7 +28,7 @@
 #include <Eigen/Core>
 
 #include "core/backend/pose_factors.hpp"
-#include "core/backend/rotor_offset_factor.hpp"
+#include "core/backend/lidar_offset_factor.hpp"
 #include "core/backend/visual_landmarks.hpp"
 #include "core/imu/imu_factor.hpp"
 #include "core/imu/preintegration.hpp"
@@ -64,8 +65,8 @@ struct SlidingWindowConfig {
   /// dominated by the accelerometer bias it does not estimate (|ba| / g).
   double initial_gravity_sigma_rad = 0.01;
 
-  /// Estimate the rotor-angle offset phi (core/backend/rotor_offset_factor.hpp: an encoder zero error, or an
-  /// encoder clock that drifts against the LiDAR's) as one block shared by the LiDAR factors (LidarRotorFactor),
+  /// Estimate the rotor-angle offset phi (core/backend/lidar_offset_factor.hpp: an encoder zero error, or an
+  /// encoder clock that drifts against the LiDAR's) as one block shared by the LiDAR factors (LidarOffsetFactor),
   /// a random walk between the marginalised past and the window as gravity is. The IMU observes it (gravity and
   /// rotation rates see the base, the LiDAR sees the scan turned by phi); the Estimator removes the estimate from
   /// the encoder angles of the scans that follow. Off: every LiDAR factor is a LidarPoseFactor.
@@ -74,6 +75,14 @@ struct SlidingWindowConfig {
   /// estimate follow that (5 mrad per 100 s) while a window's worth of data moves it little.
   double rotor_offset_random_walk_rad_per_sqrt_s = 5e-4;
   double initial_rotor_offset_sigma_rad = 0.05;  ///< prior on phi at Initialize (around 0) [rad]
+  /// Estimate the IMU time offset td (IMU stamp = rig time + td: a free-running IMU clock's offset and drift;
+  /// core/backend/lidar_offset_factor.hpp) as one block shared by the LiDAR factors, a random walk like phi. The
+  /// Estimator removes the estimate from the IMU stamps that follow. Off: the stamps are taken as rig time.
+  bool estimate_time_offset = false;
+  /// Random walk of td [s/sqrt(s)]. A 20 ppm IMU clock drifts 2e-5 s/s; 2e-4 lets the estimate follow that
+  /// (2 ms per 100 s) while a window's worth of data moves it little.
+  double time_offset_random_walk_s_per_sqrt_s = 2e-4;
+  double initial_time_offset_sigma_s = 0.01;  ///< prior on td at Initialize (around 0) [s]
   /// The motor axis and origin in the imu frame (the Estimator derives it from calib.yaml's T_base_motor and
   /// T_base_imu); used with estimate_rotor_offset.
   MotorAxisInImu motor_in_imu;
@@ -170,6 +179,8 @@ class SlidingWindow {
   NavState PredictFromLatest(const PreintegratedImu& imu_since_latest) const;
   /// The rotor-angle offset estimate [rad] (config.estimate_rotor_offset; 0 otherwise).
   double rotor_offset_rad() const { return rotor_[0]; }
+  /// The IMU time-offset estimate [s] (config.estimate_time_offset; 0 otherwise).
+  double time_offset_s() const { return time_[0]; }
   /// Gravity in world [m/s^2]: the estimate (config.estimate_gravity) or config.gravity_world_mps2.
   Eigen::Vector3d gravity_world_mps2() const { return Eigen::Map<const Eigen::Vector3d>(gravity_); }
   /// The current prior (first-state or marginalisation prior), or null.
@@ -196,7 +207,14 @@ class SlidingWindow {
   std::unique_ptr<ceres::CostFunction> MakeImuFactor(const PreintegratedImu& imu) const;
   BlockRef GravityRef() { return {gravity_, BlockKind::kVector, kGravityBlockSize}; }
   BlockRef RotorRef() { return {rotor_, BlockKind::kVector, kRotorOffsetBlockSize}; }
+  BlockRef TimeRef() { return {time_, BlockKind::kVector, kImuTimeOffsetBlockSize}; }
+  LidarOffsets EstimatedOffsets() const { return {config_.estimate_rotor_offset, config_.estimate_time_offset}; }
   std::unique_ptr<ceres::CostFunction> MakeLidarFactor(const LidarPoseMeasurement& m) const;
+  /// A state's LiDAR factor's blocks, in LidarOffsetFactor's order.
+  std::vector<BlockRef> LidarBlocks(State& s);
+  /// The random-walk terms of the shared blocks (gravity, rotor and time offsets) for the oldest interval; their
+  /// past copies are set to the current values.
+  void AddRandomWalkTerms(double dt_s, std::vector<MarginalizationTerm>* terms);
   /// The random-walk term past -> window of one shared block (gravity, rotor offset), for a slide of dt_s.
   static std::unique_ptr<LinearizedPriorFactor> RandomWalk(const BlockRef& past, const BlockRef& now,
                                                            double sigma);
@@ -210,6 +228,9 @@ class SlidingWindow {
   double rotor_[kRotorOffsetBlockSize] = {0.0};       ///< the rotor-offset block (0 without estimate_rotor_offset)
   double rotor_past_[kRotorOffsetBlockSize] = {0.0};  ///< the marginalised past's, during a slide only
   std::unique_ptr<LinearizedPriorFactor> rotor_walk_;  ///< random-walk term past -> window, during a slide
+  double time_[kImuTimeOffsetBlockSize] = {0.0};       ///< the IMU time-offset block (0 without estimate_time_offset)
+  double time_past_[kImuTimeOffsetBlockSize] = {0.0};  ///< the marginalised past's, during a slide only
+  std::unique_ptr<LinearizedPriorFactor> time_walk_;   ///< random-walk term past -> window, during a slide
   std::unique_ptr<ceres::LossFunction> lidar_loss_;
   std::deque<std::unique_ptr<State>> states_;
   std::unique_ptr<LinearizedPriorFactor> prior_;

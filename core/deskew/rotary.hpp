@@ -49,7 +49,7 @@ class RotorAngleInterpolator {
   /// Time of the newest sample (-inf when empty).
   Seconds last_time_s() const { return t_s_.empty() ? -1e300 : t_s_.back(); }
   const RigCalib& calib() const { return calib_; }
-  /// An online correction of the encoder zero [rad] (core/backend/rotor_offset_factor.hpp): subtracted from every
+  /// An online correction of the encoder zero [rad] (core/backend/lidar_offset_factor.hpp): subtracted from every
   /// angle this class gives (AngleAt, SegmentAt) from now on. Default 0.
   void set_angle_offset_rad(double offset_rad) { angle_offset_rad_ = offset_rad; }
   double angle_offset_rad() const { return angle_offset_rad_; }

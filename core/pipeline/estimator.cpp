@@ -59,9 +59,14 @@ bool Estimator::imu_initialized() const { return window_ && window_->initialized
 
 void Estimator::Feed(const EncoderSample& sample) { rotor_.Add(sample); }
 
+// IMU stamps move to rig time by the window's time-offset estimate (window.estimate_time_offset; else 0). The
+// estimate moves by microseconds per scan, far less than the 5 ms between samples, so the order holds.
 void Estimator::Feed(const ImuSample& sample) {
   if (!config_.use_imu) return;
-  if (imu_.empty() || sample.t_s > imu_.back().t_s) imu_.push_back(sample);
+  const Seconds t_s = sample.t_s - imu_time_offset_s_;
+  if (!imu_.empty() && !(t_s > imu_.back().t_s)) return;
+  imu_.push_back(sample);
+  imu_.back().t_s = t_s;
 }
 
 Status Estimator::Feed(const LidarPacket& packet) {

@@ -124,6 +124,9 @@ void Visit(V& v, SlidingWindowConfig& c) {
   v("estimate_rotor_offset", &c.estimate_rotor_offset);
   v("rotor_offset_random_walk_rad_per_sqrt_s", &c.rotor_offset_random_walk_rad_per_sqrt_s);
   v("initial_rotor_offset_sigma_rad", &c.initial_rotor_offset_sigma_rad);
+  v("estimate_time_offset", &c.estimate_time_offset);
+  v("time_offset_random_walk_s_per_sqrt_s", &c.time_offset_random_walk_s_per_sqrt_s);
+  v("initial_time_offset_sigma_s", &c.initial_time_offset_sigma_s);
   v("max_iterations", &c.max_iterations), v("initial_trust_region_radius", &c.initial_trust_region_radius);
   v("max_solver_time_s", &c.max_solver_time_s), v("function_tolerance", &c.function_tolerance);
   v("gradient_tolerance", &c.gradient_tolerance), v("parameter_tolerance", &c.parameter_tolerance);

@@ -47,6 +47,12 @@ DegeneracyRecord MakeDegeneracyRecord(const DegeneracyInfo& info) {
   return rec;
 }
 
+/// The gyro reading at t_s (the latest sample at or before it; the first when none is) [rad/s]; imu not empty.
+Eigen::Vector3d GyroAt(const std::vector<ImuSample>& imu, Seconds t_s) {
+  auto after = std::upper_bound(imu.begin(), imu.end(), t_s, [](Seconds t, const ImuSample& s) { return t < s.t_s; });
+  return after == imu.begin() ? imu.front().gyro_radps : std::prev(after)->gyro_radps;
+}
+
 }  // namespace
 
 std::optional<PreintegratedImu> PreintegrateSpan(const std::vector<ImuSample>& imu, Seconds t0_s, Seconds t1_s,
@@ -216,6 +222,8 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
     if (information_base.norm() > 0) {
       lidar = LidarMeasurementInImuFrame(T_world_base_lidar, information_base, T_bi);
       lidar->rotor_offset_applied_rad = rotor_.angle_offset_rad();  // what this scan's deskew removed
+      lidar->time_offset_applied_s = imu_time_offset_s_;           // what the IMU stamps lost
+      lidar->angular_velocity_imu_radps = GyroAt(imu_, t_s) - window_->latest_state().bias_gyro_radps;
     }
     if (Status st = window_->AddState(t_s, *prediction.imu_since_latest, lidar); st) {
       if (visual_) {
@@ -227,6 +235,8 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
       // The next scans' encoder angles lose the estimated offset (0 unless the window estimates it).
       rotor_.set_angle_offset_rad(window_->rotor_offset_rad());
       report->rotor_offset_rad = window_->rotor_offset_rad();
+      imu_time_offset_s_ = window_->time_offset_s();  // and the IMU samples that follow the time offset
+      report->imu_time_offset_s = imu_time_offset_s_;
       const NavState x = window_->latest_state();
       T_world_base = PoseOf(x) * T_bi.inverse();
       report->v_world_mps = x.v_world_mps;

@@ -43,8 +43,8 @@ struct SlamRunResult {
   std::vector<ScanReport> scans;
   size_t map_points = 0;
   size_t bad_packets = 0;
-  PacketOrderCounts packet_order;
-  std::vector<InputWarning> input_warnings;  ///< what CheckRecording found in the recording (bench/run/input_check.hpp)   ///< data packets put back in order or dropped (Estimator::packet_order_counts)
+  PacketOrderCounts packet_order;  ///< data packets put back in order or dropped (Estimator::packet_order_counts)
+  std::vector<InputWarning> input_warnings;  ///< what CheckRecording found in the recording (bench/run/input_check.hpp)
   double data_duration_s = 0.0;     ///< span of the LiDAR data [s]
   double wall_time_s = 0.0;         ///< estimator time only (excludes loading) [s]
   double median_scan_ms = 0.0;      ///< median Process time per scan [ms]

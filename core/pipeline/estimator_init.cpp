@@ -55,6 +55,9 @@ bool Estimator::StartWindow(const Eigen::Vector3d& gravity_world_mps2, const Nav
   SlidingWindowConfig wc = config_.window;
   wc.gravity_world_mps2 = gravity_world_mps2;
   wc.motor_in_imu = MotorAxisInImu::From(calib_.T_base_motor, calib_.T_base_imu);
+  // A fixed sensor (motor_speed_radps 0) has no encoder angles to be off: a rotor offset would only be a spare
+  // turn of the LiDAR-IMU extrinsic.
+  if (calib_.motor_speed_radps == 0.0) wc.estimate_rotor_offset = false;
   std::string why;
   if (!wc.Validate(&why)) return false;
   auto window = std::make_unique<SlidingWindow>(wc);

@@ -135,7 +135,9 @@ TEST_F(LiveLoopback, AtRealTimeItEqualsOfflineAndRecordsEverything) {
   ASSERT_EQ(got.size(), sent.size());
   for (std::size_t i = 0; i < got.size(); ++i) {
     ASSERT_EQ(got[i]->payload, sent[i]->payload) << "data packet " << i;
-    if (i > 0) ASSERT_GE(got[i]->t_capture_s, got[i - 1]->t_capture_s) << "data packet " << i;
+    if (i > 0) {
+      ASSERT_GE(got[i]->t_capture_s, got[i - 1]->t_capture_s) << "data packet " << i;
+    }
   }
   ASSERT_EQ(recorded.imu.size(), recording_->imu.size());
   EXPECT_EQ(recorded.encoder.size(), recording_->encoder.size());

@@ -15,15 +15,42 @@ namespace {
 using namespace window_test;
 
 struct OffsetRun {
-  double final_offset_rad = 0.0;
+  double final_offset = 0.0;            ///< the window's estimate at the end [rad or s]
   double rms_rotation_error_rad = 0.0;  ///< latest state's attitude against the truth, second half
   double rms_position_error_m = 0.0;
 };
 
+constexpr int kStates = 150;  // 15 s of the analytic motion
+
+/// Runs kStates states through `window`: measure(k, applied) is state k's LiDAR measurement when the Estimator has
+/// already removed `applied` (estimate() after the previous state), as it does from encoder angles and IMU stamps.
+template <typename Measure, typename Estimate>
+OffsetRun Drive(SlidingWindow& window, const std::vector<ImuSample>& imu, Measure measure, Estimate estimate) {
+  EXPECT_TRUE(window.Initialize(0.0, InitialGuess(), measure(0, 0.0)).ok);
+  OffsetRun out;
+  double sum_r2 = 0.0, sum_p2 = 0.0;
+  int n = 0;
+  for (int k = 1; k < kStates; ++k) {
+    const double applied = estimate();
+    const Status st =
+        window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), measure(k, applied));
+    EXPECT_TRUE(st.ok) << st.message;
+    window.Optimize();
+    if (k < kStates / 2) continue;
+    const NavState x = window.latest_state(), truth = Motion::State(StateTime(k));
+    sum_r2 += LogSO3(x.R_world_imu * truth.R_world_imu.transpose()).squaredNorm();
+    sum_p2 += (x.p_world_m - truth.p_world_m).squaredNorm();
+    ++n;
+  }
+  out.final_offset = estimate();
+  out.rms_rotation_error_rad = std::sqrt(sum_r2 / n);
+  out.rms_position_error_m = std::sqrt(sum_p2 / n);
+  return out;
+}
+
 /// 15 s of the analytic motion; each LiDAR measurement is the truth turned by B(phi_true - applied), applied = the
 /// window's estimate after the previous state (0 when `estimate` is off).
 OffsetRun RunWithOffset(double phi_true_rad, bool estimate) {
-  constexpr int kStates = 150;
   SlidingWindowConfig config;
   config.gravity_world_mps2 = kGravity;
   config.estimate_rotor_offset = estimate;
@@ -39,26 +66,7 @@ OffsetRun RunWithOffset(double phi_true_rad, bool estimate) {
     m.rotor_offset_applied_rad = applied;
     return m;
   };
-  EXPECT_TRUE(window.Initialize(0.0, InitialGuess(), measure(0, 0.0)).ok);
-  OffsetRun out;
-  double sum_r2 = 0.0, sum_p2 = 0.0;
-  int n = 0;
-  for (int k = 1; k < kStates; ++k) {
-    const double applied = window.rotor_offset_rad();
-    const Status st =
-        window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), measure(k, applied));
-    EXPECT_TRUE(st.ok) << st.message;
-    window.Optimize();
-    if (k < kStates / 2) continue;
-    const NavState x = window.latest_state(), truth = Motion::State(StateTime(k));
-    sum_r2 += LogSO3(x.R_world_imu * truth.R_world_imu.transpose()).squaredNorm();
-    sum_p2 += (x.p_world_m - truth.p_world_m).squaredNorm();
-    ++n;
-  }
-  out.final_offset_rad = window.rotor_offset_rad();
-  out.rms_rotation_error_rad = std::sqrt(sum_r2 / n);
-  out.rms_position_error_m = std::sqrt(sum_p2 / n);
-  return out;
+  return Drive(window, imu, measure, [&] { return window.rotor_offset_rad(); });
 }
 
 TEST(RotorOffsetWindow, FindsTheOffsetAndKeepsTheAttitude) {
@@ -68,20 +76,19 @@ TEST(RotorOffsetWindow, FindsTheOffsetAndKeepsTheAttitude) {
   const OffsetRun none = RunWithOffset(0.0, true);
   std::printf("[measured] rotor offset %.4f rad: estimated %.5f rad; attitude rms %.4f rad (ignored: %.4f), "
               "position rms %.4f m (ignored: %.4f); without an offset the estimate is %.5f rad\n",
-              kPhi, estimated.final_offset_rad, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
-              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset_rad);
+              kPhi, estimated.final_offset, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
+              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset);
   // Measured: 0.04915 rad (0.85 mrad off), -0.82 mrad without an offset; attitude rms 2.1 mrad against 41.2 mrad
   // when the offset is ignored (the window then splits it between the LiDAR and the gyro). Bounds: a tenth of the
   // offset, and a quarter of the ignored attitude error.
-  EXPECT_NEAR(estimated.final_offset_rad, kPhi, 0.005);
-  EXPECT_NEAR(none.final_offset_rad, 0.0, 0.005);
+  EXPECT_NEAR(estimated.final_offset, kPhi, 0.005);
+  EXPECT_NEAR(none.final_offset, 0.0, 0.005);
   EXPECT_LT(estimated.rms_rotation_error_rad, 0.25 * ignored.rms_rotation_error_rad);
 }
 
 /// 15 s of the analytic motion with the IMU's stamps td_true late: after the Estimator's shift by the estimate
 /// `applied`, state k (IMU time t_k) is the truth at t_k while the LiDAR saw the truth at t_k + td_true - applied.
 OffsetRun RunWithTimeOffset(double td_true_s, bool estimate) {
-  constexpr int kStates = 150;
   SlidingWindowConfig config;
   config.gravity_world_mps2 = kGravity;
   config.estimate_time_offset = estimate;
@@ -95,26 +102,7 @@ OffsetRun RunWithTimeOffset(double td_true_s, bool estimate) {
     m.angular_velocity_imu_radps = imu[size_t(k * kSamplesPerState)].gyro_radps - bg;
     return m;
   };
-  EXPECT_TRUE(window.Initialize(0.0, InitialGuess(), measure(0, 0.0)).ok);
-  OffsetRun out;
-  double sum_r2 = 0.0, sum_p2 = 0.0;
-  int n = 0;
-  for (int k = 1; k < kStates; ++k) {
-    const double applied = window.time_offset_s();
-    const Status st =
-        window.AddState(StateTime(k), Preintegrate(imu, k - 1, window.latest_state()), measure(k, applied));
-    EXPECT_TRUE(st.ok) << st.message;
-    window.Optimize();
-    if (k < kStates / 2) continue;
-    const NavState x = window.latest_state(), truth = Motion::State(StateTime(k));
-    sum_r2 += LogSO3(x.R_world_imu * truth.R_world_imu.transpose()).squaredNorm();
-    sum_p2 += (x.p_world_m - truth.p_world_m).squaredNorm();
-    ++n;
-  }
-  out.final_offset_rad = window.time_offset_s();  // [s] here
-  out.rms_rotation_error_rad = std::sqrt(sum_r2 / n);
-  out.rms_position_error_m = std::sqrt(sum_p2 / n);
-  return out;
+  return Drive(window, imu, measure, [&] { return window.time_offset_s(); });
 }
 
 TEST(TimeOffsetWindow, FindsTheImuTimeOffsetAndKeepsThePose) {
@@ -124,13 +112,13 @@ TEST(TimeOffsetWindow, FindsTheImuTimeOffsetAndKeepsThePose) {
   const OffsetRun none = RunWithTimeOffset(0.0, true);
   std::printf("[measured] IMU time offset %.4f s: estimated %.5f s; attitude rms %.4f rad (ignored: %.4f), "
               "position rms %.4f m (ignored: %.4f); without an offset the estimate is %.5f s\n",
-              kTd, estimated.final_offset_rad, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
-              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset_rad);
+              kTd, estimated.final_offset, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
+              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset);
   // Measured: 0.02914 s (0.86 ms off), -0.46 ms without an offset; position rms 16.6 mm against 45.1 mm when the
   // offset is ignored (attitude 0.9 against 12.5 mrad). Bounds: a tenth of the offset, and half the ignored
   // position error (the LiDAR noise, 2 cm per axis, is most of what remains).
-  EXPECT_NEAR(estimated.final_offset_rad, kTd, 0.003);
-  EXPECT_NEAR(none.final_offset_rad, 0.0, 0.003);
+  EXPECT_NEAR(estimated.final_offset, kTd, 0.003);
+  EXPECT_NEAR(none.final_offset, 0.0, 0.003);
   EXPECT_LT(estimated.rms_position_error_m, 0.5 * ignored.rms_position_error_m);
 }
 

@@ -48,6 +48,16 @@ OffsetRun Drive(SlidingWindow& window, const std::vector<ImuSample>& imu, Measur
   return out;
 }
 
+/// Prints the three runs of a test: the offset estimated, the offset ignored, and no offset (estimated).
+void PrintMeasured(const char* what, const char* unit, double truth, const OffsetRun& estimated,
+                   const OffsetRun& ignored, const OffsetRun& none) {
+  std::printf("[measured] %s %.4f %s: estimated %.5f %s; attitude rms %.4f rad (ignored: %.4f), position rms %.4f m "
+              "(ignored: %.4f); without an offset the estimate is %.5f %s\n",
+              what, truth, unit, estimated.final_offset, unit, estimated.rms_rotation_error_rad,
+              ignored.rms_rotation_error_rad, estimated.rms_position_error_m, ignored.rms_position_error_m,
+              none.final_offset, unit);
+}
+
 /// 15 s of the analytic motion; each LiDAR measurement is the truth turned by B(phi_true - applied), applied = the
 /// window's estimate after the previous state (0 when `estimate` is off).
 OffsetRun RunWithOffset(double phi_true_rad, bool estimate) {
@@ -74,10 +84,7 @@ TEST(RotorOffsetWindow, FindsTheOffsetAndKeepsTheAttitude) {
   const OffsetRun estimated = RunWithOffset(kPhi, true);
   const OffsetRun ignored = RunWithOffset(kPhi, false);
   const OffsetRun none = RunWithOffset(0.0, true);
-  std::printf("[measured] rotor offset %.4f rad: estimated %.5f rad; attitude rms %.4f rad (ignored: %.4f), "
-              "position rms %.4f m (ignored: %.4f); without an offset the estimate is %.5f rad\n",
-              kPhi, estimated.final_offset, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
-              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset);
+  PrintMeasured("rotor offset", "rad", kPhi, estimated, ignored, none);
   // Measured: 0.04915 rad (0.85 mrad off), -0.82 mrad without an offset; attitude rms 2.1 mrad against 41.2 mrad
   // when the offset is ignored (the window then splits it between the LiDAR and the gyro). Bounds: a tenth of the
   // offset, and a quarter of the ignored attitude error.
@@ -110,10 +117,7 @@ TEST(TimeOffsetWindow, FindsTheImuTimeOffsetAndKeepsThePose) {
   const OffsetRun estimated = RunWithTimeOffset(kTd, true);
   const OffsetRun ignored = RunWithTimeOffset(kTd, false);
   const OffsetRun none = RunWithTimeOffset(0.0, true);
-  std::printf("[measured] IMU time offset %.4f s: estimated %.5f s; attitude rms %.4f rad (ignored: %.4f), "
-              "position rms %.4f m (ignored: %.4f); without an offset the estimate is %.5f s\n",
-              kTd, estimated.final_offset, estimated.rms_rotation_error_rad, ignored.rms_rotation_error_rad,
-              estimated.rms_position_error_m, ignored.rms_position_error_m, none.final_offset);
+  PrintMeasured("IMU time offset", "s", kTd, estimated, ignored, none);
   // Measured: 0.02914 s (0.86 ms off), -0.46 ms without an offset; position rms 16.6 mm against 45.1 mm when the
   // offset is ignored (attitude 0.9 against 12.5 mrad). Bounds: a tenth of the offset, and half the ignored
   // position error (the LiDAR noise, 2 cm per axis, is most of what remains).

@@ -60,7 +60,7 @@ bool Estimator::imu_initialized() const { return window_ && window_->initialized
 void Estimator::Feed(const EncoderSample& sample) { rotor_.Add(sample); }
 
 // IMU stamps move to rig time by the window's time-offset estimate (window.estimate_time_offset; else 0). The
-// estimate moves by microseconds per scan, far less than the 5 ms between samples, so the order holds.
+// shift moves by at most half a millisecond per scan (Fuse), less than the samples' spacing, so the order holds.
 void Estimator::Feed(const ImuSample& sample) {
   if (!config_.use_imu) return;
   const Seconds t_s = sample.t_s - imu_time_offset_s_;

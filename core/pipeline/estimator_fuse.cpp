@@ -47,6 +47,10 @@ DegeneracyRecord MakeDegeneracyRecord(const DegeneracyInfo& info) {
   return rec;
 }
 
+/// The most the offset removed from the IMU stamps moves per scan [s]: half the 1 ms sample spacing of a 1 kHz
+/// IMU, so that stamps shifted before and after a step stay in order (a 200 Hz IMU's are 5 ms apart).
+constexpr double kMaxImuOffsetStepS = 0.5e-3;
+
 /// The gyro reading at t_s (the latest sample at or before it; the first when none is) [rad/s]; imu not empty.
 Eigen::Vector3d GyroAt(const std::vector<ImuSample>& imu, Seconds t_s) {
   auto after = std::upper_bound(imu.begin(), imu.end(), t_s, [](Seconds t, const ImuSample& s) { return t < s.t_s; });
@@ -235,8 +239,13 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
       // The next scans' encoder angles lose the estimated offset (0 unless the window estimates it).
       rotor_.set_angle_offset_rad(window_->rotor_offset_rad());
       report->rotor_offset_rad = window_->rotor_offset_rad();
-      imu_time_offset_s_ = window_->time_offset_s();  // and the IMU samples that follow the time offset
-      report->imu_time_offset_s = imu_time_offset_s_;
+      // The IMU samples that follow lose the time offset, approached by at most kMaxImuOffsetStepS per scan: a
+      // larger step would stamp a sample before the last one buffered (the estimate moved 8 ms in one scan while
+      // a 20 ms offset converged). A sample fed before this step keeps the older shift, at most one step away
+      // from the next measurement's time_offset_applied_s.
+      imu_time_offset_s_ +=
+          std::clamp(window_->time_offset_s() - imu_time_offset_s_, -kMaxImuOffsetStepS, kMaxImuOffsetStepS);
+      report->imu_time_offset_s = window_->time_offset_s();
       const NavState x = window_->latest_state();
       T_world_base = PoseOf(x) * T_bi.inverse();
       report->v_world_mps = x.v_world_mps;

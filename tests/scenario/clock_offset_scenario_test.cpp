@@ -63,7 +63,7 @@ TEST(ClockOffsetScenario, TheWindowFindsTheImuAndEncoderClockOffsets) {
               last.rotor_offset_rad, -w * kEncoderOffsetS, estimated.ape.stats.rmse, fixed.ape.stats.rmse);
   // Measured (seed 1): 21.73 ms, -0.0085 rad against -0.0130 rad expected, ATE 0.0177 m against 0.0189 m. Ten
   // seconds of a slow walk leave the estimates 1.7 ms and 4.5 mrad off the truth (the 30 min walk of
-  // docs/estimator.md ends within 1.6 ms and 1.4 mrad); the bounds are 1.5-3.5x those errors, far below the
+  // docs/estimator.md ends within 0.9 ms and 1.0 mrad); the bounds are 1.5-3.5x those errors, far below the
   // offsets themselves, so a wrong sign or a stuck estimate fails.
   EXPECT_NEAR(last.imu_time_offset_s, kImuOffsetS, 0.006);
   EXPECT_NEAR(last.rotor_offset_rad, -w * kEncoderOffsetS, 0.007);

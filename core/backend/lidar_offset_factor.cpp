@@ -6,6 +6,20 @@
 #include "core/util/log.hpp"
 
 namespace rotolidar {
+namespace {
+
+/// Where each optional block sits in the factor's parameter list (-1: absent); the order of LidarOffsets.
+struct BlockIndex {
+  int v = -1, phi = -1, td = -1;
+  explicit BlockIndex(const LidarOffsets& which) {
+    int next = 1;  // after the pose
+    if (which.time) v = next++;
+    if (which.rotor) phi = next++;
+    if (which.time) td = next++;
+  }
+};
+
+}  // namespace
 
 MotorAxisInImu MotorAxisInImu::From(const Pose3& T_base_motor, const Pose3& T_base_imu) {
   const Pose3 T_imu_motor = T_base_imu.inverse() * T_base_motor;
@@ -48,11 +62,11 @@ struct LidarOffsetFactor::Eval {
 
 LidarOffsetFactor::Eval LidarOffsetFactor::Compute(double const* const* parameters) const {
   Eval x;
+  const BlockIndex at(which_);
   x.p = detail::ReadPose(parameters[0]);
-  int next = 1;
-  if (which_.time) x.v = Eigen::Map<const Eigen::Vector3d>(parameters[next++]);
-  const double phi = which_.rotor ? parameters[next++][0] : measurement_.rotor_offset_applied_rad;
-  if (which_.time) x.tau_s = parameters[next][0] - measurement_.time_offset_applied_s;
+  if (at.v >= 0) x.v = Eigen::Map<const Eigen::Vector3d>(parameters[at.v]);
+  const double phi = at.phi >= 0 ? parameters[at.phi][0] : measurement_.rotor_offset_applied_rad;
+  if (at.td >= 0) x.tau_s = parameters[at.td][0] - measurement_.time_offset_applied_s;
   x.R_tau = x.p.R * ExpSO3(measurement_.angular_velocity_imu_radps * x.tau_s);
   x.B = motor_.B(phi - measurement_.rotor_offset_applied_rad);
   x.e.head<3>() = x.p.t + x.v * x.tau_s + x.R_tau * x.B.translation() - measurement_.T_world_imu.translation();
@@ -80,23 +94,21 @@ bool LidarOffsetFactor::Evaluate(double const* const* parameters, double* residu
     detail::WriteAmbientPoseJacobian(S_t, -S_t * so3::Hat(x.R_tau * x.B.translation()) + S_r * Jl_inv, x.p.q,
                                      jacobians[0]);
   }
-  int next = 1;
-  if (which_.time && jacobians[next] != nullptr) {
-    Eigen::Map<Eigen::Matrix<double, 6, kImuSpeedBiasBlockSize, Eigen::RowMajor>> J(jacobians[next]);
+  const BlockIndex at(which_);
+  if (at.v >= 0 && jacobians[at.v] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, 6, kImuSpeedBiasBlockSize, Eigen::RowMajor>> J(jacobians[at.v]);
     J.setZero();
     J.leftCols<3>() = x.tau_s * S_t;
   }
-  if (which_.time) ++next;
-  if (which_.rotor && jacobians[next] != nullptr) {
+  if (at.phi >= 0 && jacobians[at.phi] != nullptr) {
     const Eigen::Vector3d de_t = x.R_tau * motor_.axis.cross(x.B.linear() * motor_.origin_m);
     const Eigen::Vector3d de_R = -Jl_inv * x.R_tau * motor_.axis;
-    Eigen::Map<Vector6d>{jacobians[next]} = S_t * de_t + S_r * de_R;
+    Eigen::Map<Vector6d>{jacobians[at.phi]} = S_t * de_t + S_r * de_R;
   }
-  if (which_.rotor) ++next;
-  if (which_.time && jacobians[next] != nullptr) {
+  if (at.td >= 0 && jacobians[at.td] != nullptr) {
     const Eigen::Vector3d de_t = x.v + x.R_tau * w.cross(x.B.translation());
     const Eigen::Vector3d de_R = Jl_inv * x.p.R * w;
-    Eigen::Map<Vector6d>{jacobians[next]} = S_t * de_t + S_r * de_R;
+    Eigen::Map<Vector6d>{jacobians[at.td]} = S_t * de_t + S_r * de_R;
   }
   return true;
 }

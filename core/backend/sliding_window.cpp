@@ -258,10 +258,9 @@ void SlidingWindow::SlideOut() {
 // with the kept state), and information older by T is diluted by q^2 T, so gravity can follow the map's tilt.
 // The rotor and time offsets are random walks in the same way.
 std::vector<MarginalizationTerm> SlidingWindow::TermsOfOldest() {
-  const BlockRef past{gravity_past_, BlockKind::kVector, kGravityBlockSize};
   auto to_past = [&](std::vector<BlockRef> blocks) {
     for (BlockRef& b : blocks) {
-      if (b.values == gravity_) b = past;
+      if (b.values == gravity_) b.values = gravity_past_;
       if (b.values == rotor_) b.values = rotor_past_;
       if (b.values == time_) b.values = time_past_;
     }

@@ -226,8 +226,10 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
     if (information_base.norm() > 0) {
       lidar = LidarMeasurementInImuFrame(T_world_base_lidar, information_base, T_bi);
       lidar->rotor_offset_applied_rad = rotor_.angle_offset_rad();  // what this scan's deskew removed
-      lidar->time_offset_applied_s = imu_time_offset_s_;           // what the IMU stamps lost
-      lidar->angular_velocity_imu_radps = GyroAt(imu_, t_s) - window_->latest_state().bias_gyro_radps;
+      if (config_.window.estimate_time_offset) {  // what the IMU stamps lost, and the rate that moves the pose
+        lidar->time_offset_applied_s = imu_time_offset_s_;
+        lidar->angular_velocity_imu_radps = GyroAt(imu_, t_s) - window_->latest_state().bias_gyro_radps;
+      }
     }
     if (Status st = window_->AddState(t_s, *prediction.imu_since_latest, lidar); st) {
       if (visual_) {

@@ -141,12 +141,15 @@ RigCalib SimConfig::TrueCalib() const {
   c.encoder = motor.encoder.ToCalib();
   c.motor_speed_radps = motor.profile.speed_radps;
   c.lidar_clock_offset_s = clocks.lidar_offset_s;  // nominal: the drift and capture jitter are not known
+  c.imu_time_offset_s = imu.errors.imu_clock_offset_s;  // at rig time 0 (its drift is in truth/clocks.yaml)
   c.camera = camera.Intrinsics();
   return c;
 }
 
 RigCalib SimConfig::BelievedCalib() const {
-  return ApplyCalibErrors(TrueCalib(), DrawCalibErrors(rig_errors.calibration, seed));
+  RigCalib c = ApplyCalibErrors(TrueCalib(), DrawCalibErrors(rig_errors.calibration, seed));
+  c.imu_time_offset_s = 0.0;  // the IMU's clock error is the twin's, unknown to the rig's owner (a fault to find)
+  return c;
 }
 
 SimConfig DefaultSimConfig() { return SimConfig{}; }

@@ -81,12 +81,13 @@ struct SimConfig {
 
   bool Validate(std::string* error) const;
   /// The rig's TRUE calibration (what the sim simulates with; calib.yaml holds BelievedCalib(), equal to this
-  /// unless rig_errors.calibration is on): geometry from rig_model, IMU noise, encoder
-  /// resolution and zero, the nominal motor speed (the uniform-rotation fallback), the nominal LiDAR clock offset and
-  /// the camera's lens and rate (T_base_cam is the rig model's `cam` site).
+  /// unless rig_errors.calibration is on or the IMU clock has an offset): geometry from rig_model, IMU noise,
+  /// encoder resolution and zero, the nominal motor speed (the uniform-rotation fallback), the nominal LiDAR clock
+  /// offset, the IMU clock's offset at rig time 0 and the camera's lens and rate (T_base_cam is the rig model's
+  /// `cam` site).
   RigCalib TrueCalib() const;
   /// What calib.yaml holds: TrueCalib() with the run's calibration errors (rig_errors.calibration, drawn from
-  /// the seed's "calib.error" stream) applied; equal to TrueCalib() when they are off.
+  /// the seed's "calib.error" stream) applied, and imu_time_offset_s 0 (the IMU clock's error is not known).
   RigCalib BelievedCalib() const;
   /// Every sensor clock as the run applies it (written to truth/clocks.yaml).
   ClockTruth TrueClocks() const;

@@ -347,11 +347,12 @@ Status RunSimulation(const SimConfig& config, const std::string& recording_dir, 
   summary->scene_triangles = world.triangles;
   summary->recording_dir = recording_dir;
 
-  // The sim runs the true rig; calib.yaml holds what its owner believes (truth + drawn calibration errors).
+  // The sim runs the true rig; calib.yaml holds what its owner believes (truth + drawn calibration errors, no
+  // IMU clock offset).
   const RigCalib calib = config.TrueCalib();
   const CalibErrors calib_errors = DrawCalibErrors(config.rig_errors.calibration, config.seed);
   RecordingWriter writer;
-  if (Status s = writer.Open(recording_dir, ApplyCalibErrors(calib, calib_errors)); !s) return s;
+  if (Status s = writer.Open(recording_dir, config.BelievedCalib()); !s) return s;
   TruthWriter truth;
   if (Status s = truth.Open(recording_dir); !s) return s;
   if (config.rig_errors.Enabled())

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
 #include "bench/report/svg_raster.hpp"
+#include "core/io/calib_yaml.hpp"
 #include "core/types/geometry.hpp"
+#include "sim/truth/clock_truth.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -16,7 +19,23 @@ nlohmann::json Vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 nlohmann::json ComparisonJson(const CalibComparison& c) {
   return {{"lever_m", Vec(c.lever_m)}, {"tilt_deg", Vec(c.tilt_rad * 180.0 / M_PI)},
-          {"encoder_zero_rad", c.encoder_zero_rad}};
+          {"encoder_zero_rad", c.encoder_zero_rad}, {"imu_time_offset_s", c.imu_time_offset_s}};
+}
+
+nlohmann::json MotionJson(const CalibrationReport& rep) {
+  if (!rep.motion_ran) return {{"ran", false}, {"note", rep.motion_note}};
+  const MotionCalibResult& m = rep.motion;
+  return {{"ran", true},
+          {"span_s", {m.t_start_s, m.t_end_s}},
+          {"scans", m.scans},
+          {"path_length_m", m.path_length_m},
+          {"rotation_rad", m.rotation_rad},
+          {"encoder_zero_change_rad", m.encoder_zero_change_rad},
+          {"imu_time_offset_change_s", m.imu_time_offset_change_s},
+          {"encoder_zero_spread_rad", m.encoder_zero_spread_rad},
+          {"imu_time_offset_spread_s", m.imu_time_offset_spread_s},
+          {"settled", m.settled},
+          {"median_scan_ms", m.median_scan_ms}};
 }
 
 nlohmann::json PoseJson(const Pose3& T) {
@@ -52,7 +71,18 @@ CalibComparison CompareCalib(const RigCalib& est, const RigCalib& ref) {
   c.lever_m = est.T_rotor_lidar.translation() - ref.T_rotor_lidar.translation();
   c.tilt_rad = LogSO3(est.T_rotor_lidar.linear() * ref.T_rotor_lidar.linear().transpose());
   c.encoder_zero_rad = est.encoder.zero_offset_rad - ref.encoder.zero_offset_rad;
+  c.imu_time_offset_s = est.imu_time_offset_s - ref.imu_time_offset_s;
   return c;
+}
+
+Status LoadTwinTruth(const std::string& rec_dir, double t_ref_s, RigCalib* truth) {
+  if (Status s = LoadCalibYaml(rec_dir + "/truth/calib_true.yaml", truth); !s) return s;
+  if (!std::filesystem::exists(rec_dir + "/truth/clocks.yaml")) return Status::Ok();
+  sim::ClockTruth clocks;
+  if (Status s = sim::ReadClockTruth(rec_dir, &clocks); !s) return s;
+  truth->encoder.zero_offset_rad -= truth->motor_speed_radps * (clocks.encoder.Stamp(t_ref_s) - t_ref_s);
+  truth->imu_time_offset_s = clocks.imu.Stamp(t_ref_s) - t_ref_s;
+  return Status::Ok();
 }
 
 Status WriteCalibrationJson(const std::string& path, const CalibrationReport& rep) {
@@ -64,10 +94,12 @@ Status WriteCalibrationJson(const std::string& path, const CalibrationReport& re
   j["points"] = rep.points;
   j["input"] = {{"T_rotor_lidar", PoseJson(rep.input.T_rotor_lidar)},
                 {"encoder_zero_rad", rep.input.encoder.zero_offset_rad},
-                {"lidar_clock_offset_s", rep.input.lidar_clock_offset_s}};
+                {"lidar_clock_offset_s", rep.input.lidar_clock_offset_s},
+                {"imu_time_offset_s", rep.input.imu_time_offset_s}};
   j["output"] = {{"T_rotor_lidar", PoseJson(rep.output.T_rotor_lidar)},
                  {"encoder_zero_rad", rep.output.encoder.zero_offset_rad},
-                 {"lidar_clock_offset_s", rep.output.lidar_clock_offset_s}};
+                 {"lidar_clock_offset_s", rep.output.lidar_clock_offset_s},
+                 {"imu_time_offset_s", rep.output.imu_time_offset_s}};
   j["change"] = ComparisonJson(CompareCalib(rep.output, rep.input));
   j["change"]["time_offset_s"] = rep.output.lidar_clock_offset_s - rep.input.lidar_clock_offset_s;
   j["parameters"] = ParametersJson(r);
@@ -79,6 +111,7 @@ Status WriteCalibrationJson(const std::string& path, const CalibrationReport& re
   j["residual_sigma_m"] = r.residual_sigma_m;
   j["median_abs_residual_m"] = {{"before", rep.median_abs_before_m}, {"after", rep.median_abs_after_m}};
   j["iterations"] = IterationsJson(r);
+  j["motion"] = MotionJson(rep);
   std::vector<std::vector<double>> H(kCalibParamCount, std::vector<double>(kCalibParamCount));
   for (int a = 0; a < kCalibParamCount; ++a)
     for (int b = 0; b < kCalibParamCount; ++b) H[a][b] = r.hessian(a, b);

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "bench/calib/calib_data.hpp"
+#include "bench/calib/motion_calib.hpp"
 #include "bench/calib/rotor_calib.hpp"
 #include "core/types/calib.hpp"
 #include "core/util/status.hpp"
@@ -18,8 +19,15 @@ struct CalibComparison {
   Eigen::Vector3d lever_m = Eigen::Vector3d::Zero();   ///< translation difference, rotor frame [m]
   Eigen::Vector3d tilt_rad = Eigen::Vector3d::Zero();  ///< LogSO3(R_est * R_ref^T), rotor frame [rad]
   double encoder_zero_rad = 0.0;                       ///< zero offset difference [rad]
+  double imu_time_offset_s = 0.0;                      ///< imu_time_offset_s difference [s]
 };
 CalibComparison CompareCalib(const RigCalib& estimate, const RigCalib& reference);
+
+/// A twin recording's true calibration as the map sees it at rig time t_ref_s: truth/calib_true.yaml, with the
+/// encoder zero less the rotor speed times the encoder clock's offset (a late encoder stamp turns every angle back
+/// by the speed times the lag, as a zero would) and imu_time_offset_s the IMU clock's offset, both from
+/// truth/clocks.yaml when the recording has it. Fails naming the file.
+Status LoadTwinTruth(const std::string& recording_dir, double t_ref_s, RigCalib* truth);
 
 /// Everything calibration.json records about one run.
 struct CalibrationReport {
@@ -31,6 +39,9 @@ struct CalibrationReport {
   RotorCalibOptions options;
   RotorCalibResult result;
   double median_abs_before_m = 0.0, median_abs_after_m = 0.0;  ///< |point-to-plane| of each picture's queries
+  bool motion_ran = false;         ///< the motion stage ran (motion_calib.hpp); else motion_note says why not
+  std::string motion_note;
+  MotionCalibResult motion;
   bool has_truth = false;
   CalibComparison truth_before, truth_after;  ///< input - truth, output - truth
 };

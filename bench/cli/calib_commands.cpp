@@ -1,7 +1,9 @@
 // `rotolidar calibrate REC --out DIR`: the VLP-16's lever arm and tilt on the rotor (T_rotor_lidar) from a stretch
-// where the base stands still while the rotor turns, by making the points seen from opposite rotor angles agree
-// (bench/calib/, docs/calibration.md). Writes the corrected calib.yaml, calibration.json and before / after
-// pictures; with a twin recording's truth/calib_true.yaml also the errors against the true calibration.
+// where the base stands still while the rotor turns, by making the points seen from opposite rotor angles agree,
+// then the encoder zero and the LiDAR-IMU time offset from the motion that follows (bench/calib/,
+// docs/calibration.md). Writes the corrected calib.yaml, calibration.json and before / after pictures; with a twin
+// recording's truth/calib_true.yaml also the errors against the true calibration.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -69,6 +71,11 @@ void AddOptions(OptionParser* p) {
   p->Add("huber", Num(c.huber_m), "m", "Huber loss scale of the point-to-plane residual");
   p->Add("iterations", std::to_string(c.max_outer_iterations), "-", "re-associations at most");
   p->Add("threads", std::to_string(c.threads), "-", "Ceres threads");
+  p->Add("motion", "auto", "-", "auto|on|off: the motion stage (encoder zero, LiDAR-IMU time offset) over the data "
+                                "after the static span; auto runs it when at least --min-motion follow");
+  p->Add("min-motion", Num(MotionCalibOptions{}.min_motion_s), "s", "data after the static span the motion stage "
+                                                                     "needs at least");
+  p->Add("slam-config", "", "-", "estimator config YAML for the motion stage (keys of slam_config.yaml)");
   p->Add("estimate", "lever_x,lever_y,tilt_x,tilt_y", "-",
          "parameters to estimate (rotor frame): lever_x|y|z, tilt_x|y|z, encoder_zero, time_offset (the LiDAR's "
          "clock against the encoder's); a static stretch observes only the default four, time_offset also when "
@@ -106,9 +113,25 @@ Status FindSpan(const OptionParser& p, const Recording& rec, CalibrationReport* 
 }
 
 void PrintComparison(const char* label, const CalibComparison& c) {
-  std::printf("  %s: lever [%+.2f %+.2f %+.2f] mm, tilt [%+.3f %+.3f %+.3f] deg, encoder zero %+.3f deg\n", label,
-              1e3 * c.lever_m.x(), 1e3 * c.lever_m.y(), 1e3 * c.lever_m.z(), c.tilt_rad.x() * 180 / M_PI,
-              c.tilt_rad.y() * 180 / M_PI, c.tilt_rad.z() * 180 / M_PI, c.encoder_zero_rad * 180 / M_PI);
+  std::printf("  %s: lever [%+.2f %+.2f %+.2f] mm, tilt [%+.3f %+.3f %+.3f] deg, encoder zero %+.3f deg, IMU time "
+              "offset %+.2f ms\n", label, 1e3 * c.lever_m.x(), 1e3 * c.lever_m.y(), 1e3 * c.lever_m.z(),
+              c.tilt_rad.x() * 180 / M_PI, c.tilt_rad.y() * 180 / M_PI, c.tilt_rad.z() * 180 / M_PI,
+              c.encoder_zero_rad * 180 / M_PI, 1e3 * c.imu_time_offset_s);
+}
+
+void PrintMotion(const CalibrationReport& rep) {
+  if (!rep.motion_ran) {
+    std::printf("  motion: not run (%s)\n", rep.motion_note.c_str());
+    return;
+  }
+  const MotionCalibResult& m = rep.motion;
+  std::printf("  motion: %.2f..%.2f s, %zu scans, path %.1f m, rotation %.0f deg, %.1f ms per scan; %s\n",
+              m.t_start_s, m.t_end_s, m.scans, m.path_length_m, m.rotation_rad * 180 / M_PI, m.median_scan_ms,
+              m.settled ? "settled" : "NOT settled (spread above the limits: a longer or livelier motion helps)");
+  std::printf("  encoder_zero      change %+9.4f deg, spread %.4f deg\n", m.encoder_zero_change_rad * 180 / M_PI,
+              m.encoder_zero_spread_rad * 180 / M_PI);
+  std::printf("  imu_time_offset   change %+9.3f ms , spread %.3f ms\n", 1e3 * m.imu_time_offset_change_s,
+              1e3 * m.imu_time_offset_spread_s);
 }
 
 void PrintResult(const CalibrationReport& rep) {
@@ -131,10 +154,35 @@ void PrintResult(const CalibrationReport& rep) {
                 o.estimated ? "estimated" : "held     ", scale * r.correction.Get(p), unit, scale * o.sigma, unit,
                 o.independence, o.observable ? "" : " (unobservable here)");
   }
+  PrintMotion(rep);
   if (!rep.has_truth) return;
-  std::printf("  truth (truth/calib_true.yaml), estimate - true:\n");
+  std::printf("  truth (truth/calib_true.yaml, clocks.yaml), estimate - true:\n");
   PrintComparison("before", rep.truth_before);
   PrintComparison("after ", rep.truth_after);
+}
+
+/// The motion stage (--motion auto|on|off) after the static one: rep->output gains its corrections.
+Status RunMotionStage(const OptionParser& p, const Recording& rec, CalibrationReport* rep) {
+  const std::string mode = p.Get("motion");
+  if (mode != "auto" && mode != "on" && mode != "off") return Status::Error("--motion: auto, on or off");
+  if (mode == "off") return rep->motion_note = "--motion off", Status::Ok();
+  MotionCalibOptions options;
+  if (Status s = p.GetDouble("min-motion", &options.min_motion_s); !s) return s;
+  if (Status s = LoadSlamConfig(p.Get("slam-config"), &options.estimator); !s) return s;
+  const double data_end_s = rec.imu.empty() ? 0.0 : rec.imu.back().t_s;
+  if (mode == "auto" && data_end_s - rep->span.t_end_s < options.min_motion_s) {
+    std::ostringstream os;
+    os << "only " << std::max(0.0, data_end_s - rep->span.t_end_s) << " s of data after the static span; "
+       << "--min-motion is " << options.min_motion_s << " s";
+    return rep->motion_note = os.str(), Status::Ok();
+  }
+  if (Status s = CalibrateMotion(rec.dir, rep->output, rep->span.t_end_s, options, p.Get("out") + "/motion",
+                                 &rep->motion);
+      !s)
+    return s;
+  rep->motion_ran = true;
+  rep->output = ApplyMotionCorrection(rep->output, rep->motion);
+  return Status::Ok();
 }
 
 /// Writes the outputs of a finished calibration into `out`.
@@ -158,7 +206,8 @@ Status WriteOutputs(const std::string& out, const std::vector<RotorPoint>& point
 
 int CmdCalibrate(int argc, char** argv) {
   OptionParser p("calibrate", "Estimate the VLP-16's lever arm and tilt on the rotor (T_rotor_lidar) from a stretch "
-                              "where the base stands still while the rotor turns; writes a corrected calib.yaml, "
+                              "where the base stands still while the rotor turns, then the encoder zero and the "
+                              "LiDAR-IMU time offset from the motion after it; writes a corrected calib.yaml, "
                               "calibration.json and before/after pictures (docs/calibration.md).");
   AddOptions(&p);
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
@@ -177,17 +226,19 @@ int CmdCalibrate(int argc, char** argv) {
   rep.points = points.size();
   if (Status s = CalibrateRotor(points, rec.calib, rep.options, &rep.result); !s) return Fail(s);
   rep.output = ApplyCorrection(rec.calib, rep.result.correction);
-  const std::string truth_path = rec.dir + "/truth/calib_true.yaml";
+  if (Status s = RunMotionStage(p, rec, &rep); !s) return Fail(s);
   RigCalib truth;
-  if (std::filesystem::exists(truth_path)) {
-    if (Status s = LoadCalibYaml(truth_path, &truth); !s) return Fail(s);
+  if (std::filesystem::exists(rec.dir + "/truth/calib_true.yaml")) {
+    if (Status s = LoadTwinTruth(rec.dir, rep.motion_ran ? rep.motion.t_end_s : rep.span.t_end_s, &truth); !s)
+      return Fail(s);
     rep.has_truth = true;
     rep.truth_before = CompareCalib(rep.input, truth);
     rep.truth_after = CompareCalib(rep.output, truth);
   }
   if (Status s = WriteOutputs(p.Get("out"), points, &rep); !s) return Fail(s);
   PrintResult(rep);
-  std::printf("  output: %s (calib.yaml, calibration.json, map_before.svg, map_after.svg)\n", p.Get("out").c_str());
+  std::printf("  output: %s (calib.yaml, calibration.json, map_before.svg, map_after.svg%s)\n", p.Get("out").c_str(),
+              rep.motion_ran ? ", motion/" : "");
   return 0;
 }
 

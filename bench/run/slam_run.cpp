@@ -224,6 +224,7 @@ Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, 
   if (!config.Validate(&why)) return Status::Error("slam config: " + why);
   Recording rec;  // the LiDAR packets stay on disk: memory does not grow with the recording's length
   if (Status s = LoadRecording(recording_dir, PacketLoading::kStreamed, &rec); !s) return s;
+  if (options.calib) rec.calib = *options.calib;
   std::vector<InputWarning> warnings;
   if (Status s = CheckRecording(rec, InputCheckConfig{}, &warnings); !s) return s;
   for (const InputWarning& w : warnings) LOG_WARN("[" << w.code << "] " << w.message);

@@ -78,6 +78,8 @@ struct SlamRunOptions {
   const std::atomic<bool>* stop = nullptr;
   /// A finding of CheckRecording (a degraded input) fails the run instead of being a warning.
   bool strict = false;
+  /// Used instead of the recording's calib.yaml when set (e.g. `rotolidar calibrate`'s corrected one); not owned.
+  const RigCalib* calib = nullptr;
 };
 
 Status RunSlam(const std::string& recording_dir, const EstimatorConfig& config, const std::string& out_dir,

@@ -66,7 +66,6 @@ class LidarOffsetFactor final : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   /// The unwhitened error [t_p - t_meas; Log(R_p R_meas^T)] at the blocks above (in their order).
   Vector6d Error(double const* const* parameters) const;
-  const LidarOffsets& offsets() const { return which_; }
 
  private:
   struct Eval;  ///< the error and the intermediate values its Jacobians need

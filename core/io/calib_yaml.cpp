@@ -42,7 +42,7 @@ void Visit(V& v, RigCalib& c) {
   v("T_base_motor", &c.T_base_motor), v("T_rotor_lidar", &c.T_rotor_lidar);
   v("T_base_imu", &c.T_base_imu), v("T_base_cam", &c.T_base_cam);
   v("motor_speed_radps", &c.motor_speed_radps), v("lidar_clock_offset_s", &c.lidar_clock_offset_s);
-  v("epoch_unix_s", &c.epoch_unix_s);
+  v("epoch_unix_s", &c.epoch_unix_s), v("imu_time_offset_s", &c.imu_time_offset_s);
   v("lidar", &c.lidar), v("imu", &c.imu), v("camera", &c.camera), v("encoder", &c.encoder);
 }
 

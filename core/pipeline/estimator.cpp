@@ -59,11 +59,12 @@ bool Estimator::imu_initialized() const { return window_ && window_->initialized
 
 void Estimator::Feed(const EncoderSample& sample) { rotor_.Add(sample); }
 
-// IMU stamps move to rig time by the window's time-offset estimate (window.estimate_time_offset; else 0). The
-// shift moves by at most half a millisecond per scan (Fuse), less than the samples' spacing, so the order holds.
+// IMU stamps move to rig time by calib.yaml's imu_time_offset_s and the window's correction of it
+// (window.estimate_time_offset; else 0). The correction moves by at most half a millisecond per scan (Fuse), less
+// than the samples' spacing, so the order holds.
 void Estimator::Feed(const ImuSample& sample) {
   if (!config_.use_imu) return;
-  const Seconds t_s = sample.t_s - imu_time_offset_s_;
+  const Seconds t_s = sample.t_s - calib_.imu_time_offset_s - imu_time_offset_s_;
   if (!imu_.empty() && !(t_s > imu_.back().t_s)) return;
   imu_.push_back(sample);
   imu_.back().t_s = t_s;

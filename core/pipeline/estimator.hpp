@@ -88,8 +88,9 @@ struct ScanReport {
   /// The window's rotor-angle offset estimate after this scan [rad] (window.estimate_rotor_offset; else 0),
   /// removed from the encoder angles of the scans that follow.
   double rotor_offset_rad = 0.0;
-  /// The window's IMU time-offset estimate after this scan [s] (IMU stamp = rig time + this;
-  /// window.estimate_time_offset; else 0), removed from the stamps of the IMU samples that follow.
+  /// The window's IMU time-offset estimate after this scan [s]: its correction of calib.yaml's imu_time_offset_s
+  /// (IMU stamp = rig time + calib's offset + this; window.estimate_time_offset; else 0), removed from the stamps
+  /// of the IMU samples that follow.
   double imu_time_offset_s = 0.0;
   bool keyframe = false;          ///< the scan's features went into the local map (UpdateMap)
   /// Free-space test (core/pipeline/free_space.hpp): keyframe features that earlier scans saw through (kept out
@@ -215,7 +216,7 @@ class Estimator {
   RevolutionSplitter splitter_;
   RotorAngleInterpolator rotor_;
   std::vector<ImuSample> imu_;  ///< time-ordered, stamps in rig time; trimmed as scans are processed
-  double imu_time_offset_s_ = 0.0;  ///< removed from every IMU stamp fed (the window's estimate; else 0) [s]
+  double imu_time_offset_s_ = 0.0;  ///< removed from every IMU stamp fed after calib's (window's estimate; else 0) [s]
   std::deque<LidarScan> pending_scans_;
   std::vector<LidarPoint> packet_points_;
   LocalMap local_map_;

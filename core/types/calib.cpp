@@ -35,6 +35,8 @@ bool RigCalib::Validate(std::string* error) const {
   if (camera.width_px <= 0 || camera.height_px <= 0 || camera.fx_px <= 0 || camera.fy_px <= 0)
     return FailValidation(error, "camera: width, height, fx, fy must be > 0");
   if (encoder.counts_per_rev < 4) return FailValidation(error, "encoder.counts_per_rev: must be >= 4");
+  if (!(std::abs(imu_time_offset_s) <= 1.0))
+    return FailValidation(error, "imu_time_offset_s: must be finite and within +-1 s");
   return true;
 }
 

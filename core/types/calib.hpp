@@ -69,6 +69,9 @@ struct RigCalib {
   double motor_speed_radps = 0.0;  ///< nominal rotor speed, for the uniform-rotation fallback [rad/s]
   double lidar_clock_offset_s = 0.0;  ///< rig time = VLP-16 time past the hour (unwrapped) + this [s]
   double epoch_unix_s = 0.0;          ///< the rig clock's epoch as a Unix time [s] (informational)
+  /// IMU stamp = rig time + this [s]: the Estimator subtracts it from every IMU stamp it is fed (the window's
+  /// online estimate, window.estimate_time_offset, is a correction on top; `rotolidar calibrate` writes it).
+  double imu_time_offset_s = 0.0;
   LidarIntrinsics lidar;
   ImuNoise imu;
   CameraIntrinsics camera;

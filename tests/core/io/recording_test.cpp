@@ -282,6 +282,22 @@ TEST(CalibYaml, NanOrInfinityInAnyNumberIsNamed) {
   }
 }
 
+TEST(CalibYaml, ImuTimeOffsetRoundTripsAndIsBounded) {
+  const std::string dir = TempDir("calib_imu_offset");
+  fs::create_directories(dir);
+  const std::string path = dir + "/calib.yaml";
+  RigCalib calib = TestCalib();
+  calib.imu_time_offset_s = 0.0123456789;
+  ASSERT_TRUE(SaveCalibYaml(path, calib).ok);
+  RigCalib back;
+  ASSERT_TRUE(LoadCalibYaml(path, &back).ok);
+  EXPECT_EQ(back.imu_time_offset_s, calib.imu_time_offset_s);  // 17 digits: exact
+  std::ofstream(path) << "format_version: 1\nimu_time_offset_s: 2.5\n";
+  const Status s = LoadCalibYaml(path, &back);
+  ASSERT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("imu_time_offset_s"), std::string::npos) << s.message;
+}
+
 TEST(CalibYaml, MissingFormatVersionIsAnError) {
   const std::string dir = TempDir("calib_version");
   fs::create_directories(dir);

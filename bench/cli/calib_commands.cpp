@@ -56,7 +56,8 @@ void AddOptions(OptionParser* p) {
   const RotorPointOptions d;
   p->AddPositional("RECORDING", "recording folder (docs/recording_format.md) starting with the base still and the "
                                 "rotor turning");
-  p->Add("out", "runs/calibrate", "-", "output folder: calib.yaml, calibration.json, map_before.svg, map_after.svg");
+  p->Add("out", "runs/calibrate", "-", "output folder: calib.yaml, calibration.json, map_before.svg, map_after.svg, "
+                                       "motion/ (the motion stage's SLAM run)");
   p->Add("static-span", "", "s", "A:B, the stretch of rig time where the base stands still; empty = detect it "
                                  "from the IMU (the first seconds without motion)");
   p->Add("min-range", Num(d.min_range_m), "m", "closer returns are not used");
@@ -170,10 +171,11 @@ Status RunMotionStage(const OptionParser& p, const Recording& rec, CalibrationRe
   if (Status s = p.GetDouble("min-motion", &options.min_motion_s); !s) return s;
   if (Status s = LoadSlamConfig(p.Get("slam-config"), &options.estimator); !s) return s;
   const double data_end_s = rec.imu.empty() ? 0.0 : rec.imu.back().t_s;
-  if (mode == "auto" && data_end_s - rep->span.t_end_s < options.min_motion_s) {
+  if (data_end_s - rep->span.t_end_s < options.min_motion_s) {
     std::ostringstream os;
-    os << "only " << std::max(0.0, data_end_s - rep->span.t_end_s) << " s of data after the static span; "
+    os << "only " << std::max(0.0, data_end_s - rep->span.t_end_s) << " s of IMU data after the static span; "
        << "--min-motion is " << options.min_motion_s << " s";
+    if (mode == "on") return Status::Error(rec.dir + ": --motion on: " + os.str());
     return rep->motion_note = os.str(), Status::Ok();
   }
   if (Status s = CalibrateMotion(rec.dir, rep->output, rep->span.t_end_s, options, p.Get("out") + "/motion",

@@ -4,21 +4,12 @@
 #include <sstream>
 #include <vector>
 
+#include "bench/eval/statistics.hpp"
 #include "bench/run/slam_run.hpp"
 #include "core/types/geometry.hpp"
 
 namespace rotolidar::bench {
 namespace {
-
-double StdDev(const std::vector<double>& v) {
-  if (v.size() < 2) return 0.0;
-  double mean = 0.0;
-  for (double x : v) mean += x;
-  mean /= double(v.size());
-  double ss = 0.0;
-  for (double x : v) ss += (x - mean) * (x - mean);
-  return std::sqrt(ss / double(v.size() - 1));
-}
 
 /// The scans after motion_start_s in which the window ran.
 std::vector<const ScanReport*> MovingScans(const std::vector<ScanReport>& scans, double motion_start_s) {
@@ -37,7 +28,7 @@ void Summarise(const std::vector<const ScanReport*>& moving, MotionCalibResult* 
   std::vector<double> phi, td;
   for (std::size_t i = moving.size() / 2; i < moving.size(); ++i)
     phi.push_back(moving[i]->rotor_offset_rad), td.push_back(moving[i]->imu_time_offset_s);
-  r->encoder_zero_spread_rad = StdDev(phi), r->imu_time_offset_spread_s = StdDev(td);
+  r->encoder_zero_spread_rad = ComputeStatistics(phi).std, r->imu_time_offset_spread_s = ComputeStatistics(td).std;
   for (std::size_t i = 1; i < moving.size(); ++i) {
     const Pose3 d = moving[i - 1]->T_world_base.inverse() * moving[i]->T_world_base;
     r->path_length_m += d.translation().norm();

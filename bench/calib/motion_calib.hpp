@@ -35,7 +35,7 @@ struct MotionCalibOptions {
 struct MotionCalibResult {
   double encoder_zero_change_rad = 0.0;    ///< phi at the last scan: add to encoder.zero_offset_rad [rad]
   double imu_time_offset_change_s = 0.0;   ///< td at the last scan: add to imu_time_offset_s [s]
-  double encoder_zero_spread_rad = 0.0;    ///< standard deviation of phi over the second half of the motion [rad]
+  double encoder_zero_spread_rad = 0.0;    ///< standard deviation (population) of phi, second half of the motion [rad]
   double imu_time_offset_spread_s = 0.0;   ///< the same for td [s]
   double t_start_s = 0.0, t_end_s = 0.0;   ///< the moving scans used (rig time) [s]
   std::size_t scans = 0;                   ///< scans after the static span with the window running

@@ -80,16 +80,15 @@ TEST(MotionCalibrationScenario, FindsTheEncoderZeroAndTheImuTimeOffset) {
   const double ate_static = AteWith(rec.dir, static_out, dir + "/slam_static");
   const double ate_motion = AteWith(rec.dir, motion_out, dir + "/slam_motion");
   std::printf("[measured] motion %.1f..%.1f s, %zu scans, path %.1f m, rotation %.0f deg; encoder zero %+.4f -> "
-              "%+.4f deg (spread %.4f), IMU time offset %+.2f -> %+.2f ms (spread %.2f); ATE %.4f m static stage, %.4f m "
-              "both\n", motion.t_start_s,
-              motion.t_end_s, motion.scans, motion.path_length_m, motion.rotation_rad / kDeg,
-              before.encoder_zero_rad / kDeg, after.encoder_zero_rad / kDeg, motion.encoder_zero_spread_rad / kDeg,
+              "%+.4f deg (spread %.4f), IMU time offset %+.2f -> %+.2f ms (spread %.2f); ATE %.4f m static stage, "
+              "%.4f m both\n", motion.t_start_s, motion.t_end_s, motion.scans, motion.path_length_m,
+              motion.rotation_rad / kDeg, before.encoder_zero_rad / kDeg, after.encoder_zero_rad / kDeg, motion.encoder_zero_spread_rad / kDeg,
               1e3 * before.imu_time_offset_s, 1e3 * after.imu_time_offset_s, 1e3 * motion.imu_time_offset_spread_s,
               ate_static, ate_motion);
-  // Measured (seed 1): encoder zero +0.565 -> -0.015 deg (spread 0.088 deg), IMU time offset -15.48 -> +0.55 ms
+  // Measured (seed 1): encoder zero +0.565 -> -0.015 deg (spread 0.087 deg), IMU time offset -15.48 -> +0.55 ms
   // (spread 0.37 ms), ATE 0.0225 -> 0.0075 m. Seeds 1-5 of the same run through `rotolidar calibrate`
   // (docs/calibration.md, "Motion stage"): encoder zero within 0.333 deg, IMU time offset +0.45..+0.97 ms, spreads
-  // at most 0.088 deg and 0.49 ms, the ATE ratio 0.32-0.35. Bounds:
+  // at most 0.087 deg and 0.48 ms, the ATE ratio 0.32-0.35. Bounds:
   // - the IMU time offset within 2 ms (2x the worst of 15.5 ms injected);
   // - the encoder zero within 0.35 deg: the window aligns the LiDAR with the IMU, whose axes the twin misaligns by
   //   2 mrad per axis and whose mount it rotates by 0.1 deg (neither is in this truth); with the IMU's

@@ -32,15 +32,7 @@ constexpr double kDeg = M_PI / 180.0;
 /// Typical realism, the box room, handheld at rest for 4 s at (0.5, -0.5) while the rotor turns, then walking
 /// (so that the static-span detector has an end to find).
 sim::SimConfig StaticStart(uint64_t seed) {
-  sim::SimConfig config = sim::PresetSimConfig(sim::Realism::kTypical);
-  config.seed = seed;
-  config.scene = "box_room";
-  config.duration_s = 5.5;
-  config.camera.enabled = false;
-  config.carrier_from_scene = false;
-  config.carrier.type = sim::CarrierType::kHandheld;
-  config.carrier.handheld.waypoints = {{0.5, -0.5, 4.0}, {2.5, -0.5, 0.0}};
-  return config;
+  return test_util::TypicalBoxRoomWalk(seed, 5.5, {{0.5, -0.5, 4.0}, {2.5, -0.5, 0.0}});
 }
 
 void CalibrateSeed(uint64_t seed) {

@@ -29,15 +29,9 @@ constexpr double kDeg = M_PI / 180.0;
 /// Still for 4 s at (0.5, -0.5) while the rotor turns, then one loop around the room's middle (about 18 m, turns
 /// of 90 deg at every corner).
 sim::SimConfig StillThenLoop(uint64_t seed) {
-  sim::SimConfig config = sim::PresetSimConfig(sim::Realism::kTypical);
-  config.seed = seed;
-  config.scene = "box_room";
-  config.duration_s = 24.0;
-  config.camera.enabled = false;
-  config.carrier_from_scene = false;
-  config.carrier.type = sim::CarrierType::kHandheld;
-  config.carrier.handheld.waypoints = {{0.5, -0.5, 4.0}, {3.0, -0.5, 0.0},  {3.0, 0.6, 0.0}, {-3.0, 0.6, 0.0},
-                                       {-3.0, -2.6, 0.0}, {0.5, -2.6, 0.0}, {0.5, -0.5, 0.0}};
+  sim::SimConfig config = test_util::TypicalBoxRoomWalk(
+      seed, 24.0, {{0.5, -0.5, 4.0}, {3.0, -0.5, 0.0}, {3.0, 0.6, 0.0}, {-3.0, 0.6, 0.0}, {-3.0, -2.6, 0.0},
+                   {0.5, -2.6, 0.0}, {0.5, -0.5, 0.0}});
   config.imu.errors.imu_clock_offset_s = 0.015;
   config.clocks.encoder_offset_s = 0.003;
   return config;

@@ -94,8 +94,8 @@ Status WriteRigErrorTruth(const std::string& recording_dir, const RigErrorConfig
   const std::string path = RigErrorsTruthPath(recording_dir);
   std::ofstream file(path);
   file << "# Rig imperfections of this run (sim/rig/rig_errors.hpp). calib.yaml = truth/calib_true.yaml with\n"
-       << "# calibration_errors applied (rotations as rotation vectors [rad], parent frame); the wobble and the\n"
-       << "# vibration are in the simulated motion and IMU only.\n"
+       << "# calibration_errors applied (rotations as rotation vectors [rad], parent frame) and imu_time_offset_s 0;\n"
+       << "# the wobble and the vibration are in the simulated motion and IMU only.\n"
        << out.c_str() << "\n";
   return file ? Status::Ok() : Status::Error(path + ": write failed");
 }

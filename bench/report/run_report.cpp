@@ -174,8 +174,8 @@ void AddRunMetricsJson(const SlamRunResult& s, const RunEvaluation& ev, nlohmann
   for (const report::StageTiming& t : report::ComputeStageTimings(s.scans))
     j["slam"]["stage_mean_ms"][t.stage] = t.mean_ms;
   j["health"] = ScanHealthJson(AssessScanHealth(s.scans));
-  // The window's online calibration at the last scan (0 unless window.estimate_rotor_offset /
-  // estimate_time_offset; scans.csv has them per scan).
+  // The window's online calibration at the last scan: corrections of calib.yaml's encoder zero and
+  // imu_time_offset_s (0 unless window.estimate_rotor_offset / estimate_time_offset; scans.csv has them per scan).
   if (!s.scans.empty())
     j["online_calibration"] = {{"rotor_offset_rad", s.scans.back().rotor_offset_rad},
                                {"imu_time_offset_s", s.scans.back().imu_time_offset_s}};

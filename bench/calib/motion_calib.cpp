@@ -7,6 +7,7 @@
 #include "bench/eval/statistics.hpp"
 #include "bench/run/slam_run.hpp"
 #include "core/types/geometry.hpp"
+#include "core/util/validation.hpp"
 
 namespace rotolidar::bench {
 namespace {
@@ -39,7 +40,7 @@ void Summarise(const std::vector<const ScanReport*>& moving, MotionCalibResult* 
 }  // namespace
 
 bool MotionCalibOptions::Validate(std::string* error) const {
-  auto fail = [&](const std::string& m) { return *error = "motion calibration: " + m, false; };
+  auto fail = [error](const std::string& m) { return FailValidation(error, "motion calibration: " + m); };
   if (!(min_motion_s > 0.0)) return fail("min_motion_s must be > 0");
   if (!(max_spread_rad > 0.0) || !(max_spread_s > 0.0)) return fail("the spread limits must be > 0");
   if (!estimator.use_imu) return fail("the estimator must use the IMU (use_imu: true)");

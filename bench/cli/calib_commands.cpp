@@ -162,24 +162,33 @@ void PrintResult(const CalibrationReport& rep) {
   PrintComparison("after ", rep.truth_after);
 }
 
-/// The motion stage (--motion auto|on|off) after the static one: rep->output gains its corrections.
-Status RunMotionStage(const OptionParser& p, const Recording& rec, CalibrationReport* rep) {
-  const std::string mode = p.Get("motion");
-  if (mode != "auto" && mode != "on" && mode != "off") return Status::Error("--motion: auto, on or off");
-  if (mode == "off") return rep->motion_note = "--motion off", Status::Ok();
+/// --motion, --min-motion and --slam-config, read before any work so that a typo fails at once.
+struct MotionStage {
+  std::string mode;  ///< auto, on or off
   MotionCalibOptions options;
-  if (Status s = p.GetDouble("min-motion", &options.min_motion_s); !s) return s;
-  if (Status s = LoadSlamConfig(p.Get("slam-config"), &options.estimator); !s) return s;
+};
+
+Status ReadMotionOptions(const OptionParser& p, MotionStage* m) {
+  m->mode = p.Get("motion");
+  if (m->mode != "auto" && m->mode != "on" && m->mode != "off") return Status::Error("--motion: auto, on or off");
+  if (Status s = p.GetDouble("min-motion", &m->options.min_motion_s); !s) return s;
+  if (Status s = LoadSlamConfig(p.Get("slam-config"), &m->options.estimator); !s) return s;
+  std::string why;
+  return m->options.Validate(&why) ? Status::Ok() : Status::Error(why);
+}
+
+/// The motion stage after the static one, into <out>/motion: rep->output gains its corrections.
+Status RunMotionStage(const MotionStage& m, const std::string& out, const Recording& rec, CalibrationReport* rep) {
+  if (m.mode == "off") return rep->motion_note = "--motion off", Status::Ok();
   const double data_end_s = rec.imu.empty() ? 0.0 : rec.imu.back().t_s;
-  if (data_end_s - rep->span.t_end_s < options.min_motion_s) {
+  if (data_end_s - rep->span.t_end_s < m.options.min_motion_s) {
     std::ostringstream os;
     os << "only " << std::max(0.0, data_end_s - rep->span.t_end_s) << " s of IMU data after the static span; "
-       << "--min-motion is " << options.min_motion_s << " s";
-    if (mode == "on") return Status::Error(rec.dir + ": --motion on: " + os.str());
+       << "--min-motion is " << m.options.min_motion_s << " s";
+    if (m.mode == "on") return Status::Error(rec.dir + ": --motion on: " + os.str());
     return rep->motion_note = os.str(), Status::Ok();
   }
-  if (Status s = CalibrateMotion(rec.dir, rep->output, rep->span.t_end_s, options, p.Get("out") + "/motion",
-                                 &rep->motion);
+  if (Status s = CalibrateMotion(rec.dir, rep->output, rep->span.t_end_s, m.options, out + "/motion", &rep->motion);
       !s)
     return s;
   rep->motion_ran = true;
@@ -215,7 +224,9 @@ int CmdCalibrate(int argc, char** argv) {
   if (int rc = ParseOrHelp(p, argc, argv); rc >= 0) return rc;
   CalibrationReport rep;
   RotorPointOptions point_options;
+  MotionStage motion;
   if (Status s = ReadOptions(p, &point_options, &rep.options, &rep.span); !s) return CalibUsage(s.message);
+  if (Status s = ReadMotionOptions(p, &motion); !s) return CalibUsage(s.message);
   Recording rec;
   if (Status s = LoadRecording(p.Get("RECORDING"), &rec); !s) return Fail(s);
   rep.recording = rec.dir;
@@ -228,7 +239,7 @@ int CmdCalibrate(int argc, char** argv) {
   rep.points = points.size();
   if (Status s = CalibrateRotor(points, rec.calib, rep.options, &rep.result); !s) return Fail(s);
   rep.output = ApplyCorrection(rec.calib, rep.result.correction);
-  if (Status s = RunMotionStage(p, rec, &rep); !s) return Fail(s);
+  if (Status s = RunMotionStage(motion, p.Get("out"), rec, &rep); !s) return Fail(s);
   RigCalib truth;
   if (std::filesystem::exists(rec.dir + "/truth/calib_true.yaml")) {
     if (Status s = LoadTwinTruth(rec.dir, rep.motion_ran ? rep.motion.t_end_s : rep.span.t_end_s, &truth); !s)

@@ -50,14 +50,16 @@ std::size_t CountDynamicPoints(const std::vector<sim::DynamicHitSample>& hits,
   }
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;
   tree.setInputCloud(cloud);
-  std::vector<int> index(1);
-  std::vector<float> sq_dist(1);
-  const double r2 = config.hit_radius_m * config.hit_radius_m;
+  std::vector<int> index;
+  std::vector<float> sq_dist;
   std::size_t count = 0;
   std::set<VoxelKey> reached;
+  // A radius search (sorted: nearest first) instead of a nearest-neighbour one: most map points are far from
+  // every hit, and the radius prunes the tree at once where an unbounded search descends to some far hit
+  // (minutes on a long run's map). The same nearest hit within the radius either way.
   for (const Eigen::Vector3f& p : map_world) {
     const pcl::PointXYZ q(p.x(), p.y(), p.z());
-    if (tree.nearestKSearch(q, 1, index, sq_dist) != 1 || sq_dist[0] > r2) continue;
+    if (tree.radiusSearch(q, config.hit_radius_m, index, sq_dist) < 1) continue;
     if (static_distance(p.cast<double>(), config.static_clearance_m) <= config.static_clearance_m) continue;
     ++count;
     reached.insert(VoxelOf(hits[std::size_t(index[0])], config.voxel_m));

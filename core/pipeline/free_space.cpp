@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "core/util/log.hpp"
 #include "core/util/validation.hpp"
 
@@ -43,12 +45,25 @@ bool RangeImage::BinOf(const Eigen::Vector3f& d, int* face, int* u, int* v) cons
   return true;
 }
 
+void RangeImage::Clear() {
+  std::fill(nearest_cm_.begin(), nearest_cm_.end(), uint16_t(0));
+  std::fill(looked_around_.begin(), looked_around_.end(), uint8_t(0));
+  scatter_.setZero();
+  band_sin_ = 1.f;
+  band_sin2_ = 2.f;
+}
+
 void RangeImage::Add(const Eigen::Vector3f& d_sensor) {
   int face, u, v;
   if (!BinOf(d_sensor, &face, &u, &v)) return;
+  band_sin_ = 1.f;  // unsealed: a new return may lie outside the band
+  band_sin2_ = 2.f;
   uint16_t& nearest = nearest_cm_[Index(face, u, v)];
+  const float r_m = d_sensor.norm();
+  const Eigen::Vector3f unit = d_sensor / r_m;
+  scatter_.noalias() += unit * unit.transpose();
   // Rounded up to whole cm, at least 1 (0 marks an empty bin), at most 655.35 m.
-  const uint16_t r_cm = uint16_t(std::min(65535.f, std::max(1.f, std::ceil(100.f * d_sensor.norm()))));
+  const uint16_t r_cm = uint16_t(std::min(65535.f, std::max(1.f, std::ceil(100.f * r_m))));
   if (nearest == 0) {  // a bin's first return: its 3x3 neighbours (on this face) have one more bin looked at
     for (int dv = -1; dv <= 1; ++dv)
       for (int du = -1; du <= 1; ++du)
@@ -58,25 +73,62 @@ void RangeImage::Add(const Eigen::Vector3f& d_sensor) {
   if (nearest == 0 || r_cm < nearest) nearest = r_cm;
 }
 
-RangeImage::Verdict RangeImage::Judge(const Eigen::Vector3f& d_sensor, float margin_m) const {
+Eigen::Vector3f RangeImage::BinCentre(int face, int u, int v) const {
+  const int axis = face / 2;
+  const float half = 0.5f * float(n_);
+  Eigen::Vector3f c;
+  c[axis] = face % 2 == 0 ? 1.f : -1.f;
+  c[(axis + 1) % 3] = (float(u) + 0.5f - half) / half;  // BinOf's s and t, inverted, at |c[axis]| = 1
+  c[(axis + 2) % 3] = (float(v) + 0.5f - half) / half;
+  return c.normalized();
+}
+
+// The band's axis: least spread of the returns' directions. Its half-width: the largest angle off the band's
+// plane of a bin holding a return, plus the reach of a 3x3 neighbourhood from a query in the outer bin to that
+// bin's centre (1.5 bins per axis on the face's tangent plane at distance 1, where a length bounds the angle).
+void RangeImage::Seal() {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig(scatter_);
+  band_axis_ = eig.eigenvectors().col(0).normalized();
+  if (!band_axis_.allFinite()) return;  // unbounded
+  float max_cos = 0.f;
+  for (int face = 0; face < 6; ++face)
+    for (int v = 0; v < n_; ++v)
+      for (int u = 0; u < n_; ++u)
+        if (nearest_cm_[Index(face, u, v)] != 0)
+          max_cos = std::max(max_cos, std::abs(BinCentre(face, u, v).dot(band_axis_)));
+  const double reach_rad = 1.5 * std::sqrt(2.0) * 2.0 / n_ + 1e-3;  // + float rounding
+  const double half_width_rad = std::asin(std::min(1.0, double(max_cos))) + reach_rad;
+  if (half_width_rad >= 0.5 * M_PI) return;  // the returns span the sphere: no bound
+  band_sin_ = float(std::sin(half_width_rad));
+  band_sin2_ = band_sin_ * band_sin_;
+}
+
+RangeImage::Verdict RangeImage::Judge(const Eigen::Vector3f& d_sensor, float margin_m, float margin_per_m) const {
+  if (band_sin2_ <= 1.f) {  // sealed: outside the band nothing was looked at
+    const float c = d_sensor.dot(band_axis_);
+    if (c * c > band_sin2_ * d_sensor.squaredNorm()) return Verdict::kUnknown;
+  }
   int face, u, v;
   if (!BinOf(d_sensor, &face, &u, &v)) return Verdict::kUnknown;
-  const float r_cm = 100.f * d_sensor.norm(), margin_cm = 100.f * margin_m;
-  const uint16_t centre = nearest_cm_[Index(face, u, v)];
+  const size_t bin = Index(face, u, v);
+  const uint16_t centre = nearest_cm_[bin];
+  const bool looked = looked_around_[bin] >= min_looked_;
+  if (centre == 0 && !looked) return Verdict::kUnknown;  // not looked at: no range needed
+  const float r_m = d_sensor.norm();
+  const float r_cm = 100.f * r_m, margin_cm = 100.f * (margin_m + margin_per_m * r_m);
   if (centre > 0 && std::abs(float(centre) - r_cm) <= margin_cm) return Verdict::kHit;
-  // Outside the scan's band (most of the sphere for one rotary scan): one read decides.
-  if (looked_around_[Index(face, u, v)] < min_looked_) return Verdict::kUnknown;
+  if (!looked) return Verdict::kUnknown;  // outside the scan's band (most of the sphere for one rotary scan)
   if (u == 0 || v == 0 || u == n_ - 1 || v == n_ - 1) return Verdict::kUnknown;  // neighbours on another face
   const float beyond_cm = r_cm + margin_cm;
-  int looked = 0;
+  int through = 0;
   for (int dv = -1; dv <= 1; ++dv)
     for (int du = -1; du <= 1; ++du) {
       const uint16_t b = nearest_cm_[Index(face, u + du, v + dv)];
       if (b == 0) continue;  // no return in this bin: not looked at
       if (float(b) <= beyond_cm) return Verdict::kUnknown;  // something at or before the point
-      ++looked;
+      ++through;
     }
-  return looked >= min_looked_ ? Verdict::kSeenThrough : Verdict::kUnknown;
+  return through >= min_looked_ ? Verdict::kSeenThrough : Verdict::kUnknown;
 }
 
 FreeSpaceFilter::FreeSpaceFilter(const FreeSpaceConfig& config, const Eigen::Vector3d& origin_base)
@@ -87,8 +139,7 @@ FreeSpaceFilter::FreeSpaceFilter(const FreeSpaceConfig& config, const Eigen::Vec
 
 void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points,
                               double max_range_m) {
-  Scan scan{t_s, T_world_base, Eigen::Matrix3f(), Eigen::Vector3f(),
-            RangeImage(config_.bins_per_face, config_.min_looked_bins), {}};
+  Scan scan{t_s, T_world_base, Eigen::Matrix3f(), Eigen::Vector3f(), TakeImage(), {}};
   const Pose3 T_base_world = T_world_base.inverse();
   scan.R_base_world = T_base_world.linear().cast<float>();
   scan.t_sensor_world = T_base_world.translation().cast<float>() - origin_base_;
@@ -98,6 +149,7 @@ void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std:
     scan.image.Add(p.p_base - origin_base_);
     if (p.range_m <= max_range_m) scan.waiting_world.push_back(T_world_base * p.p_base.cast<double>());
   }
+  scan.image.Seal();
   scans_.push_back(std::move(scan));
 }
 
@@ -113,6 +165,7 @@ void FreeSpaceFilter::MarkDynamic(size_t k) {
   dynamic_.assign(n, 0);
   std::vector<Eigen::Vector3f> p(n);
   for (size_t i = 0; i < n; ++i) p[i] = candidates_[i].cast<float>();
+  const float margin_m = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
   const size_t stride = size_t(config_.vote_every_scans);
   for (size_t j = k % stride; j < scans_.size(); j += stride) {
     if (j == k || std::abs(scans_[j].t_s - scans_[k].t_s) > config_.window_s) continue;
@@ -120,7 +173,7 @@ void FreeSpaceFilter::MarkDynamic(size_t k) {
     const uint16_t later = j > k ? 1 : 0;
     for (size_t i = 0; i < n; ++i) {
       const Eigen::Vector3f d = scan.R_base_world * p[i] + scan.t_sensor_world;
-      const RangeImage::Verdict verdict = scan.image.Judge(d, MarginAt(d.norm()));
+      const RangeImage::Verdict verdict = scan.image.Judge(d, margin_m, margin_per_m);
       if (verdict == RangeImage::Verdict::kSeenThrough) {
         ++through_[i];
         later_through_[i] += later;
@@ -135,6 +188,7 @@ void FreeSpaceFilter::MarkDynamic(size_t k) {
 
 bool FreeSpaceFilter::SeenThroughBefore(Seconds t_s, const Eigen::Vector3d& p_world) const {
   const Eigen::Vector3f p = p_world.cast<float>();
+  const float margin_m = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
   int through = 0, hits = 0, eligible = 0;
   for (auto it = scans_.rbegin(); it != scans_.rend(); ++it) {  // newest first: every vote_every_scans-th votes
     const Scan& scan = *it;
@@ -142,11 +196,21 @@ bool FreeSpaceFilter::SeenThroughBefore(Seconds t_s, const Eigen::Vector3d& p_wo
     if (t_s - scan.t_s > config_.window_s) break;
     if (eligible++ % config_.vote_every_scans != 0) continue;
     const Eigen::Vector3f d = scan.R_base_world * p + scan.t_sensor_world;
-    const RangeImage::Verdict verdict = scan.image.Judge(d, MarginAt(d.norm()));
+    const RangeImage::Verdict verdict = scan.image.Judge(d, margin_m, margin_per_m);
     through += verdict == RangeImage::Verdict::kSeenThrough ? 1 : 0;
     hits += verdict == RangeImage::Verdict::kHit ? 1 : 0;
   }
   return PassedBy(through, hits);
+}
+
+// A dropped scan's image, cleared, or a new one (an image is ~150 kB: reusing it spares the allocator and the
+// kernel's page clearing).
+RangeImage FreeSpaceFilter::TakeImage() {
+  if (spare_images_.empty()) return RangeImage(config_.bins_per_face, config_.min_looked_bins);
+  RangeImage image = std::move(spare_images_.back());
+  spare_images_.pop_back();
+  image.Clear();
+  return image;
 }
 
 // Images stay while a waiting scan's window or SeenThroughBefore may still need them.
@@ -155,6 +219,7 @@ void FreeSpaceFilter::DropOld() {
   const Seconds oldest_needed =
       (released_ < scans_.size() ? scans_[released_].t_s : scans_.back().t_s) - config_.window_s;
   while (released_ > 0 && scans_.front().t_s < oldest_needed) {
+    spare_images_.push_back(std::move(scans_.front().image));
     scans_.pop_front();
     --released_;
   }

@@ -63,23 +63,47 @@ struct FreeSpaceConfig {
 };
 
 /// A cube-map range image of one scan (see the file comment).
+///
+/// Band bound: one scan of a rotary rig (or of any multi-beam LiDAR) looks along a belt of directions, a fan
+/// swept about the head's spin axis, and most of the sphere holds no return. Seal() finds the belt's axis n
+/// (the direction with the least spread of the returns' unit directions: the smallest eigenvector of their
+/// scatter) and the largest |cos| between n and any bin holding a return, widened by the angular reach of a
+/// 3x3 neighbourhood. A direction beyond that bound has no return in its 3x3 bins, so Judge answers kUnknown with
+/// one dot product instead of a bin lookup: the same verdicts, exactly, at a fraction of the cost. A scan
+/// covering the whole sphere gets no bound (every direction is tested as before).
 class RangeImage {
  public:
   enum class Verdict { kUnknown, kHit, kSeenThrough };
   RangeImage(int bins_per_face, int min_looked_bins);
-  /// Adds a return at d_sensor [m] (the point minus the sensor origin, in the image's frame).
+  /// Empties the image (keeps its memory), unsealed.
+  void Clear();
+  /// Adds a return at d_sensor [m] (the point minus the sensor origin, in the image's frame). Unseals.
   void Add(const Eigen::Vector3f& d_sensor);
-  /// How this image sees a point at d_sensor (same frame); margin_m as FreeSpaceConfig's total margin.
-  Verdict Judge(const Eigen::Vector3f& d_sensor, float margin_m) const;
+  /// After the last Add: computes the band bound (see the class comment). Optional: Judge's verdicts are the
+  /// same either way, only faster sealed.
+  void Seal();
+  /// How this image sees a point at d_sensor (same frame). The margin is margin_m + margin_per_m * |d_sensor|
+  /// [m] (FreeSpaceConfig's margin_m and margin_per_m).
+  Verdict Judge(const Eigen::Vector3f& d_sensor, float margin_m, float margin_per_m = 0.f) const;
+  /// The sealed band's axis (unit, image frame) and the sine of its half-width: directions d with
+  /// |d.n| > band_sin * |d| are outside; band_sin >= 1 when unsealed or unbounded.
+  const Eigen::Vector3f& band_axis() const { return band_axis_; }
+  float band_sin() const { return band_sin_; }
 
  private:
   /// Bin of a direction: face 0..5 and (u, v) in [0, bins_per_face); false for the zero vector.
   bool BinOf(const Eigen::Vector3f& d, int* face, int* u, int* v) const;
+  /// The unit direction through the centre of bin (face, u, v).
+  Eigen::Vector3f BinCentre(int face, int u, int v) const;
   size_t Index(int face, int u, int v) const { return size_t((face * n_ + v) * n_ + u); }
   int n_;
   int min_looked_;
   std::vector<uint16_t> nearest_cm_;  ///< per bin the nearest return [cm, rounded up]; 0 = no return
   std::vector<uint8_t> looked_around_;  ///< per bin how many of its 3x3 bins (on its face) hold a return
+  Eigen::Matrix3f scatter_ = Eigen::Matrix3f::Zero();  ///< sum of the returns' u u^T (u: unit direction)
+  Eigen::Vector3f band_axis_ = Eigen::Vector3f::UnitZ();
+  float band_sin_ = 1.f;     ///< see band_sin()
+  float band_sin2_ = 2.f;    ///< band_sin_^2, or > 1 for "no bound"
 };
 
 /// Counters of one call (ScanReport reports them per scan).
@@ -122,7 +146,7 @@ class FreeSpaceFilter {
   };
   /// dynamic_[i] for each candidates_[i] of scans_[k]: the votes of the scans around it (the rule above).
   void MarkDynamic(size_t k);
-  float MarginAt(float range_m) const { return float(config_.margin_m + config_.margin_per_m * range_m); }
+  RangeImage TakeImage();
   /// The "passed by" half of the rule: at least one scan saw through the point and no more hit it.
   static bool PassedBy(int through, int hits) { return through > 0 && through >= hits; }
   void DropOld();
@@ -130,6 +154,7 @@ class FreeSpaceFilter {
   FreeSpaceConfig config_;
   Eigen::Vector3f origin_base_;
   std::deque<Scan> scans_;  ///< time order
+  std::vector<RangeImage> spare_images_;  ///< images of dropped scans, for reuse
   size_t released_ = 0;     ///< scans_[0, released_) have handed their points on
   // Release's buffers (kept to reuse their memory): the released scan's points to judge and their votes.
   std::vector<Eigen::Vector3d> candidates_;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <optional>
+#include <random>
 
 #include "core/pipeline/free_space.hpp"
 
@@ -64,6 +65,69 @@ TEST(RangeImage, SeesThroughFreeSpaceNotSurfacesOrGrazingFloor) {
   EXPECT_NE(image.Judge({7.f, 0.5f, -1.5f}, margin), RangeImage::Verdict::kSeenThrough);
   // Straight down past the scan's -80 deg elevation: never looked at.
   EXPECT_EQ(image.Judge({0.05f, 0.02f, -1.f}, margin), RangeImage::Verdict::kUnknown);
+}
+
+/// One revolution of a VLP-16-like head (16 beams at -15..+15 deg, 0.2 deg azimuth steps) whose spin axis is
+/// tilted 70 deg off z and turned 15 deg about z during the sweep, as on a rotor: a belt of the room.
+std::vector<ScanPoint> RotaryBand() {
+  std::vector<ScanPoint> points;
+  for (double az = 0; az < 360; az += 0.2) {
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd((30.0 + 15.0 * az / 360.0) * kDeg, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(70.0 * kDeg, Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
+    for (double el = -15; el <= 15; el += 2.0) {
+      const Eigen::Vector3d d = R * Eigen::Vector3d(std::cos(el * kDeg) * std::cos(az * kDeg),
+                                                    std::cos(el * kDeg) * std::sin(az * kDeg), std::sin(el * kDeg));
+      ScanPoint p;
+      p.range_m = float(RoomRange(d));
+      p.p_base = (p.range_m * d).cast<float>();
+      points.push_back(p);
+    }
+  }
+  return points;
+}
+
+// Sealing bounds the band of directions that hold returns; Judge must then give exactly the verdicts it gives
+// unsealed (the bound only skips directions whose 3x3 bins are all empty), on a rotary belt and on the whole
+// sphere (no bound). Queries: random directions at 0.3-1.2x the room's range there, so that hits, seen-through
+// and occluded points all occur.
+TEST(RangeImage, SealedBandGivesTheSameVerdicts) {
+  const FreeSpaceConfig config;
+  for (const bool belt : {true, false}) {
+    RangeImage open(config.bins_per_face, config.min_looked_bins), sealed = open;
+    for (const ScanPoint& p : belt ? RotaryBand() : Scan(std::nullopt)) {
+      open.Add(p.p_base);
+      sealed.Add(p.p_base);
+    }
+    sealed.Seal();
+    // A belt of +-15 deg (smeared by the 15 deg rotor turn) leaves most of the sphere out; the room scan's
+    // +-80 deg elevations leave nothing out.
+    if (belt) {
+      EXPECT_LT(sealed.band_sin(), 0.6f);
+      EXPECT_GT(std::abs(sealed.band_axis().dot(Eigen::Vector3f(0, -std::sin(70 * kDeg), std::cos(70 * kDeg)))),
+                0.8f);
+    } else {
+      EXPECT_GE(sealed.band_sin(), 1.f);
+    }
+    std::mt19937 rng(7);
+    std::normal_distribution<double> gauss;
+    std::uniform_real_distribution<double> scale(0.3, 1.2);
+    int counts[3] = {0, 0, 0}, outside = 0;
+    for (int i = 0; i < 200000; ++i) {
+      const Eigen::Vector3d d = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+      const Eigen::Vector3f q = (scale(rng) * RoomRange(d) * d).cast<float>();
+      const RangeImage::Verdict v = sealed.Judge(q, 0.1f, 0.01f);
+      ASSERT_EQ(v, open.Judge(q, 0.1f, 0.01f)) << "direction " << d.transpose();
+      ++counts[int(v)];
+      const float c = q.normalized().dot(sealed.band_axis());
+      outside += c * c > sealed.band_sin() * sealed.band_sin() ? 1 : 0;
+    }
+    EXPECT_GT(counts[int(RangeImage::Verdict::kHit)], 1000);
+    EXPECT_GT(counts[int(RangeImage::Verdict::kSeenThrough)], 10000);
+    if (belt) {
+      EXPECT_GT(outside, 200000 / 3) << "directions the bound decides";
+    }
+  }
 }
 
 // The ball stands at A for 1 s, then at B: its points at A are dynamic (later scans see through A, however

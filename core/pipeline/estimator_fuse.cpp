@@ -274,10 +274,17 @@ namespace {
 size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
                        pcl::PointCloud<pcl::PointXYZI>* cloud) {
   const size_t before = cloud->size();
-  auto seen_through = [&](const pcl::PointXYZI& q) {
-    return filter.SeenThroughBefore(t_s, T_world_base * Eigen::Vector3d(q.x, q.y, q.z));
-  };
-  cloud->points.erase(std::remove_if(cloud->points.begin(), cloud->points.end(), seen_through), cloud->points.end());
+  Eigen::Matrix3Xf p_world(3, Eigen::Index(before));
+  for (size_t i = 0; i < before; ++i) {
+    const pcl::PointXYZI& q = (*cloud)[i];
+    p_world.col(Eigen::Index(i)) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
+  }
+  std::vector<uint8_t> seen;
+  filter.SeenThroughBefore(t_s, p_world, &seen);
+  size_t kept = 0;
+  for (size_t i = 0; i < before; ++i)
+    if (!seen[i]) cloud->points[kept++] = cloud->points[i];
+  cloud->points.resize(kept);
   cloud->width = uint32_t(cloud->size());
   cloud->height = 1;
   return before - cloud->size();

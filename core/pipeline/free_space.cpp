@@ -29,7 +29,7 @@ RangeImage::RangeImage(int bins_per_face, int min_looked_bins)
       nearest_cm_(size_t(6 * n_ * n_), 0),
       looked_around_(size_t(6 * n_ * n_), 0) {}
 
-bool RangeImage::BinOf(const Eigen::Vector3f& d, int* face, int* u, int* v) const {
+inline bool RangeImage::BinOf(const Eigen::Vector3f& d, int* face, int* u, int* v) const {
   const Eigen::Vector3f a = d.cwiseAbs();
   int axis = 0;
   if (a.y() > a[axis]) axis = 1;
@@ -103,11 +103,8 @@ void RangeImage::Seal() {
   band_sin2_ = band_sin_ * band_sin_;
 }
 
-RangeImage::Verdict RangeImage::Judge(const Eigen::Vector3f& d_sensor, float margin_m, float margin_per_m) const {
-  if (band_sin2_ <= 1.f) {  // sealed: outside the band nothing was looked at
-    const float c = d_sensor.dot(band_axis_);
-    if (c * c > band_sin2_ * d_sensor.squaredNorm()) return Verdict::kUnknown;
-  }
+RangeImage::Verdict RangeImage::JudgeInBand(const Eigen::Vector3f& d_sensor, float margin_m,
+                                            float margin_per_m) const {
   int face, u, v;
   if (!BinOf(d_sensor, &face, &u, &v)) return Verdict::kUnknown;
   const size_t bin = Index(face, u, v);
@@ -153,6 +150,36 @@ void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std:
   scans_.push_back(std::move(scan));
 }
 
+// One image against many points: the band test for all of them first (vectorised: p -> d = R p + t, d.n, |d|^2),
+// then the bins for the few in the band.
+void FreeSpaceFilter::Vote(const Scan& scan, const Eigen::Matrix3Xf& p_world, bool later,
+                           std::vector<uint16_t>* through, std::vector<uint16_t>* later_through,
+                           std::vector<uint16_t>* hits) const {
+  const float margin_m = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
+  constexpr Eigen::Index kBlock = 256;
+  Eigen::Matrix<float, 3, kBlock> d;
+  Eigen::Matrix<float, 1, kBlock> along, sq_norm;
+  for (Eigen::Index begin = 0; begin < p_world.cols(); begin += kBlock) {
+    const Eigen::Index n = std::min(kBlock, p_world.cols() - begin);
+    d.leftCols(n).noalias() = scan.R_base_world * p_world.middleCols(begin, n);
+    d.leftCols(n).colwise() += scan.t_sensor_world;
+    along.leftCols(n).noalias() = scan.image.band_axis().transpose() * d.leftCols(n);
+    sq_norm.leftCols(n) = d.leftCols(n).colwise().squaredNorm();
+    const float sin2 = scan.image.band_sin2();
+    for (Eigen::Index j = 0; j < n; ++j) {
+      if (along[j] * along[j] > sin2 * sq_norm[j]) continue;  // outside the band: unknown
+      const RangeImage::Verdict verdict = scan.image.JudgeInBand(d.col(j), margin_m, margin_per_m);
+      const size_t i = size_t(begin + j);
+      if (verdict == RangeImage::Verdict::kSeenThrough) {
+        ++(*through)[i];
+        if (later && later_through) ++(*later_through)[i];
+      } else if (verdict == RangeImage::Verdict::kHit) {
+        ++(*hits)[i];
+      }
+    }
+  }
+}
+
 // Votes of every vote_every_scans-th scan within window_s of scans_[k] (k itself excluded), one image at a time
 // (its bins stay in cache). Dynamic when the space was seen free after the point by min_later_through scans (the
 // object left, however long it stood there), or when at least one scan saw through it and no more hit it than
@@ -163,44 +190,37 @@ void FreeSpaceFilter::MarkDynamic(size_t k) {
   later_through_.assign(n, 0);
   hits_.assign(n, 0);
   dynamic_.assign(n, 0);
-  std::vector<Eigen::Vector3f> p(n);
-  for (size_t i = 0; i < n; ++i) p[i] = candidates_[i].cast<float>();
-  const float margin_m = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
+  candidates_f_.resize(3, Eigen::Index(n));
+  for (size_t i = 0; i < n; ++i) candidates_f_.col(Eigen::Index(i)) = candidates_[i].cast<float>();
   const size_t stride = size_t(config_.vote_every_scans);
   for (size_t j = k % stride; j < scans_.size(); j += stride) {
     if (j == k || std::abs(scans_[j].t_s - scans_[k].t_s) > config_.window_s) continue;
-    const Scan& scan = scans_[j];
-    const uint16_t later = j > k ? 1 : 0;
-    for (size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3f d = scan.R_base_world * p[i] + scan.t_sensor_world;
-      const RangeImage::Verdict verdict = scan.image.Judge(d, margin_m, margin_per_m);
-      if (verdict == RangeImage::Verdict::kSeenThrough) {
-        ++through_[i];
-        later_through_[i] += later;
-      } else if (verdict == RangeImage::Verdict::kHit) {
-        ++hits_[i];
-      }
-    }
+    Vote(scans_[j], candidates_f_, j > k, &through_, &later_through_, &hits_);
   }
   for (size_t i = 0; i < n; ++i)
     dynamic_[i] = later_through_[i] >= config_.min_later_through || PassedBy(through_[i], hits_[i]);
 }
 
 bool FreeSpaceFilter::SeenThroughBefore(Seconds t_s, const Eigen::Vector3d& p_world) const {
-  const Eigen::Vector3f p = p_world.cast<float>();
-  const float margin_m = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
-  int through = 0, hits = 0, eligible = 0;
+  std::vector<uint8_t> seen;
+  SeenThroughBefore(t_s, Eigen::Matrix3Xf(p_world.cast<float>()), &seen);
+  return seen[0] != 0;
+}
+
+void FreeSpaceFilter::SeenThroughBefore(Seconds t_s, const Eigen::Matrix3Xf& p_world,
+                                        std::vector<uint8_t>* seen) const {
+  const size_t n = size_t(p_world.cols());
+  std::vector<uint16_t> through(n, 0), hits(n, 0);
+  int eligible = 0;
   for (auto it = scans_.rbegin(); it != scans_.rend(); ++it) {  // newest first: every vote_every_scans-th votes
     const Scan& scan = *it;
     if (scan.t_s >= t_s) continue;
     if (t_s - scan.t_s > config_.window_s) break;
     if (eligible++ % config_.vote_every_scans != 0) continue;
-    const Eigen::Vector3f d = scan.R_base_world * p + scan.t_sensor_world;
-    const RangeImage::Verdict verdict = scan.image.Judge(d, margin_m, margin_per_m);
-    through += verdict == RangeImage::Verdict::kSeenThrough ? 1 : 0;
-    hits += verdict == RangeImage::Verdict::kHit ? 1 : 0;
+    Vote(scan, p_world, false, &through, nullptr, &hits);
   }
-  return PassedBy(through, hits);
+  seen->resize(n);
+  for (size_t i = 0; i < n; ++i) (*seen)[i] = PassedBy(through[i], hits[i]) ? 1 : 0;
 }
 
 // A dropped scan's image, cleared, or a new one (an image is ~150 kB: reusing it spares the allocator and the

@@ -84,11 +84,21 @@ class RangeImage {
   void Seal();
   /// How this image sees a point at d_sensor (same frame). The margin is margin_m + margin_per_m * |d_sensor|
   /// [m] (FreeSpaceConfig's margin_m and margin_per_m).
-  Verdict Judge(const Eigen::Vector3f& d_sensor, float margin_m, float margin_per_m = 0.f) const;
+  Verdict Judge(const Eigen::Vector3f& d_sensor, float margin_m, float margin_per_m = 0.f) const {
+    return OutsideBand(d_sensor) ? Verdict::kUnknown : JudgeInBand(d_sensor, margin_m, margin_per_m);
+  }
+  /// True when sealed and d_sensor lies outside the band: Judge would answer kUnknown.
+  bool OutsideBand(const Eigen::Vector3f& d_sensor) const {
+    const float c = d_sensor.dot(band_axis_);
+    return c * c > band_sin2_ * d_sensor.squaredNorm();  // never true unsealed (band_sin2_ > 1)
+  }
+  /// Judge without the band test (the caller made it, e.g. for many points at once).
+  Verdict JudgeInBand(const Eigen::Vector3f& d_sensor, float margin_m, float margin_per_m) const;
   /// The sealed band's axis (unit, image frame) and the sine of its half-width: directions d with
   /// |d.n| > band_sin * |d| are outside; band_sin >= 1 when unsealed or unbounded.
   const Eigen::Vector3f& band_axis() const { return band_axis_; }
   float band_sin() const { return band_sin_; }
+  float band_sin2() const { return band_sin2_; }  ///< band_sin()^2, or > 1 when unbounded
 
  private:
   /// Bin of a direction: face 0..5 and (u, v) in [0, bins_per_face); false for the zero vector.
@@ -129,6 +139,9 @@ class FreeSpaceFilter {
   /// True when scans before t_s (within window_s; every vote_every_scans-th, newest first) saw through p_world
   /// and no more hit it: a point arriving where space was free.
   bool SeenThroughBefore(Seconds t_s, const Eigen::Vector3d& p_world) const;
+  /// SeenThroughBefore for each column of p_world (world [m]), one image at a time (its bins stay in cache):
+  /// (*seen)[i] = 1 or 0; resized.
+  void SeenThroughBefore(Seconds t_s, const Eigen::Matrix3Xf& p_world, std::vector<uint8_t>* seen) const;
   /// Hands the waiting points of scans older than latest - delay_s (all of them with `flush`) to `accept`
   /// (world frame), except those the scans around them found dynamic; drops images no longer needed.
   /// `wanted(p)` may skip the test for points the map would not take anyway (e.g. its voxel is full).
@@ -146,6 +159,10 @@ class FreeSpaceFilter {
   };
   /// dynamic_[i] for each candidates_[i] of scans_[k]: the votes of the scans around it (the rule above).
   void MarkDynamic(size_t k);
+  /// One image's votes on points p_world (3xN, world): ++(*through)[i] (and ++(*later_through)[i] when `later`)
+  /// where it saw through point i, ++(*hits)[i] where it hit it. later_through may be null.
+  void Vote(const Scan& scan, const Eigen::Matrix3Xf& p_world, bool later, std::vector<uint16_t>* through,
+            std::vector<uint16_t>* later_through, std::vector<uint16_t>* hits) const;
   RangeImage TakeImage();
   /// The "passed by" half of the rule: at least one scan saw through the point and no more hit it.
   static bool PassedBy(int through, int hits) { return through > 0 && through >= hits; }
@@ -158,6 +175,7 @@ class FreeSpaceFilter {
   size_t released_ = 0;     ///< scans_[0, released_) have handed their points on
   // Release's buffers (kept to reuse their memory): the released scan's points to judge and their votes.
   std::vector<Eigen::Vector3d> candidates_;
+  Eigen::Matrix3Xf candidates_f_;  ///< candidates_ as floats, one per column
   std::vector<uint16_t> through_, later_through_, hits_;
   std::vector<uint8_t> dynamic_;
 };

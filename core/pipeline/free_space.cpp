@@ -48,7 +48,6 @@ inline bool RangeImage::BinOf(const Eigen::Vector3f& d, int* face, int* u, int* 
 void RangeImage::Clear() {
   std::fill(nearest_cm_.begin(), nearest_cm_.end(), uint16_t(0));
   std::fill(looked_around_.begin(), looked_around_.end(), uint8_t(0));
-  scatter_.setZero();
   band_sin_ = 1.f;
   band_sin2_ = 2.f;
 }
@@ -59,11 +58,8 @@ void RangeImage::Add(const Eigen::Vector3f& d_sensor) {
   band_sin_ = 1.f;  // unsealed: a new return may lie outside the band
   band_sin2_ = 2.f;
   uint16_t& nearest = nearest_cm_[Index(face, u, v)];
-  const float r_m = d_sensor.norm();
-  const Eigen::Vector3f unit = d_sensor / r_m;
-  scatter_.noalias() += unit * unit.transpose();
   // Rounded up to whole cm, at least 1 (0 marks an empty bin), at most 655.35 m.
-  const uint16_t r_cm = uint16_t(std::min(65535.f, std::max(1.f, std::ceil(100.f * r_m))));
+  const uint16_t r_cm = uint16_t(std::min(65535.f, std::max(1.f, std::ceil(100.f * d_sensor.norm()))));
   if (nearest == 0) {  // a bin's first return: its 3x3 neighbours (on this face) have one more bin looked at
     for (int dv = -1; dv <= 1; ++dv)
       for (int du = -1; du <= 1; ++du)
@@ -83,19 +79,27 @@ Eigen::Vector3f RangeImage::BinCentre(int face, int u, int v) const {
   return c.normalized();
 }
 
-// The band's axis: least spread of the returns' directions. Its half-width: the largest angle off the band's
-// plane of a bin holding a return, plus the reach of a 3x3 neighbourhood from a query in the outer bin to that
-// bin's centre (1.5 bins per axis on the face's tangent plane at distance 1, where a length bounds the angle).
+// The band's axis: least spread of the directions of the bins holding a return (the scatter of their centres:
+// fewer than the returns, and the axis need not be exact, only the bound computed for it). Its half-width: the
+// largest angle off the band's plane of such a bin, plus the reach of a 3x3 neighbourhood from a query in the outer
+// bin to that bin's centre (1.5 bins per axis on the face's tangent plane at distance 1, where a length bounds the
+// angle).
 void RangeImage::Seal() {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig(scatter_);
-  band_axis_ = eig.eigenvectors().col(0).normalized();
-  if (!band_axis_.allFinite()) return;  // unbounded
-  float max_cos = 0.f;
+  std::vector<Eigen::Vector3f> centres;
+  centres.reserve(4096);
+  Eigen::Matrix3f scatter = Eigen::Matrix3f::Zero();
   for (int face = 0; face < 6; ++face)
     for (int v = 0; v < n_; ++v)
       for (int u = 0; u < n_; ++u)
-        if (nearest_cm_[Index(face, u, v)] != 0)
-          max_cos = std::max(max_cos, std::abs(BinCentre(face, u, v).dot(band_axis_)));
+        if (nearest_cm_[Index(face, u, v)] != 0) {
+          centres.push_back(BinCentre(face, u, v));
+          scatter.noalias() += centres.back() * centres.back().transpose();
+        }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig(scatter);
+  band_axis_ = eig.eigenvectors().col(0).normalized();
+  if (!band_axis_.allFinite()) return;  // unbounded
+  float max_cos = 0.f;
+  for (const Eigen::Vector3f& c : centres) max_cos = std::max(max_cos, std::abs(c.dot(band_axis_)));
   const double reach_rad = 1.5 * std::sqrt(2.0) * 2.0 / n_ + 1e-3;  // + float rounding
   const double half_width_rad = std::asin(std::min(1.0, double(max_cos))) + reach_rad;
   if (half_width_rad >= 0.5 * M_PI) return;  // the returns span the sphere: no bound

@@ -66,8 +66,7 @@ struct FreeSpaceConfig {
 ///
 /// Band bound: one scan of a rotary rig (or of any multi-beam LiDAR) looks along a belt of directions, a fan
 /// swept about the head's spin axis, and most of the sphere holds no return. Seal() finds the belt's axis n
-/// (the direction with the least spread of the returns' unit directions: the smallest eigenvector of their
-/// scatter) and the largest |cos| between n and any bin holding a return, widened by the angular reach of a
+/// (the direction with the least spread of the returns' directions: the smallest eigenvector of their scatter) and the largest |cos| between n and any bin holding a return, widened by the angular reach of a
 /// 3x3 neighbourhood. A direction beyond that bound has no return in its 3x3 bins, so Judge answers kUnknown with
 /// one dot product instead of a bin lookup: the same verdicts, exactly, at a fraction of the cost. A scan
 /// covering the whole sphere gets no bound (every direction is tested as before).
@@ -110,7 +109,6 @@ class RangeImage {
   int min_looked_;
   std::vector<uint16_t> nearest_cm_;  ///< per bin the nearest return [cm, rounded up]; 0 = no return
   std::vector<uint8_t> looked_around_;  ///< per bin how many of its 3x3 bins (on its face) hold a return
-  Eigen::Matrix3f scatter_ = Eigen::Matrix3f::Zero();  ///< sum of the returns' u u^T (u: unit direction)
   Eigen::Vector3f band_axis_ = Eigen::Vector3f::UnitZ();
   float band_sin_ = 1.f;     ///< see band_sin()
   float band_sin2_ = 2.f;    ///< band_sin_^2, or > 1 for "no bound"

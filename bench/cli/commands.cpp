@@ -253,7 +253,8 @@ int CmdSlam(int argc, char** argv) {
                 ev.map_metrics_wall_s);
   else if (score.map_metrics)
     std::printf("no map metrics: %s\n", ev.map_note.c_str());
-  if (ev.has_dynamic && ev.dynamic.returns_seen > 0) std::printf("%s\n", DynamicShareLine(ev.dynamic).c_str());
+  if (ev.has_dynamic && ev.dynamic.returns_seen > 0)
+    std::printf("%s\n%s", DynamicShareLine(ev.dynamic).c_str(), DynamicObjectLines(ev.dynamic).c_str());
   std::printf("report: %s/report.html\n", p.Get("out").c_str());
   if (r.stopped) {
     std::fprintf(stderr, "slam: stopped by %s after %.1f s of LiDAR data: the outputs are partial (metrics.json: "

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <set>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -28,10 +29,19 @@ VoxelKey VoxelOf(const sim::DynamicHitSample& h, double voxel_m) {
   return key;
 }
 
-/// Distinct voxels of the hits.
-std::size_t CountVoxels(const std::vector<sim::DynamicHitSample>& hits, double voxel_m) {
+/// Distinct voxels of the hits, in all and per object (an entry per object id seen, by id).
+std::size_t CountVoxels(const std::vector<sim::DynamicHitSample>& hits, double voxel_m,
+                        std::vector<DynamicObjectShare>* per_object) {
   std::set<VoxelKey> voxels;
-  for (const sim::DynamicHitSample& h : hits) voxels.insert(VoxelOf(h, voxel_m));
+  std::set<std::pair<int, VoxelKey>> object_voxels;
+  for (const sim::DynamicHitSample& h : hits) {
+    voxels.insert(VoxelOf(h, voxel_m));
+    object_voxels.insert({h.object_id, VoxelOf(h, voxel_m)});
+    if (h.object_id >= int(per_object->size())) per_object->resize(size_t(h.object_id) + 1);
+    ++(*per_object)[size_t(h.object_id)].returns_seen;
+  }
+  for (const auto& ov : object_voxels) ++(*per_object)[size_t(ov.first)].voxels_seen;
+  for (size_t id = 0; id < per_object->size(); ++id) (*per_object)[id].object_id = int(id);
   return voxels.size();
 }
 
@@ -39,7 +49,8 @@ std::size_t CountVoxels(const std::vector<sim::DynamicHitSample>& hits, double v
 /// the distinct voxels of those points' nearest hits.
 std::size_t CountDynamicPoints(const std::vector<sim::DynamicHitSample>& hits,
                                const std::vector<Eigen::Vector3f>& map_world, const StaticDistanceFn& static_distance,
-                               const DynamicShareConfig& config, std::size_t* voxels_reached) {
+                               const DynamicShareConfig& config, std::size_t* voxels_reached,
+                               std::vector<DynamicObjectShare>* per_object) {
   *voxels_reached = 0;
   if (hits.empty() || map_world.empty()) return 0;
   pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
@@ -54,6 +65,7 @@ std::size_t CountDynamicPoints(const std::vector<sim::DynamicHitSample>& hits,
   std::vector<float> sq_dist;
   std::size_t count = 0;
   std::set<VoxelKey> reached;
+  std::set<std::pair<int, VoxelKey>> object_reached;
   // A radius search (sorted: nearest first) instead of a nearest-neighbour one: most map points are far from
   // every hit, and the radius prunes the tree at once where an unbounded search descends to some far hit
   // (minutes on a long run's map). The same nearest hit within the radius either way.
@@ -62,9 +74,13 @@ std::size_t CountDynamicPoints(const std::vector<sim::DynamicHitSample>& hits,
     if (tree.radiusSearch(q, config.hit_radius_m, index, sq_dist) < 1) continue;
     if (static_distance(p.cast<double>(), config.static_clearance_m) <= config.static_clearance_m) continue;
     ++count;
-    reached.insert(VoxelOf(hits[std::size_t(index[0])], config.voxel_m));
+    const sim::DynamicHitSample& nearest = hits[std::size_t(index[0])];
+    reached.insert(VoxelOf(nearest, config.voxel_m));
+    object_reached.insert({nearest.object_id, VoxelOf(nearest, config.voxel_m)});
+    ++(*per_object)[size_t(nearest.object_id)].map_points_dynamic;
   }
   *voxels_reached = reached.size();
+  for (const auto& ov : object_reached) ++(*per_object)[size_t(ov.first)].voxels_reached;
   return count;
 }
 
@@ -86,9 +102,14 @@ Status ComputeDynamicShare(const std::vector<sim::DynamicHitSample>& hits,
   if (!static_distance) return Status::Error("dynamic share: no static distance function");
   *out = DynamicShare{};
   out->returns_seen = hits.size();
-  out->voxels_seen = CountVoxels(hits, config.voxel_m);
+  for (const sim::DynamicHitSample& h : hits)
+    if (h.object_id < 0) return Status::Error("dynamic share: a hit with object_id < 0");
+  out->voxels_seen = CountVoxels(hits, config.voxel_m, &out->per_object);
   out->map_points = map_world.size();
-  out->map_points_dynamic = CountDynamicPoints(hits, map_world, static_distance, config, &out->voxels_reached);
+  out->map_points_dynamic =
+      CountDynamicPoints(hits, map_world, static_distance, config, &out->voxels_reached, &out->per_object);
+  for (DynamicObjectShare& o : out->per_object)
+    if (o.voxels_seen > 0) o.share_of_seen = double(o.voxels_reached) / double(o.voxels_seen);
   if (out->voxels_seen > 0)
     out->share_of_seen = static_cast<double>(out->voxels_reached) / static_cast<double>(out->voxels_seen);
   if (out->map_points > 0)
@@ -112,6 +133,18 @@ void ToJson(const DynamicShare& s, const DynamicShareConfig& c, nlohmann::json* 
           {"voxel_m", c.voxel_m},
           {"static_clearance_m", c.static_clearance_m},
           {"hit_radius_m", c.hit_radius_m}};
+  nlohmann::json objects = nlohmann::json::array();
+  for (const DynamicObjectShare& o : s.per_object) {
+    if (o.returns_seen == 0) continue;
+    objects.push_back({{"object_id", o.object_id},
+                       {"name", o.name},
+                       {"returns_seen", o.returns_seen},
+                       {"voxels_seen", o.voxels_seen},
+                       {"map_points_dynamic", o.map_points_dynamic},
+                       {"voxels_reached", o.voxels_reached},
+                       {"share_of_seen", o.share_of_seen}});
+  }
+  (*out)["per_object"] = objects;
 }
 
 std::string DynamicShareLine(const DynamicShare& s) {
@@ -122,6 +155,20 @@ std::string DynamicShareLine(const DynamicShare& s) {
                 s.returns_seen, s.voxels_seen, s.voxels_reached, 100.0 * s.share_of_seen, s.map_points_dynamic,
                 100.0 * s.share_of_map);
   return line;
+}
+
+std::string DynamicObjectLines(const DynamicShare& s) {
+  std::string lines;
+  for (const DynamicObjectShare& o : s.per_object) {
+    if (o.returns_seen == 0) continue;
+    char line[240];
+    std::snprintf(line, sizeof(line),
+                  "  %s (id %d): %zu returns, %zu voxels; the map reached %zu (%.2f %%) with %zu points\n",
+                  o.name.empty() ? "object" : o.name.c_str(), o.object_id, o.returns_seen, o.voxels_seen,
+                  o.voxels_reached, 100.0 * o.share_of_seen, o.map_points_dynamic);
+    lines += line;
+  }
+  return lines;
 }
 
 }  // namespace rotolidar::bench

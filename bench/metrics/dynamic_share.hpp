@@ -39,6 +39,17 @@ struct DynamicShareConfig {
   bool Validate(std::string* error) const;
 };
 
+/// The counts of one moving object (the scene's `dynamic:` entry object_id): which object a map leaks.
+struct DynamicObjectShare {
+  int object_id = 0;                   ///< index into the scene's dynamic objects
+  std::string name;                    ///< its name in the scene, when the caller knows it (else empty)
+  std::size_t returns_seen = 0;
+  std::size_t voxels_seen = 0;
+  std::size_t map_points_dynamic = 0;  ///< dynamic map points whose nearest return is this object's
+  std::size_t voxels_reached = 0;
+  double share_of_seen = 0.0;          ///< voxels_reached / voxels_seen
+};
+
 struct DynamicShare {
   std::size_t returns_seen = 0;        ///< dynamic returns in the truth
   std::size_t voxels_seen = 0;         ///< distinct voxels (voxel_m) those returns occupy
@@ -47,6 +58,7 @@ struct DynamicShare {
   std::size_t voxels_reached = 0;      ///< seen voxels holding the nearest return of a dynamic map point
   double share_of_seen = 0.0;          ///< voxels_reached / voxels_seen (<= 1); 0 when nothing was seen
   double share_of_map = 0.0;           ///< map_points_dynamic / map_points; 0 for an empty map
+  std::vector<DynamicObjectShare> per_object;  ///< the same per object seen, by object_id
 };
 
 /// Distance [m] from a point [scene world frame] to the static scene surface; may return any value above
@@ -63,11 +75,13 @@ Status ComputeDynamicShare(const std::vector<sim::DynamicHitSample>& hits,
 /// `surface` must outlive the function.
 StaticDistanceFn StaticDistanceOf(const SurfaceDistance& surface);
 
-/// The "dynamic" object of metrics.json: the counts, the shares and the thresholds used.
+/// The "dynamic" object of metrics.json: the counts, the shares, the thresholds used and `per_object`.
 void ToJson(const DynamicShare& share, const DynamicShareConfig& config, nlohmann::json* out);
 
 /// One line: "dynamic objects: N returns seen in V voxels; the dense map reached R of those voxels (x.xx %) with M
 /// points (y.yy % of the map)".
 std::string DynamicShareLine(const DynamicShare& share);
+/// One line per object seen: "  NAME (id K): R returns, V voxels; the map reached X (x.xx %) with M points".
+std::string DynamicObjectLines(const DynamicShare& share);
 
 }  // namespace rotolidar::bench

@@ -158,6 +158,9 @@ Status EvaluateDynamic(const std::vector<sim::DynamicHitSample>& hits, const sim
   }
   if (Status s = ComputeDynamicShare(hits, out->map_points, static_distance, options.dynamic, &out->dynamic); !s)
     return s;
+  for (DynamicObjectShare& o : out->dynamic.per_object)
+    if (scene && size_t(o.object_id) < scene->dynamic_objects.size())
+      o.name = scene->dynamic_objects[size_t(o.object_id)].name;
   out->dynamic_config = options.dynamic;
   out->has_dynamic = true;
   return Status::Ok();

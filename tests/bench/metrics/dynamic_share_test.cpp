@@ -45,6 +45,22 @@ TEST(DynamicShare, CountsTheMapPointsOffTheStaticSurfaceNextToDynamicReturns) {
   EXPECT_DOUBLE_EQ(share.share_of_seen, 2.0 / 4.0);
   EXPECT_DOUBLE_EQ(share.share_of_map, 3.0 / 8.0);
   EXPECT_EQ(asked, 4);  // only the points within hit_radius_m of a return
+  // Per object: object 0 (A, B, D) kept its three points in A and B; object 1 (C) nothing.
+  ASSERT_EQ(share.per_object.size(), 2u);
+  EXPECT_EQ(share.per_object[0].returns_seen, 4u);
+  EXPECT_EQ(share.per_object[0].voxels_seen, 3u);
+  EXPECT_EQ(share.per_object[0].map_points_dynamic, 3u);
+  EXPECT_EQ(share.per_object[0].voxels_reached, 2u);
+  EXPECT_DOUBLE_EQ(share.per_object[0].share_of_seen, 2.0 / 3.0);
+  EXPECT_EQ(share.per_object[1].object_id, 1);
+  EXPECT_EQ(share.per_object[1].returns_seen, 1u);
+  EXPECT_EQ(share.per_object[1].voxels_seen, 1u);
+  EXPECT_EQ(share.per_object[1].map_points_dynamic, 0u);
+  EXPECT_DOUBLE_EQ(share.per_object[1].share_of_seen, 0.0);
+  share.per_object[0].name = "walker";
+  EXPECT_EQ(DynamicObjectLines(share),
+            "  walker (id 0): 4 returns, 3 voxels; the map reached 2 (66.67 %) with 3 points\n"
+            "  object (id 1): 1 returns, 1 voxels; the map reached 0 (0.00 %) with 0 points\n");
   EXPECT_EQ(DynamicShareLine(share),
             "dynamic objects: 5 returns seen in 4 voxels; the dense map reached 2 of those voxels (50.00 %) with 3 "
             "points (37.50 % of the map)");
@@ -70,6 +86,9 @@ TEST(DynamicShare, ThresholdsAndVoxelComeFromTheConfig) {
   EXPECT_EQ(j.at("static_clearance_m").get<double>(), 0.005);
   EXPECT_EQ(j.at("voxel_m").get<double>(), 1.0);
   for (const char* key : {"voxels_seen", "voxels_reached", "map_points", "share_of_seen", "share_of_map"}) EXPECT_TRUE(j.contains(key));
+  ASSERT_EQ(j.at("per_object").size(), 2u);
+  EXPECT_EQ(j.at("per_object")[1].at("object_id").get<int>(), 1);
+  EXPECT_EQ(j.at("per_object")[1].at("voxels_reached").get<size_t>(), 1u);  // C's voxel, by the 18 cm point
 }
 
 TEST(DynamicShare, NothingSeenGivesZeroSharesAndBadConfigsNameTheField) {

@@ -66,10 +66,11 @@ struct FreeSpaceConfig {
 ///
 /// Band bound: one scan of a rotary rig (or of any multi-beam LiDAR) looks along a belt of directions, a fan
 /// swept about the head's spin axis, and most of the sphere holds no return. Seal() finds the belt's axis n
-/// (the direction with the least spread of the returns' directions: the smallest eigenvector of their scatter) and the largest |cos| between n and any bin holding a return, widened by the angular reach of a
-/// 3x3 neighbourhood. A direction beyond that bound has no return in its 3x3 bins, so Judge answers kUnknown with
-/// one dot product instead of a bin lookup: the same verdicts, exactly, at a fraction of the cost. A scan
-/// covering the whole sphere gets no bound (every direction is tested as before).
+/// (the direction along which the bins holding a return spread least: the eigenvector of the smallest
+/// eigenvalue of their directions' scatter) and the largest |cos| between n and any such bin, widened by the
+/// angular reach of a 3x3 neighbourhood. A direction beyond that bound has no return in its 3x3 bins, so Judge
+/// answers kUnknown with one dot product instead of a bin lookup: the same verdicts, exactly, at a fraction of the
+/// cost. A scan covering the whole sphere gets no bound (every direction is tested as before).
 class RangeImage {
  public:
   enum class Verdict { kUnknown, kHit, kSeenThrough };

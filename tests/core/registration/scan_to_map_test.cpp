@@ -147,8 +147,8 @@ TEST(MatchProblem, AReusedProblemSolvesLikeAFreshOne) {
       ceres::Solver::Summary s_reused, s_fresh;
       const Pose3 T_reused = SolveIn(&reused, c, Pose3::Identity(), &s_reused);
       const Pose3 T_fresh = SolveIn(&fresh, c, Pose3::Identity(), &s_fresh);
-      const int g = int(MatchProblem::kPointsPerGroup);
-      const auto groups = [g](int n) { return (n + g - 1) / g; };
+      constexpr int kGroup = int(MatchProblem::kPointsPerGroup);
+      const auto groups = [](int n) { return (n + kGroup - 1) / kGroup; };
       EXPECT_EQ(s_reused.num_residual_blocks, groups(nl) + groups(np));
       EXPECT_EQ(s_reused.num_residuals, 7 * (groups(nl) + groups(np)));  // 7 rows per group, any size
       EXPECT_EQ(s_reused.iterations.size(), s_fresh.iterations.size());

@@ -15,8 +15,6 @@
 namespace rotolidar::visual {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return std::numeric_limits<double>::infinity();
   std::sort(v.begin(), v.end());

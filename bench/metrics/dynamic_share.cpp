@@ -35,8 +35,9 @@ std::size_t CountVoxels(const std::vector<sim::DynamicHitSample>& hits, double v
   std::set<VoxelKey> voxels;
   std::set<std::pair<int, VoxelKey>> object_voxels;
   for (const sim::DynamicHitSample& h : hits) {
-    voxels.insert(VoxelOf(h, voxel_m));
-    object_voxels.insert({h.object_id, VoxelOf(h, voxel_m)});
+    const VoxelKey key = VoxelOf(h, voxel_m);
+    voxels.insert(key);
+    object_voxels.insert({h.object_id, key});
     if (h.object_id >= int(per_object->size())) per_object->resize(size_t(h.object_id) + 1);
     ++(*per_object)[size_t(h.object_id)].returns_seen;
   }
@@ -75,8 +76,9 @@ std::size_t CountDynamicPoints(const std::vector<sim::DynamicHitSample>& hits,
     if (static_distance(p.cast<double>(), config.static_clearance_m) <= config.static_clearance_m) continue;
     ++count;
     const sim::DynamicHitSample& nearest = hits[std::size_t(index[0])];
-    reached.insert(VoxelOf(nearest, config.voxel_m));
-    object_reached.insert({nearest.object_id, VoxelOf(nearest, config.voxel_m)});
+    const VoxelKey key = VoxelOf(nearest, config.voxel_m);
+    reached.insert(key);
+    object_reached.insert({nearest.object_id, key});
     ++(*per_object)[size_t(nearest.object_id)].map_points_dynamic;
   }
   *voxels_reached = reached.size();

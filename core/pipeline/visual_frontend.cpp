@@ -143,24 +143,28 @@ void VisualFrontEnd::AddDepthPoints(Seconds t_s, const Pose3& T_world_base, cons
   while (!depth_cloud_.empty() && depth_cloud_.front().t_s < t_s - config_.depth_cloud_s) depth_cloud_.pop_front();
 }
 
-// The depth cloud's points in the camera's view (the LidarDepthMap drops those behind it), then one query per
-// feature that will start a landmark.
+// The depth cloud's points that can be a neighbour of a fresh feature's ray (the LidarDepthMap drops those behind
+// the camera), then one query per fresh feature. Only the points near some feature's ray are indexed
+// (visual::RayNeighbourhood): the same depths as over the whole cloud at a fraction of the index's cost.
 std::vector<double> VisualFrontEnd::LidarDepths(const std::vector<Eigen::Vector2d>& normalized,
                                                 const Pose3& T_world_cam, int* valid) {
   std::vector<double> depths(normalized.size(), std::numeric_limits<double>::quiet_NaN());
   *valid = 0;
   if (normalized.empty() || depth_cloud_.empty()) return depths;
   const Eigen::Matrix4f T_cam_world = T_world_cam.inverse().matrix().cast<float>();
-  // The view widened by twice the depth search's radius: no point beyond can be a neighbour of a feature's ray.
-  const Eigen::Vector2f cone = ViewTangents(calib_.camera, 2.0 * config_.depth.search_radius_deg * M_PI / 180.0);
-  std::vector<Eigen::Vector3d> in_view;
+  const double radius_rad = config_.depth.search_radius_deg * M_PI / 180.0;
+  // The view widened by twice the search radius: no point beyond can be a neighbour of a feature's ray.
+  const Eigen::Vector2f cone = ViewTangents(calib_.camera, 2.0 * radius_rad);
+  const visual::RayNeighbourhood neighbourhood(normalized, radius_rad);
+  std::vector<Eigen::Vector3d> near;
   for (const DepthScan& scan : depth_cloud_)
     for (const Eigen::Vector3f& p : scan.points_world) {
       const Eigen::Vector3f c = (T_cam_world * p.homogeneous()).head<3>();
-      if (InView(c, cone, float(config_.depth.min_depth_m))) in_view.push_back(c.cast<double>());
+      if (!InView(c, cone, float(config_.depth.min_depth_m))) continue;
+      if (neighbourhood.Contains(c)) near.push_back(c.cast<double>());
     }
   visual::LidarDepthMap map(config_.depth);
-  if (map.Build(in_view) == 0) return depths;
+  if (map.Build(near) == 0) return depths;
   for (size_t i = 0; i < normalized.size(); ++i) {
     const visual::FeatureDepth d = map.Query(normalized[i]);
     if (!d.valid) continue;

@@ -204,6 +204,12 @@ std::vector<FeatureDepth> LidarDepthMap::Query(const std::vector<Eigen::Vector2d
   return out;
 }
 
+RayNeighbourhood::RayNeighbourhood(const std::vector<Eigen::Vector2d>& xy_normalised, double radius_rad)
+    : rays_(Eigen::Index(xy_normalised.size()), 3), min_cos_(float(std::cos(radius_rad + 1e-4))) {
+  for (size_t i = 0; i < xy_normalised.size(); ++i)
+    rays_.row(Eigen::Index(i)) = xy_normalised[i].homogeneous().normalized().cast<float>();
+}
+
 // ------------------------------------------------------------------------------------------------ triangulation
 
 namespace {

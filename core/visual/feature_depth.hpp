@@ -141,6 +141,26 @@ class LidarDepthMap {
   std::unique_ptr<Index> index_;         ///< kd-tree over the unit bearings of points_
 };
 
+/// The bearings that can be a neighbour of some feature's ray: within radius_rad of it. A LidarDepthMap built over
+/// only the points Contains accepts answers those features' queries as one built over all points does, since a
+/// query takes the nearest bearings within search_radius_deg (pass that radius). Building the index over the few
+/// thousand points near a handful of new features instead of a whole accumulated cloud (~10^5 points) is what
+/// makes a per-state depth query cheap. Contains costs one 3-vector product per feature.
+class RayNeighbourhood {
+ public:
+  /// xy_normalised: the features' undistorted normalised coordinates (cam frame); radius_rad in (0, pi/2).
+  RayNeighbourhood(const std::vector<Eigen::Vector2d>& xy_normalised, double radius_rad);
+  /// Whether the bearing of p_cam (cam frame, any range > 0) lies within the radius of some feature's ray. The
+  /// radius is widened by 1e-4 rad so that float rounding never drops a neighbour at its edge.
+  bool Contains(const Eigen::Vector3f& p_cam) const {
+    return rays_.rows() > 0 && (rays_ * p_cam).maxCoeff() >= min_cos_ * p_cam.norm();
+  }
+
+ private:
+  Eigen::Matrix<float, Eigen::Dynamic, 3> rays_;  ///< the features' unit bearings, one per row
+  float min_cos_ = 1.0f;
+};
+
 /// Why a triangulation failed (kValid when it did not).
 enum class TriangulationStatus {
   kValid,

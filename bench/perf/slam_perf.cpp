@@ -158,7 +158,7 @@ void PrintSlamBench(const SlamBenchOptions& o, const SlamBenchResult& r, std::os
   char line[256];
   os << "SLAM core: scene " << o.scene << ", carrier " << o.carrier << ", " << o.duration_s << " s simulated (seed "
      << o.seed << "), " << o.repetitions << " repetition(s), " << o.threads << " thread(s)"
-     << (o.camera ? ", camera fused (+1 tracker thread)" : "") << "\n";
+     << (o.camera ? ", camera fused (+2 threads: frame decoder, tracker)" : "") << "\n";
   std::snprintf(line, sizeof(line), "scans %zu, median %zu points per scan, data %.2f s\n", r.scans,
                 r.points_per_scan, r.data_s);
   os << line << "stage            median [ms]   p90 [ms]\n";

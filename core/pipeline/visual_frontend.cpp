@@ -48,7 +48,10 @@ VisualFrontEnd::VisualFrontEnd(const VisualConfig& config, const RigCalib& calib
       landmarks_(config.landmarks, CameraExtrinsic(calib), 0.5 * (calib.camera.fx_px + calib.camera.fy_px)) {
   std::string error;
   ROTOLIDAR_CHECK(config.Validate(&error), error);
-  if (config.track_in_thread) worker_ = std::thread([this] { WorkerLoop(); });
+  if (config.track_in_thread) {
+    decoder_ = std::thread([this] { DecodeLoop(); });
+    tracker_thread_ = std::thread([this] { TrackLoop(); });
+  }
 }
 
 VisualFrontEnd::~VisualFrontEnd() {
@@ -56,8 +59,10 @@ VisualFrontEnd::~VisualFrontEnd() {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
   }
-  work_cv_.notify_all();
-  if (worker_.joinable()) worker_.join();
+  decode_cv_.notify_all();
+  track_cv_.notify_all();
+  if (decoder_.joinable()) decoder_.join();
+  if (tracker_thread_.joinable()) tracker_thread_.join();
 }
 
 bool VisualFrontEnd::WantsFrame(Seconds t_s) const {
@@ -75,47 +80,64 @@ void VisualFrontEnd::Track(const CameraFrameRef& ref) {
 
 void VisualFrontEnd::Enqueue(Pending pending) {
   last_tracked_s_ = pending.t_s();
-  if (!worker_.joinable()) return TrackNow(std::move(pending));
+  if (!decoder_.joinable()) return TrackNow(std::move(pending));
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(std::move(pending));
+    in_flight_.push_back(pending.t_s());
+    decode_queue_.push_back(std::move(pending));
   }
-  work_cv_.notify_one();
+  decode_cv_.notify_one();
 }
 
-void VisualFrontEnd::WorkerLoop() {
+void VisualFrontEnd::DecodeLoop() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    work_cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+    decode_cv_.wait(lock, [&] { return stop_ || !decode_queue_.empty(); });
     if (stop_) return;
-    Pending pending = std::move(queue_.front());
-    queue_.pop_front();
-    busy_ = true;
-    busy_t_s_ = pending.t_s();
+    Pending pending = std::move(decode_queue_.front());
+    decode_queue_.pop_front();
+    lock.unlock();
+    Decode(&pending);
+    lock.lock();
+    track_queue_.push_back(std::move(pending));
+    track_cv_.notify_one();
+  }
+}
+
+void VisualFrontEnd::TrackLoop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    track_cv_.wait(lock, [&] { return stop_ || !track_queue_.empty(); });
+    if (stop_) return;
+    Pending pending = std::move(track_queue_.front());
+    track_queue_.pop_front();
     lock.unlock();
     TrackNow(std::move(pending));
     lock.lock();
-    busy_ = false;
+    in_flight_.pop_front();
     idle_cv_.notify_all();
   }
 }
 
 void VisualFrontEnd::WaitForTracking(Seconds t_limit_s) {
-  if (!worker_.joinable()) return;
+  if (!decoder_.joinable()) return;
   std::unique_lock<std::mutex> lock(mutex_);
-  idle_cv_.wait(lock, [&] {
-    return !(busy_ && busy_t_s_ <= t_limit_s) && (queue_.empty() || queue_.front().t_s() > t_limit_s);
-  });
+  idle_cv_.wait(lock, [&] { return in_flight_.empty() || in_flight_.front() > t_limit_s; });
+}
+
+void VisualFrontEnd::Decode(Pending* pending) {
+  if (!pending->ref) return;
+  if (Status s = LoadCameraFrame(*pending->ref, &pending->frame); !s) {
+    LOG_WARN("camera frame at " << pending->ref->t_s << " s: " << s.message);
+    pending->unreadable = true;
+  }
+  pending->ref.reset();
 }
 
 void VisualFrontEnd::TrackNow(Pending pending) {
-  CameraFrame& frame = pending.frame;
-  if (pending.ref) {
-    if (Status s = LoadCameraFrame(*pending.ref, &frame); !s) {
-      LOG_WARN("camera frame at " << pending.ref->t_s << " s: " << s.message);
-      return;
-    }
-  }
+  Decode(&pending);
+  if (pending.unreadable) return;
+  const CameraFrame& frame = pending.frame;
   const visual::FeatureTrackResult r = tracker_.Track(frame, calib_.camera);
   if (!r.ok) {
     LOG_WARN("camera frame at " << frame.t_s << " s not tracked: " << r.message);

@@ -10,8 +10,9 @@
 // feature's tracked velocity on the normalised plane (VINS-Mono's time-offset model).
 // Frames: T_world_base estimates of the estimator; RigCalib's T_base_cam; observations are undistorted
 // normalised coordinates of the camera at t_s.
-// Threads (track_in_thread): frames are decoded and tracked in one worker thread while the estimator's thread
-// handles the LiDAR (LVI-SAM runs its feature tracker as a node of its own); ObservationsAt first waits until
+// Threads (track_in_thread): frames are decoded in one worker thread and tracked in another while the estimator's
+// thread handles the LiDAR (LVI-SAM runs its feature tracker as a node of its own; decoding a recording's PNG costs
+// more than tracking the frame, and the two stages overlap); ObservationsAt first waits until
 // every frame handed over that it may choose (within max_image_offset_s of its time) is tracked and ignores any
 // tracked beyond, so the results do not depend on the threads' timing.
 // Ownership: owns the tracker, its worker, its recent results, the depth cloud and the landmarks (the window only
@@ -50,7 +51,8 @@ struct VisualConfig {
   /// Frames nearer than 0.9 / max_tracking_rate_hz to the last tracked one are skipped [Hz] (their decoding too:
   /// Estimator::WantsCameraFrame). 15 Hz tracks every other frame of a 30 Hz camera: KLT's 3-level pyramid
   /// follows ~80 px per step, and a 1 rad/s handheld turn moves features ~30 px in 1/15 s. 0 (default): every
-  /// frame: on clean_street 60 s (typical, seed 1) 15 Hz tracking raised the ATE from 0.12 to 0.18 m.
+  /// frame. 15 Hz runs ~1.3x faster, but raised the median ATE of clean_street 30 s (typical, seeds 1-5) by 5 %
+  /// and left the lab slightly worse than LiDAR-inertial alone (docs/visual.md, "Tracking rate").
   double max_tracking_rate_hz = 0.0;
   /// LiDAR points of the last this many seconds give new landmarks their depth [s]: 2.5 s is one rotor turn at
   /// 2.6 rad/s, so the camera's whole view has been swept.
@@ -62,7 +64,7 @@ struct VisualConfig {
   /// 0.14 rad/s turn over the cloud's 2.5 s; a rotary scan's ~15 k points over 2.5 s cost ~15 ms per state to
   /// project, the ~20 % in view ~3 ms.
   double depth_view_margin_rad = 0.35;
-  /// Decode and track frames in a worker thread (see above); off: in the caller's thread. Same results.
+  /// Decode and track frames in two worker threads (see above); off: in the caller's thread. Same results.
   bool track_in_thread = true;
   bool Validate(std::string* error) const;
 };
@@ -113,12 +115,15 @@ class VisualFrontEnd {
   struct Pending {  ///< a frame handed over: decoded (frame.image) or on disk (ref)
     CameraFrame frame;
     std::optional<CameraFrameRef> ref;
+    bool unreadable = false;  ///< its image could not be decoded (logged); it is skipped
     Seconds t_s() const { return ref ? ref->t_s : frame.t_s; }
   };
   void Enqueue(Pending pending);
-  void TrackNow(Pending pending);  ///< decode, track, keep the result (worker, or caller without one)
+  static void Decode(Pending* pending);  ///< loads a frame on disk into frame.image; marks it unreadable on failure
+  void TrackNow(Pending pending);  ///< decode if still on disk, track, keep the result
   void WaitForTracking(Seconds t_limit_s);  ///< until every frame handed over up to t_limit_s is tracked
-  void WorkerLoop();
+  void DecodeLoop();
+  void TrackLoop();
   /// The depth of each feature without a landmark (NaN where the LiDAR gives none).
   std::vector<double> LidarDepths(const std::vector<Eigen::Vector2d>& normalized, const Pose3& T_world_cam,
                                   int* valid);
@@ -131,14 +136,15 @@ class VisualFrontEnd {
   std::deque<DepthScan> depth_cloud_;
   std::optional<Seconds> last_tracked_s_;  ///< the last frame handed over (caller's thread)
   std::optional<Seconds> last_state_s_;  ///< the previous ObservationsAt's t_s
-  // recent_ (declared above) is written by TrackNow (the worker) and copied by ObservationsAt, both under mutex_.
-  // The worker and its queue (guarded by mutex_).
+  // The two workers (track_in_thread): frames pass the decoder, then the tracker, in the order handed over, so the
+  // oldest frame not yet tracked is in_flight_.front(). recent_ (declared above) is written by TrackNow (the
+  // tracker) and copied by ObservationsAt, both under mutex_, which guards all of these.
   std::mutex mutex_;
-  std::condition_variable work_cv_, idle_cv_;
-  std::deque<Pending> queue_;
-  bool busy_ = false, stop_ = false;
-  Seconds busy_t_s_ = 0.0;  ///< the time of the frame the worker is tracking
-  std::thread worker_;
+  std::condition_variable decode_cv_, track_cv_, idle_cv_;
+  std::deque<Pending> decode_queue_, track_queue_;
+  std::deque<Seconds> in_flight_;  ///< times of the frames handed over and not yet tracked, oldest first
+  bool stop_ = false;
+  std::thread decoder_, tracker_thread_;
 };
 
 }  // namespace rotolidar

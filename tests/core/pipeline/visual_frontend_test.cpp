@@ -1,4 +1,4 @@
-// The estimator's camera path: tracking in the worker thread (frames decoded there from disk, or handed over
+// The estimator's camera path: tracking in the worker threads (frames decoded there from disk, or handed over
 // decoded) gives exactly the observations of tracking in the caller's thread, whatever the worker's timing.
 #include <filesystem>
 #include <string>

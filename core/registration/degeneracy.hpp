@@ -37,7 +37,10 @@ struct DegeneracyConfig {
   /// when it moves the matched points by at most weak_gate_m RMS along the direction (|v^T G delta|), otherwise
   /// the direction is treated as degenerate (remapped; the prior / IMU keeps it).
   double weak_eigenvalue = 0.05;
-  double weak_gate_m = 0.03;  ///< [m] RMS point motion along a weak direction, guess -> solution
+  /// [m] RMS point motion along a weak direction, guess -> solution. 0.1: a person's trail in the map pulled an
+  /// axis by 5-30 cm per scan, while an IMU-held axis may drift past a few cm during a weak stretch and must still
+  /// be corrected when the LiDAR sees it again (docs/registration.md, 'Degeneracy').
+  double weak_gate_m = 0.1;
   bool Validate(std::string* error) const;  ///< false with the offending field named in *error
 };
 

@@ -21,6 +21,7 @@ EstimatorConfig ResolveFromCalib(const EstimatorConfig& config, const RigCalib& 
   const KeyframePolicy policy = RotaryKeyframePolicy(calib, c.local_map);
   if (c.keyframe_every_scans == kDeriveFromCalib) c.keyframe_every_scans = policy.every_scans;
   if (c.initial_keyframes == kDeriveFromCalib) c.initial_keyframes = policy.initial_keyframes;
+  if (c.visual.enabled) c.registration.degeneracy.weak_gate_m = c.visual.registration_weak_gate_m;
   return c;
 }
 

@@ -103,7 +103,8 @@ struct EstimatorConfig {
 };
 
 /// The config with every derived value resolved from the calibration (what the Estimator runs with and what a
-/// run writes as its resolved slam_config.yaml).
+/// run writes as its resolved slam_config.yaml). With the camera fused (visual.enabled), the registration's
+/// weak-direction gate becomes visual.registration_weak_gate_m.
 EstimatorConfig ResolveFromCalib(const EstimatorConfig& config, const RigCalib& calib);
 
 }  // namespace rotolidar

@@ -196,6 +196,7 @@ void Visit(V& v, VisualConfig& c) {
   v("enabled", &c.enabled), v("max_image_offset_s", &c.max_image_offset_s), v("depth_cloud_s", &c.depth_cloud_s);
   v("depth_cloud_max_range_m", &c.depth_cloud_max_range_m), v("max_tracking_rate_hz", &c.max_tracking_rate_hz);
   v("depth_view_margin_rad", &c.depth_view_margin_rad), v("track_in_thread", &c.track_in_thread);
+  v("registration_weak_gate_m", &c.registration_weak_gate_m);
   v("tracker", &c.tracker), v("landmarks", &c.landmarks), v("depth", &c.depth);
 }
 

@@ -36,6 +36,8 @@ bool VisualConfig::Validate(std::string* error) const {
   if (!(depth_cloud_max_range_m > 0.0)) return FailValidation(error, "visual.depth_cloud_max_range_m must be > 0");
   if (!(max_tracking_rate_hz >= 0.0) || !std::isfinite(max_tracking_rate_hz))
     return FailValidation(error, "visual.max_tracking_rate_hz must be >= 0");
+  if (!(registration_weak_gate_m > 0.0) || !std::isfinite(registration_weak_gate_m))
+    return FailValidation(error, "visual.registration_weak_gate_m must be > 0");
   if (!(depth_view_margin_rad >= 0.0 && depth_view_margin_rad < 1.0))
     return FailValidation(error, "visual.depth_view_margin_rad must be in [0, 1)");
   return true;

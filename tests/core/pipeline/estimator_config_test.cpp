@@ -62,5 +62,20 @@ TEST(ResolveFromCalib, DerivesMarkedValuesAndKeepsExplicitOnes) {
   EXPECT_NE(error.find("keyframe_every_scans"), std::string::npos) << error;
 }
 
+// The registration's weak-direction gate is the LiDAR-inertial one unless the camera is fused.
+TEST(ResolveFromCalib, TheCameraSetsTheWeakDirectionGate) {
+  const RigCalib calib = Rotary(2.6, 600);
+  EstimatorConfig config;
+  config.registration.degeneracy.weak_gate_m = 0.08;
+  config.visual.registration_weak_gate_m = 0.02;
+  EXPECT_EQ(ResolveFromCalib(config, calib).registration.degeneracy.weak_gate_m, 0.08);
+  config.visual.enabled = true;
+  EXPECT_EQ(ResolveFromCalib(config, calib).registration.degeneracy.weak_gate_m, 0.02);
+  config.visual.registration_weak_gate_m = 0.0;
+  std::string error;
+  EXPECT_FALSE(config.Validate(&error));
+  EXPECT_NE(error.find("visual.registration_weak_gate_m"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace rotolidar

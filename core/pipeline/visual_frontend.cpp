@@ -1,6 +1,7 @@
 #include "core/pipeline/visual_frontend.hpp"
 
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <limits>
 
@@ -91,34 +92,35 @@ void VisualFrontEnd::Enqueue(Pending pending) {
   decode_cv_.notify_one();
 }
 
-void VisualFrontEnd::DecodeLoop() {
+// One stage of the pipeline: takes the frames of `queue` in order, runs `work` on each outside the lock and
+// `done` under it.
+void VisualFrontEnd::StageLoop(std::condition_variable& cv, std::deque<Pending>& queue,
+                               const std::function<void(Pending&)>& work, const std::function<void(Pending&)>& done) {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    decode_cv_.wait(lock, [&] { return stop_ || !decode_queue_.empty(); });
+    cv.wait(lock, [&] { return stop_ || !queue.empty(); });
     if (stop_) return;
-    Pending pending = std::move(decode_queue_.front());
-    decode_queue_.pop_front();
+    Pending pending = std::move(queue.front());
+    queue.pop_front();
     lock.unlock();
-    Decode(&pending);
+    work(pending);
     lock.lock();
-    track_queue_.push_back(std::move(pending));
-    track_cv_.notify_one();
+    done(pending);
   }
 }
 
+void VisualFrontEnd::DecodeLoop() {
+  StageLoop(decode_cv_, decode_queue_, [](Pending& p) { Decode(&p); }, [this](Pending& p) {
+    track_queue_.push_back(std::move(p));
+    track_cv_.notify_one();
+  });
+}
+
 void VisualFrontEnd::TrackLoop() {
-  std::unique_lock<std::mutex> lock(mutex_);
-  while (true) {
-    track_cv_.wait(lock, [&] { return stop_ || !track_queue_.empty(); });
-    if (stop_) return;
-    Pending pending = std::move(track_queue_.front());
-    track_queue_.pop_front();
-    lock.unlock();
-    TrackNow(std::move(pending));
-    lock.lock();
+  StageLoop(track_cv_, track_queue_, [this](Pending& p) { TrackNow(std::move(p)); }, [this](Pending&) {
     in_flight_.pop_front();
     idle_cv_.notify_all();
-  }
+  });
 }
 
 void VisualFrontEnd::WaitForTracking(Seconds t_limit_s) {

@@ -19,6 +19,7 @@
 // points at them). Thread safety: every public member is for one caller thread (the estimator's).
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -128,6 +129,8 @@ class VisualFrontEnd {
   static void Decode(Pending* pending);  ///< loads a frame on disk into frame.image; marks it unreadable on failure
   void TrackNow(Pending pending);  ///< decode if still on disk, track, keep the result
   void WaitForTracking(Seconds t_limit_s);  ///< until every frame handed over up to t_limit_s is tracked
+  void StageLoop(std::condition_variable& cv, std::deque<Pending>& queue, const std::function<void(Pending&)>& work,
+                 const std::function<void(Pending&)>& done);
   void DecodeLoop();
   void TrackLoop();
   /// The depth of each feature without a landmark (NaN where the LiDAR gives none).

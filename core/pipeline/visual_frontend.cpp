@@ -78,15 +78,18 @@ void VisualFrontEnd::Track(const CameraFrame& frame) {
 }
 
 void VisualFrontEnd::Track(const CameraFrameRef& ref) {
-  if (WantsFrame(ref.t_s)) Enqueue({CameraFrame{}, ref});
+  if (!WantsFrame(ref.t_s)) return;
+  CameraFrame frame;
+  frame.t_s = ref.t_s;
+  Enqueue({frame, ref});
 }
 
 void VisualFrontEnd::Enqueue(Pending pending) {
-  last_tracked_s_ = pending.t_s();
+  last_tracked_s_ = pending.frame.t_s;
   if (!decoder_.joinable()) return TrackNow(std::move(pending));
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    in_flight_.push_back(pending.t_s());
+    in_flight_.push_back(pending.frame.t_s);
     decode_queue_.push_back(std::move(pending));
   }
   decode_cv_.notify_one();
@@ -132,7 +135,7 @@ void VisualFrontEnd::WaitForTracking(Seconds t_limit_s) {
 void VisualFrontEnd::Decode(Pending* pending) {
   if (!pending->ref) return;
   if (Status s = LoadCameraFrame(*pending->ref, &pending->frame); !s) {
-    LOG_WARN("camera frame at " << pending->ref->t_s << " s: " << s.message);
+    LOG_WARN("camera frame at " << pending->frame.t_s << " s: " << s.message);
     pending->unreadable = true;
   }
   pending->ref.reset();

@@ -119,11 +119,10 @@ class VisualFrontEnd {
     Seconds t_s;
     std::vector<Eigen::Vector3f> points_world;
   };
-  struct Pending {  ///< a frame handed over: decoded (frame.image) or on disk (ref)
+  struct Pending {  ///< a frame handed over: decoded (frame.image) or on disk (ref; frame.t_s set, image empty)
     CameraFrame frame;
     std::optional<CameraFrameRef> ref;
     bool unreadable = false;  ///< its image could not be decoded (logged); it is skipped
-    Seconds t_s() const { return ref ? ref->t_s : frame.t_s; }
   };
   void Enqueue(Pending pending);
   static void Decode(Pending* pending);  ///< loads a frame on disk into frame.image; marks it unreadable on failure

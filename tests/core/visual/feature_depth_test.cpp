@@ -341,8 +341,10 @@ TEST(LidarDepth, RayNeighbourhoodKeepsEveryNeighbour) {
   auto near_points = [&](double radius_deg) {
     const RayNeighbourhood hood(features, radius_deg * kDeg);
     std::vector<Eigen::Vector3d> kept;
-    for (const Eigen::Vector3d& p : scan)
-      if (hood.Contains((T_cam_lidar * p).cast<float>())) kept.push_back(T_cam_lidar * p);
+    for (const Eigen::Vector3d& p : scan) {
+      const Eigen::Vector3d p_cam = T_cam_lidar * p;
+      if (hood.Contains(p_cam.cast<float>())) kept.push_back(p_cam);
+    }
     return kept;
   };
   const std::vector<Eigen::Vector3d> near = near_points(config.search_radius_deg);

@@ -102,23 +102,40 @@ void MarkOccluded(const Context& ctx, const Ring& ring, std::vector<uint8_t>* oc
   }
 }
 
-/// LOAM's beam-parallel rule, noise-robust: the incidence from the range slope over N steps, on both sides.
-bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
+/// tan of the surface's incidence from the range slope over N steps on each side of position i: the central
+/// difference (the mean of the two sides' slopes) for the noise gate, the smaller side for the beam-parallel rule
+/// (a corner with one face square to the beam is not beam-parallel). Only for positions with a full window.
+struct IncidenceSlopes {
+  double mean = 0.0, min = 0.0;
+};
+IncidenceSlopes TanIncidence(const Context& ctx, const Ring& ring, int i) {
   const int n_side = ctx.config.neighbours;
-  const double tan_max = ctx.tan_max_incidence;
   const float r_i = ring.range[i], az_i = ring.az[i];
+  double t[2];
+  int k = 0;
   for (const int q : {i - n_side, i + n_side}) {
     const double gamma_rad = (q < i ? StepDeg(ring.az[q], az_i) : StepDeg(az_i, ring.az[q])) *
                              kDegToRad;  // angle between the rays (ignores cos(elevation) <= 3.5 %)
-    if (std::abs(double(ring.range[q]) - double(r_i)) <= tan_max * r_i * gamma_rad) return false;
+    t[k++] = std::abs(double(ring.range[q]) - double(r_i)) / (r_i * gamma_rad);
   }
-  return true;
+  return {0.5 * (t[0] + t[1]), std::min(t[0], t[1])};
 }
 
-/// The edge threshold at range r [m]: the fixed Eq. 3 threshold or the noise gate, whichever is higher.
-double EdgeThresholdAt(const Context& ctx, float range_m) {
+/// LOAM's beam-parallel rule, noise-robust: the incidence from the range slope over N steps, on both sides.
+bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
+  return TanIncidence(ctx, ring, i).min > ctx.tan_max_incidence;
+}
+
+/// The edge threshold of position i: the fixed Eq. 3 threshold or the noise gate at its range and incidence,
+/// whichever is higher. The range sigma grows as 1 / max(cos(incidence), min_cos)^exponent.
+double EdgeThresholdAt(const Context& ctx, const Ring& ring, int i) {
   const FeatureConfig& cfg = ctx.config;
-  const double sigma_c = ctx.sigma_c_numerator / (2.0 * cfg.neighbours * range_m);
+  double sigma_c = ctx.sigma_c_numerator / (2.0 * cfg.neighbours * ring.range[i]);
+  if (cfg.range_sigma_incidence_exponent > 0.0 && sigma_c > 0.0 && !std::isnan(ring.c[i])) {
+    const double t = TanIncidence(ctx, ring, i).mean;
+    const double cos_inc = std::max(cfg.range_sigma_min_cos, 1.0 / std::sqrt(1.0 + t * t));
+    sigma_c /= cfg.range_sigma_incidence_exponent == 1.0 ? cos_inc : std::pow(cos_inc, cfg.range_sigma_incidence_exponent);
+  }
   return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
 }
 
@@ -167,7 +184,7 @@ void AnalyseRing(Context* ctx, Ring* ring) {
   std::vector<uint8_t> occluded(n, 0);
   if (cfg.reject_occluded) MarkOccluded(*ctx, *ring, &occluded);
   for (int i = 0; i < n; ++i) {
-    ring->sharp[i] = ring->c[i] > EdgeThresholdAt(*ctx, ring->range[i]);  // false for NaN
+    ring->sharp[i] = ring->c[i] > cfg.edge_threshold && ring->c[i] > EdgeThresholdAt(*ctx, *ring, i);  // NaN: false
     FeatureLabel& label = ctx->labels[ring->index[i]];
     if (std::isnan(ring->c[i])) label = FeatureLabel::kNoWindow;
     else if (occluded[i]) label = FeatureLabel::kOccluded;
@@ -330,6 +347,10 @@ bool FeatureConfig::Validate(std::string* error) const {
     return fail("range_sigma_m", "finite and >= 0", range_sigma_m);
   if (!(edge_min_snr >= 0.0) || !std::isfinite(edge_min_snr))
     return fail("edge_min_snr", "finite and >= 0", edge_min_snr);
+  if (!(range_sigma_incidence_exponent >= 0.0) || !(range_sigma_incidence_exponent <= 10.0))
+    return fail("range_sigma_incidence_exponent", "in [0, 10]", range_sigma_incidence_exponent);
+  if (!(range_sigma_min_cos > 0.0) || !(range_sigma_min_cos <= 1.0))
+    return fail("range_sigma_min_cos", "in (0, 1]", range_sigma_min_cos);
   if (threads < 0) return fail("threads", ">= 0", threads);
   return true;
 }

@@ -36,6 +36,13 @@ struct FeatureConfig {
   /// 3 with 1 cm would be A-LOAM's unnormalised |sum|^2 > 0.1 m^2 rule; 5 keeps noise out of the edge set on
   /// the rotary rig's near-range returns (docs/features.md).
   double edge_min_snr = 5.0;
+  /// The gate's sigma grows on oblique surfaces: sigma_r / max(cos(incidence), range_sigma_min_cos)^exponent,
+  /// the incidence from the central difference of the range over +-N steps. The beam's footprint stretches by
+  /// 1/cos on an oblique surface and its echo spreads in range with it; the real VLP-16 capture's noise grows
+  /// faster still (docs/lidar_model.md). Without it, range noise on oblique walls passes the gate as edges that
+  /// pull registration along weakly observed axes (docs/features.md, "Oblique surfaces"). 0 = one sigma for all.
+  double range_sigma_incidence_exponent = 1.0;
+  double range_sigma_min_cos = 0.26;  ///< cos(75 deg): the beam-parallel rule rejects anything more oblique
   /// Consecutive same-ring points farther apart in azimuth are not neighbours (dropouts, the scan seam): no window
   /// crosses such a gap, no occlusion is declared across it. 2.5x the step at the VLP-16's fastest 1200 rpm.
   double max_neighbour_step_deg = 1.0;

@@ -46,6 +46,8 @@ void Visit(V& v, FeatureConfig& c) {
   v("planar_voxel_m", &c.planar_voxel_m);
   v("neighbours", &c.neighbours), v("edge_threshold", &c.edge_threshold), v("planar_threshold", &c.planar_threshold);
   v("range_sigma_m", &c.range_sigma_m), v("edge_min_snr", &c.edge_min_snr);
+  v("range_sigma_incidence_exponent", &c.range_sigma_incidence_exponent);
+  v("range_sigma_min_cos", &c.range_sigma_min_cos);
   v("max_neighbour_step_deg", &c.max_neighbour_step_deg), v("reject_occluded", &c.reject_occluded);
   v("occlusion_min_jump_m", &c.occlusion_min_jump_m), v("occlusion_jump_ratio", &c.occlusion_jump_ratio);
   v("reject_beam_parallel", &c.reject_beam_parallel);

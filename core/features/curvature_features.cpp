@@ -102,28 +102,29 @@ void MarkOccluded(const Context& ctx, const Ring& ring, std::vector<uint8_t>* oc
   }
 }
 
-/// tan of the surface's incidence from the range slope over N steps on each side of position i: the central
-/// difference (the mean of the two sides' slopes) for the noise gate, the smaller side for the beam-parallel rule
-/// (a corner with one face square to the beam is not beam-parallel). Only for positions with a full window.
+/// tan of the surface's incidence from the range slope over N steps on each side of position i: the smaller
+/// side's |slope| for the beam-parallel rule (a corner with one face square to the beam is not beam-parallel), the
+/// mean of the two sides' |slope| for the noise gate. The mean reads a corner between two oblique faces as oblique,
+/// and it is: the returns on both faces are noisier. (The signed central difference, which cancels at corners,
+/// kept 4x more noise edges on the twin's walls and cost ATE; docs/features.md, "Oblique surfaces".)
+/// Only for positions with a full window.
 struct IncidenceSlopes {
-  double mean = 0.0, min = 0.0;
+  double mean = 0.0, min_side = 0.0;
 };
 IncidenceSlopes TanIncidence(const Context& ctx, const Ring& ring, int i) {
   const int n_side = ctx.config.neighbours;
-  const float r_i = ring.range[i], az_i = ring.az[i];
-  double t[2];
-  int k = 0;
-  for (const int q : {i - n_side, i + n_side}) {
-    const double gamma_rad = (q < i ? StepDeg(ring.az[q], az_i) : StepDeg(az_i, ring.az[q])) *
-                             kDegToRad;  // angle between the rays (ignores cos(elevation) <= 3.5 %)
-    t[k++] = std::abs(double(ring.range[q]) - double(r_i)) / (r_i * gamma_rad);
-  }
-  return {0.5 * (t[0] + t[1]), std::min(t[0], t[1])};
+  const double r_i = ring.range[i];
+  // angles between the rays [rad] (ignore cos(elevation) <= 3.5 %)
+  const double g_before = StepDeg(ring.az[i - n_side], ring.az[i]) * kDegToRad;
+  const double g_after = StepDeg(ring.az[i], ring.az[i + n_side]) * kDegToRad;
+  const double t_before = std::abs(double(ring.range[i]) - double(ring.range[i - n_side])) / (r_i * g_before);
+  const double t_after = std::abs(double(ring.range[i + n_side]) - double(ring.range[i])) / (r_i * g_after);
+  return {0.5 * (t_before + t_after), std::min(t_before, t_after)};
 }
 
 /// LOAM's beam-parallel rule, noise-robust: the incidence from the range slope over N steps, on both sides.
 bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
-  return TanIncidence(ctx, ring, i).min > ctx.tan_max_incidence;
+  return TanIncidence(ctx, ring, i).min_side > ctx.tan_max_incidence;
 }
 
 /// The edge threshold of position i: the fixed Eq. 3 threshold or the noise gate at its range and incidence,

@@ -92,7 +92,9 @@ TEST(IncidenceGate, NoiseOnObliqueWallsIsNoEdge) {
     // stays below that (0-25 per seed), the flat one is 3.5-5.5x above it (280-430). The corners' faces lie at 30-60 deg, their returns 1.15-2x
     // noisier: the corners left out are those within 3 grown sigmas, which the flat gate drops at that noise too.
     EXPECT_GT(flat.elsewhere, 8 * std::max(1, grown.elsewhere));
-    if (&room == &kRoom) EXPECT_GE(3 * grown.at_corners, flat.at_corners);
+    if (&room == &kRoom) {
+      EXPECT_GE(3 * grown.at_corners, flat.at_corners);
+    }
   }
 }
 

@@ -89,8 +89,9 @@ TEST(IncidenceGate, NoiseOnObliqueWallsIsNoEdge) {
                 flat.at_corners, flat.elsewhere, grown.at_corners, grown.elsewhere);
     // Measured: corridor 53 / 1278 -> 0 / 2, room 163 / 838 -> 66 / 75 (of 192 corner rays). A 3-sigma gate
     // that knew every point's sigma would pass ~0.27 % of the 28,800 points, ~78 per seed: the grown gate
-    // stays below that (0-25 per seed), the flat one is 3.5-5.5x above it (280-430). The corners' faces lie at 30-60 deg, their returns 1.15-2x
-    // noisier: the corners left out are those within 3 grown sigmas, which the flat gate drops at that noise too.
+    // stays below that (0-25 per seed), the flat one is 3.5-5.5x above it (280-430). The corners' faces lie at
+    // 30-60 deg, their returns 1.15-2x noisier: the corners left out are those within 3 grown sigmas, which the
+    // flat gate drops at that noise too.
     EXPECT_GT(flat.elsewhere, 8 * std::max(1, grown.elsewhere));
     if (&room == &kRoom) {
       EXPECT_GE(3 * grown.at_corners, flat.at_corners);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/features/curvature_features.hpp"
+#include "core/wire/vlp16.hpp"
 
 namespace rotolidar::test {
 
@@ -17,6 +18,18 @@ inline FeatureConfig SeedFeatureConfig() {
   c.less_flat_voxel_m = 0.2;
   c.edge_min_snr = 3.0;
   return c;
+}
+
+/// The return of a synthetic 600 rpm VLP-16 revolution at firing sequence k and `ring` (elevation -15 + 2 ring
+/// deg), along unit ray d at range r_m, lidar = base frame.
+inline ScanPoint SyntheticReturn(const Eigen::Vector3d& d, double r_m, double az_deg, int ring, int k) {
+  ScanPoint p;
+  p.p_base = (d * r_m).cast<float>();
+  p.range_m = static_cast<float>(r_m);
+  p.azimuth_deg = static_cast<float>(az_deg);
+  p.ring = static_cast<uint8_t>(ring);
+  p.t_s = k * kVlp16SequencePeriodS + ring * kVlp16FiringPeriodS;
+  return p;
 }
 
 /// (ring, sector) -> count of points with one of the given labels, sectors of 360 / `sectors` degrees.

@@ -73,13 +73,7 @@ std::vector<ScanPoint> CastScan(const Scene& scene, uint64_t seed = 1) {
       double t = ExitDistance(scene.room, d);
       for (const Box& b : scene.solids) t = std::min(t, EntryDistance(b, d));
       const double r = t + scene.noise_sigma_m * rng.Normal();
-      ScanPoint p;
-      p.p_base = (d * r).cast<float>();
-      p.range_m = static_cast<float>(r);
-      p.azimuth_deg = static_cast<float>(az_deg);
-      p.ring = static_cast<uint8_t>(ring);
-      p.t_s = k * kVlp16SequencePeriodS + ring * kVlp16FiringPeriodS;
-      pts.push_back(p);
+      pts.push_back(test::SyntheticReturn(d, r, az_deg, ring, k));
     }
   }
   return pts;

@@ -44,13 +44,7 @@ std::vector<ScanPoint> Cast(const Room& room, double sigma0_m, uint64_t seed) {
       }
       const double cos_incidence = std::abs(d[axis]);  // the hit wall's normal is that axis
       const double r = t + sigma0_m / std::max(cos_incidence, 0.5) * rng.Normal();
-      ScanPoint p;
-      p.p_base = (d * r).cast<float>();
-      p.range_m = static_cast<float>(r);
-      p.azimuth_deg = static_cast<float>(az_deg);
-      p.ring = static_cast<uint8_t>(ring);
-      p.t_s = k * kVlp16SequencePeriodS + ring * kVlp16FiringPeriodS;
-      pts.push_back(p);
+      pts.push_back(test::SyntheticReturn(d, r, az_deg, ring, k));
     }
   }
   return pts;

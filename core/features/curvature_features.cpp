@@ -135,7 +135,8 @@ double EdgeThresholdAt(const Context& ctx, const Ring& ring, int i) {
   if (cfg.range_sigma_incidence_exponent > 0.0 && sigma_c > 0.0 && !std::isnan(ring.c[i])) {
     const double t = TanIncidence(ctx, ring, i).mean;
     const double cos_inc = std::max(cfg.range_sigma_min_cos, 1.0 / std::sqrt(1.0 + t * t));
-    sigma_c /= cfg.range_sigma_incidence_exponent == 1.0 ? cos_inc : std::pow(cos_inc, cfg.range_sigma_incidence_exponent);
+    const double k = cfg.range_sigma_incidence_exponent;
+    sigma_c /= k == 1.0 ? cos_inc : std::pow(cos_inc, k);
   }
   return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
 }

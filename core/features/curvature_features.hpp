@@ -37,7 +37,7 @@ struct FeatureConfig {
   /// the rotary rig's near-range returns (docs/features.md).
   double edge_min_snr = 5.0;
   /// The gate's sigma grows on oblique surfaces: sigma_r / max(cos(incidence), range_sigma_min_cos)^exponent,
-  /// the incidence from the central difference of the range over +-N steps. The beam's footprint stretches by
+  /// tan(incidence) the mean of the range slopes over N steps on both sides. The beam's footprint stretches by
   /// 1/cos on an oblique surface and its echo spreads in range with it; the real VLP-16 capture's noise grows
   /// faster still (docs/lidar_model.md). Without it, range noise on oblique walls passes the gate as edges that
   /// pull registration along weakly observed axes (docs/features.md, "Oblique surfaces"). 0 = one sigma for all.

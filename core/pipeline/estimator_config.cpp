@@ -22,6 +22,7 @@ EstimatorConfig ResolveFromCalib(const EstimatorConfig& config, const RigCalib& 
   if (c.keyframe_every_scans == kDeriveFromCalib) c.keyframe_every_scans = policy.every_scans;
   if (c.initial_keyframes == kDeriveFromCalib) c.initial_keyframes = policy.initial_keyframes;
   if (c.visual.enabled) c.registration.degeneracy.weak_gate_m = c.visual.registration_weak_gate_m;
+  else if (!c.use_imu) c.registration.degeneracy.weak_gate_m = c.lidar_only_weak_gate_m;
   return c;
 }
 
@@ -40,6 +41,8 @@ bool EstimatorConfig::Validate(std::string* error) const {
     return false;
   if (!(lidar_point_sigma_m > 0) || !std::isfinite(lidar_point_sigma_m))
     return fail("lidar_point_sigma_m must be > 0");
+  if (!(lidar_only_weak_gate_m > 0) || !std::isfinite(lidar_only_weak_gate_m))
+    return fail("lidar_only_weak_gate_m must be finite and > 0");
   if (keyframe_every_scans < 0 && keyframe_every_scans != kDeriveFromCalib)
     return fail("keyframe_every_scans must be >= 0 (or -1: derived from calib)");
   if (initial_keyframes < 0 && initial_keyframes != kDeriveFromCalib)

@@ -65,6 +65,10 @@ struct EstimatorConfig {
 
   /// Use the IMU when samples are fed (false: LiDAR-only with gyro-free constant-velocity deskew; an ablation).
   bool use_imu = true;
+  /// With use_imu false the registration's guess along a weak direction is the constant-twist extrapolation, which
+  /// no sensor holds: this replaces the weak-direction gate (registration.degeneracy.weak_gate_m) [m]. Wide enough
+  /// that only a broken solve is refused (why: docs/registration.md, "The gate without an IMU"). Finite, > 0.
+  double lidar_only_weak_gate_m = 3.0;
   /// Per-point residual sigma that turns the registration Hessian into the LiDAR factor's information [m]
   /// (InformationFromRegistration). It absorbs the correlation between points: larger = trust the scan less.
   double lidar_point_sigma_m = 0.05;

@@ -77,5 +77,22 @@ TEST(ResolveFromCalib, TheCameraSetsTheWeakDirectionGate) {
   EXPECT_NE(error.find("visual.registration_weak_gate_m"), std::string::npos) << error;
 }
 
+// Without the IMU the guess is the constant-twist extrapolation: the LiDAR-only gate replaces the weak-direction
+// gate (the camera's, when it is on, still wins).
+TEST(ResolveFromCalib, LidarOnlySetsTheWeakDirectionGate) {
+  const RigCalib calib = Rotary(2.6, 600);
+  EstimatorConfig config;
+  config.registration.degeneracy.weak_gate_m = 0.08;
+  config.lidar_only_weak_gate_m = 2.5;
+  config.use_imu = false;
+  EXPECT_EQ(ResolveFromCalib(config, calib).registration.degeneracy.weak_gate_m, 2.5);
+  config.use_imu = true;
+  EXPECT_EQ(ResolveFromCalib(config, calib).registration.degeneracy.weak_gate_m, 0.08);
+  config.lidar_only_weak_gate_m = 0.0;
+  std::string error;
+  EXPECT_FALSE(config.Validate(&error));
+  EXPECT_NE(error.find("lidar_only_weak_gate_m"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace rotolidar

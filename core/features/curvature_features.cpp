@@ -122,22 +122,13 @@ IncidenceSlopes TanIncidence(const Context& ctx, const Ring& ring, int i) {
   return {0.5 * (t_before + t_after), std::min(t_before, t_after)};
 }
 
-/// LOAM's beam-parallel rule, noise-robust: the incidence from the range slope over N steps, on both sides.
-bool IsBeamParallel(const Context& ctx, const Ring& ring, int i) {
-  return TanIncidence(ctx, ring, i).min_side > ctx.tan_max_incidence;
-}
-
-/// The edge threshold of position i: the fixed Eq. 3 threshold or the noise gate at its range and incidence,
-/// whichever is higher. The range sigma grows as 1 / max(cos(incidence), min_cos)^exponent.
-double EdgeThresholdAt(const Context& ctx, const Ring& ring, int i) {
+/// The edge threshold at range r [m] on a surface of incidence tan_incidence: the fixed Eq. 3 threshold or the
+/// noise gate, whichever is higher. The range sigma grows as 1 / max(cos(incidence), min_cos)^exponent.
+double EdgeThresholdAt(const Context& ctx, float range_m, double tan_incidence) {
   const FeatureConfig& cfg = ctx.config;
-  double sigma_c = ctx.sigma_c_numerator / (2.0 * cfg.neighbours * ring.range[i]);
-  if (cfg.range_sigma_incidence_exponent > 0.0 && sigma_c > 0.0 && !std::isnan(ring.c[i])) {
-    const double t = TanIncidence(ctx, ring, i).mean;
-    const double cos_inc = std::max(cfg.range_sigma_min_cos, 1.0 / std::sqrt(1.0 + t * t));
-    const double k = cfg.range_sigma_incidence_exponent;
-    sigma_c /= k == 1.0 ? cos_inc : std::pow(cos_inc, k);
-  }
+  const double cos_inc = std::max(cfg.range_sigma_min_cos, 1.0 / std::sqrt(1.0 + tan_incidence * tan_incidence));
+  const double sigma_c = ctx.sigma_c_numerator / (2.0 * cfg.neighbours * range_m) /
+                         std::pow(cos_inc, cfg.range_sigma_incidence_exponent);
   return std::max(cfg.edge_threshold, cfg.edge_min_snr * sigma_c);
 }
 
@@ -186,11 +177,18 @@ void AnalyseRing(Context* ctx, Ring* ring) {
   std::vector<uint8_t> occluded(n, 0);
   if (cfg.reject_occluded) MarkOccluded(*ctx, *ring, &occluded);
   for (int i = 0; i < n; ++i) {
-    ring->sharp[i] = ring->c[i] > cfg.edge_threshold && ring->c[i] > EdgeThresholdAt(*ctx, *ring, i);  // NaN: false
     FeatureLabel& label = ctx->labels[ring->index[i]];
-    if (std::isnan(ring->c[i])) label = FeatureLabel::kNoWindow;
-    else if (occluded[i]) label = FeatureLabel::kOccluded;
-    else if (cfg.reject_beam_parallel && IsBeamParallel(*ctx, *ring, i)) label = FeatureLabel::kBeamParallel;
+    ring->sharp[i] = 0;
+    if (std::isnan(ring->c[i])) {
+      label = FeatureLabel::kNoWindow;
+      continue;
+    }
+    const IncidenceSlopes slopes = TanIncidence(*ctx, *ring, i);  // once per point, for both rules
+    ring->sharp[i] = ring->c[i] > cfg.edge_threshold &&  // the gate is never below it: skip its cost
+                     ring->c[i] > EdgeThresholdAt(*ctx, ring->range[i], slopes.mean);
+    if (occluded[i]) label = FeatureLabel::kOccluded;
+    else if (cfg.reject_beam_parallel && slopes.min_side > ctx->tan_max_incidence)  // LOAM's beam-parallel rule
+      label = FeatureLabel::kBeamParallel;
     else label = FeatureLabel::kUnused;
   }
 }

@@ -184,7 +184,8 @@ ScanReport Estimator::ProcessBaseFrameScan(Seconds t_s, std::vector<ScanPoint> p
 // preprocess -> features -> register -> fuse -> map, shared by all entries.
 void Estimator::ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const Prediction& prediction,
                              ScanReport* report) {
-  const FeatureSet features = ExtractScanFeatures(t_s, std::move(points), report);
+  FeatureSet features = ExtractScanFeatures(t_s, std::move(points), report);
+  ScreenMovingFeatures(t_s, prediction.T_world_base, &features, report);
   Matrix6d information_base = Matrix6d::Zero();
   const Pose3 T_world_base_lidar = Register(features, prediction.T_world_base, report, &information_base);
   const Pose3 T_world_base = Fuse(t_s, T_world_base_lidar, information_base, prediction, report);
@@ -227,6 +228,35 @@ FeatureSet Estimator::ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> po
                       result.stats.num_less_flat};
   report->timings.features_ms = watch.ms();
   return std::move(result.features);
+}
+
+// Moving objects out of registration: the scan-side features standing where earlier scans saw free space (a
+// person walking into the view) are dropped before they are matched, judged at the predicted pose. The map side
+// (less_sharp / less_flat) is judged again at the registered pose when it enters the local map (UpdateMap).
+void Estimator::ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, FeatureSet* features,
+                                     ScanReport* report) const {
+  if (!free_space_ || !config_.free_space.screen_scan_features) return;
+  report->num_moving_scan_features = DropSeenThrough(*free_space_, t_s, T_world_base_guess, &features->edge) +
+                                     DropSeenThrough(*free_space_, t_s, T_world_base_guess, &features->planar);
+}
+
+size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
+                       pcl::PointCloud<pcl::PointXYZI>* cloud) {
+  const size_t before = cloud->size();
+  Eigen::Matrix3Xf p_world(3, Eigen::Index(before));
+  for (size_t i = 0; i < before; ++i) {
+    const pcl::PointXYZI& q = (*cloud)[i];
+    p_world.col(Eigen::Index(i)) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
+  }
+  std::vector<uint8_t> seen;
+  filter.SeenThroughBefore(t_s, p_world, &seen);
+  size_t kept = 0;
+  for (size_t i = 0; i < before; ++i)
+    if (!seen[i]) cloud->points[kept++] = cloud->points[i];
+  cloud->points.resize(kept);
+  cloud->width = uint32_t(cloud->size());
+  cloud->height = 1;
+  return before - cloud->size();
 }
 
 }  // namespace rotolidar

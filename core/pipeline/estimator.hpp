@@ -97,6 +97,9 @@ struct ScanReport {
   /// of the local map), and the dense-map points released at this scan (those of the scan delay_s earlier):
   /// how many were tested and how many were dynamic (kept out of the dense map).
   size_t num_dynamic_features = 0;
+  /// Scan-side features (edge + planar) dropped before registration because earlier scans saw through where
+  /// they stand at the predicted pose (free_space.screen_scan_features).
+  size_t num_moving_scan_features = 0;
   FreeSpaceCounts map_free_space;
   VisualScanReport visual;  ///< the camera path (config.visual.enabled; zeros otherwise)
   ScanTimings timings;
@@ -186,6 +189,8 @@ class Estimator {
   std::vector<ScanPoint> Deskew(const LidarScan& scan, const Prediction& prediction, ScanReport* report);
   /// Preprocess + features; keeps the preprocessed points in preprocessed_ (the dense map's input).
   FeatureSet ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report);
+  void ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, FeatureSet* features,
+                            ScanReport* report) const;
   /// Scan-to-map from the guess; *information_base = the LiDAR factor's information (zero: no usable result).
   bool HoldStaticStart(ScanReport* report);
   Pose3 Register(const FeatureSet& features, const Pose3& T_world_base_guess, ScanReport* report,

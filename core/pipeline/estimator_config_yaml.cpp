@@ -82,7 +82,7 @@ void Visit(V& v, FreeSpaceConfig& c) {
   v("enabled", &c.enabled), v("delay_s", &c.delay_s), v("window_s", &c.window_s);
   v("bins_per_face", &c.bins_per_face), v("margin_m", &c.margin_m), v("margin_per_m", &c.margin_per_m);
   v("min_later_through", &c.min_later_through), v("vote_every_scans", &c.vote_every_scans);
-  v("min_looked_bins", &c.min_looked_bins);
+  v("min_looked_bins", &c.min_looked_bins), v("screen_scan_features", &c.screen_scan_features);
 }
 
 }  // namespace rotolidar

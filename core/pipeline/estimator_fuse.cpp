@@ -268,30 +268,6 @@ Pose3 Estimator::Fuse(Seconds t_s, const Pose3& T_world_base_lidar, const Matrix
   return T_world_base;
 }
 
-namespace {
-
-/// Drops the points of `cloud` (base frame at T_world_base) that scans before t_s saw through; returns how many.
-size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
-                       pcl::PointCloud<pcl::PointXYZI>* cloud) {
-  const size_t before = cloud->size();
-  Eigen::Matrix3Xf p_world(3, Eigen::Index(before));
-  for (size_t i = 0; i < before; ++i) {
-    const pcl::PointXYZI& q = (*cloud)[i];
-    p_world.col(Eigen::Index(i)) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
-  }
-  std::vector<uint8_t> seen;
-  filter.SeenThroughBefore(t_s, p_world, &seen);
-  size_t kept = 0;
-  for (size_t i = 0; i < before; ++i)
-    if (!seen[i]) cloud->points[kept++] = cloud->points[i];
-  cloud->points.resize(kept);
-  cloud->width = uint32_t(cloud->size());
-  cloud->height = 1;
-  return before - cloud->size();
-}
-
-}  // namespace
-
 // A keyframe's map-side features into the local map, less those arriving where earlier scans saw free space
 // (moving objects); then the dense map.
 void Estimator::UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& T_world_base, ScanReport* report) {

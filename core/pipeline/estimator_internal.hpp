@@ -6,6 +6,7 @@
 
 #include "core/deskew/deskew.hpp"
 #include "core/imu/preintegration.hpp"
+#include "core/pipeline/free_space.hpp"
 #include "core/pipeline/estimator.hpp"
 
 namespace rotolidar {
@@ -39,5 +40,10 @@ struct Estimator::Prediction {
 std::optional<PreintegratedImu> PreintegrateSpan(const std::vector<ImuSample>& imu, Seconds t0_s, Seconds t1_s,
                                                  const Eigen::Vector3d& bias_gyro_radps,
                                                  const Eigen::Vector3d& bias_accel_mps2, const ImuNoise& noise);
+
+/// Drops the points of `cloud` (base frame at T_world_base, world [m]) that scans before t_s saw through (the
+/// free-space test's SeenThroughBefore: they stand where space was seen empty); returns how many.
+size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
+                       pcl::PointCloud<pcl::PointXYZI>* cloud);
 
 }  // namespace rotolidar

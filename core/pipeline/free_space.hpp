@@ -59,6 +59,10 @@ struct FreeSpaceConfig {
   /// Every this many scans of the window vote (a rotary rig's consecutive scans share half their band, so
   /// every other one sees nearly all a point's neighbours do, at half the cost).
   int vote_every_scans = 2;
+  /// Also drop the scan's own edge / planar features that stand where earlier scans saw free space, judged at
+  /// the predicted pose, before registration matches them (a person walking towards the rig is otherwise
+  /// matched against the walls it hides until its points are kept out of the map).
+  bool screen_scan_features = true;
   bool Validate(std::string* error) const;  ///< false with the offending field named in *error
 };
 

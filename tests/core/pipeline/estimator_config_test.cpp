@@ -15,7 +15,8 @@ RigCalib Rotary(double motor_speed_radps, double rpm) {
 }
 
 TEST(RotaryKeyframePolicy, FollowsTheRotorAnglePerScan) {
-  const LocalMapConfig map;  // 40 keyframes
+  LocalMapConfig map;
+  map.max_keyframes = 40;  // a small window, so that the cap shows
   struct Case {
     double speed_radps, rpm;
     int every, initial;
@@ -47,7 +48,7 @@ TEST(ResolveFromCalib, DerivesMarkedValuesAndKeepsExplicitOnes) {
   EXPECT_TRUE(config.Validate(&error)) << error;  // the markers are valid
   const EstimatorConfig derived = ResolveFromCalib(config, calib);
   EXPECT_EQ(derived.keyframe_every_scans, 4);
-  EXPECT_EQ(derived.initial_keyframes, 40);
+  EXPECT_EQ(derived.initial_keyframes, 48);  // 7.4 deg per scan: one turn, below the 160-keyframe window
   EXPECT_EQ(derived.features.range_sigma_m, 0.03);
   EXPECT_TRUE(derived.Validate(&error)) << error;
   config.keyframe_every_scans = 3;

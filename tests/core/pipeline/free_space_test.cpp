@@ -7,6 +7,7 @@
 #include <optional>
 #include <random>
 
+#include "core/pipeline/estimator_internal.hpp"
 #include "core/pipeline/free_space.hpp"
 
 namespace rotolidar {
@@ -165,6 +166,41 @@ TEST(FreeSpaceFilter, KeepsMovedBallOutAndRoomIn) {
   EXPECT_EQ(judged, 25u * Scan(std::nullopt).size());
   EXPECT_GE(dynamic, ball_a);
   EXPECT_LT(dynamic - ball_a, room / 1000) << "room points called dynamic";
+}
+
+// The registration-side screen (Estimator::ScreenMovingFeatures): of a new scan's cloud, the points standing where
+// earlier scans saw free space (the ball that just arrived at B) are dropped at the cloud's pose; the room's
+// points stay. The rig stands at a pose off the world origin, so a frame mix-up would misjudge the room.
+TEST(DropSeenThrough, DropsArrivalsKeepsTheRoom) {
+  FreeSpaceFilter filter(FreeSpaceConfig(), Eigen::Vector3d::Zero());
+  Pose3 T_world_base = Pose3::Identity();
+  T_world_base.translate(Eigen::Vector3d(4.0, -2.0, 0.3)).rotate(Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d a(3.0, 1.0, 0.0), b(-2.0, -2.5, 0.5);
+  for (int k = 0; k < 10; ++k) filter.AddScan(0.1 * k, T_world_base, Scan(a), 40.0);
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  size_t on_b = 0;
+  for (const ScanPoint& p : Scan(b)) {
+    if (OnBall(p.p_base.cast<double>(), a)) continue;  // where the ball was: uncertain (hidden, then not)
+    pcl::PointXYZI q;
+    q.x = p.p_base.x(), q.y = p.p_base.y(), q.z = p.p_base.z();
+    cloud.push_back(q);
+    on_b += OnBall(p.p_base.cast<double>(), b) ? 1 : 0;
+  }
+  const size_t before = cloud.size();
+  ASSERT_GT(on_b, 100u);
+  const size_t dropped = DropSeenThrough(filter, 1.0, T_world_base, &cloud);
+  EXPECT_EQ(cloud.size(), before - dropped);
+  size_t b_kept = 0;
+  for (const pcl::PointXYZI& q : cloud) b_kept += OnBall(Eigen::Vector3d(q.x, q.y, q.z), b) ? 1 : 0;
+  // Every arrival goes; of the room at most the sliver around the ball's outline that shares a 3x3 bin
+  // neighbourhood with the ball (as for KeepsMovedBallOutAndRoomIn).
+  EXPECT_EQ(b_kept, 0u) << "of " << on_b;
+  EXPECT_LT(dropped - on_b, (before - on_b) / 1000) << "room points dropped";
+  // At the wrong pose (the rig 1 m aside) walls stand where space was seen free: the screen is pose-sensitive.
+  Pose3 T_wrong = T_world_base;
+  T_wrong.translate(Eigen::Vector3d(0.0, 1.0, 0.0));
+  pcl::PointCloud<pcl::PointXYZI> again = cloud;
+  EXPECT_GT(DropSeenThrough(filter, 1.0, T_wrong, &again), 1000u);
 }
 
 TEST(FreeSpaceConfig, ValidateNamesTheField) {

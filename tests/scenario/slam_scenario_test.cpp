@@ -103,8 +103,8 @@ TEST(SlamScenario, LabHandheld) {
   ExpectHealthy(r, seconds);
   std::printf("lab: median weakest lambda %.4f\n", MedianWeakestLambda(r));
   // Typical realism over seeds 1-10 (bench/studies/scenario_seeds.yaml: `rotolidar study` runs these exact
-  // segments; study_seeds.csv; with the incidence-aware feature gate): median 0.0062 m, p90 0.0084 m, worst
-  // 0.0093 m; the bound is 2x the worst.
+  // segments; study_seeds.csv; with the incidence-aware feature gate and the 160-keyframe map): median
+  // 0.0062 m, p90 0.0086 m, worst 0.0095 m; the bound is 2x the worst.
   // Ideal realism (seed 1, 8 s: ~2.2 s at rest, ~6 m walked): 0.0109 m RMSE (0.0131 m with a keyframe every
   // scan, exact neighbour reuse and denser planar sets; 0.0143 m before the visibility check and 5 neighbours;
   // 0.0243 m without the static-start hold: the first bands drifted 3.8 deg). ~3x headroom. Frame, time or
@@ -132,8 +132,8 @@ TEST(SlamScenario, CorridorHandheld) {
   // feature gate: 95 / 87 / 95 of 173 (median weakest lambda 0.043 against the lab's 0.089), so the detector
   // sees the axis again; the bound is under half of that.
   EXPECT_GT(weak, 40u);
-  // Typical, seeds 1-10 (bench/studies/scenario_seeds.yaml; with the incidence-aware feature gate): median
-  // 0.0055 m, p90 0.0070 m, worst 0.0077 m; the bound is 2x the worst. Before that gate (one range sigma for
+  // Typical, seeds 1-10 (bench/studies/scenario_seeds.yaml; with the incidence-aware feature gate and the
+  // 160-keyframe map): median 0.0056 m, p90 0.0070 m, worst 0.0075 m; the bound is 2x the worst. Before that gate (one range sigma for
   // every return) the noise on the oblique walls passed as edges: median 0.0253 m, worst 0.0291 m, which fails.
   EXPECT_LT(r.ape.stats.rmse, 0.015);
 }
@@ -144,10 +144,10 @@ TEST(SlamScenario, ParkingHandheld) {
   const double seconds = 12.0;
   const ScenarioResult r = RunScenario("parking", seconds);
   ExpectHealthy(r, seconds);
-  // Typical realism, seeds 1-10 (bench/studies/scenario_seeds.yaml; with the incidence-aware feature gate):
-  // median 0.0140 m, p90 0.0228 m, worst 0.0231 m (0.0190 / 0.0251 / 0.0254 m before it; seeds 1-5 gave median
-  // 0.0469 m, worst 0.0672 m before the static hold lasted through the IMU initialisation); the bound is 1.7x
-  // the worst. Ideal realism
+  // Typical realism, seeds 1-10 (bench/studies/scenario_seeds.yaml; with the incidence-aware feature gate and
+  // the 160-keyframe map): median 0.0139 m, p90 0.0231 m, worst 0.0265 m (0.0190 / 0.0251 / 0.0254 m before the
+  // gate; seeds 1-5 gave median 0.0469 m, worst 0.0672 m before the static hold lasted through the IMU
+  // initialisation); the bound is 1.5x the worst. Ideal realism
   // (seed 1, 12 s: ~2.2 s at rest, then ~11 m walked): 0.0153 m RMSE (0.0346 m with a keyframe every
   // scan, exact neighbour reuse and denser planar sets; 0.0406 m with the full planar set; 3-5 cm lateral errors
   // in the first seconds after the static initialisation; the full 202 s loop: 0.015 m). the loop's goal
@@ -157,9 +157,10 @@ TEST(SlamScenario, ParkingHandheld) {
 
 // LiDAR-only (use_imu false) on the parking lot's first 12 s: the guess along the lot's weakly observed lateral
 // axis is the constant-twist extrapolation, so the weak-direction gate is lidar_only_weak_gate_m (3 m). Typical,
-// seeds 1-5 (`rotolidar slam R --out O --config F`, F = `use_imu: false`): 0.063 / 0.184 / 0.169 / 0.057 /
-// 0.067 m. With the IMU's 10 cm gate they diverged: 1.40 / 1.67 / 14.7 / 1.97 / 6.78 m. The bound is 1.6x the
-// worst seed and far below the divergence.
+// seeds 1-5 (`rotolidar slam R --out O --config F`, F = `use_imu: false`): 0.066 / 0.175 / 0.169 / 0.062 /
+// 0.070 m (160-keyframe map; 0.063 / 0.184 / 0.169 / 0.057 / 0.067 m with 40). With the IMU's 10 cm gate they
+// diverged: 1.40 / 1.67 / 14.7 / 1.97 / 6.78 m; with the scan-side free-space screen at the constant-twist
+// guess 3.64 m on seed 3. The bound is 1.7x the worst seed and far below the divergence.
 TEST(SlamScenario, ParkingLidarOnly) {
   EstimatorConfig config;
   config.use_imu = false;

@@ -6,8 +6,8 @@
 
 #include "core/deskew/deskew.hpp"
 #include "core/imu/preintegration.hpp"
-#include "core/pipeline/free_space.hpp"
 #include "core/pipeline/estimator.hpp"
+#include "core/pipeline/free_space.hpp"
 
 namespace rotolidar {
 

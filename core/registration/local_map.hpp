@@ -36,8 +36,9 @@ struct LocalMapConfig {
   /// Sliding window by count. 160: a rotary rig keys every other scan (EstimatorConfig::keyframe_every_scans),
   /// so 160 keyframes hold the last ~32 s (~13 rotor turns). Along an axis the scans see only weakly (the far
   /// end walls of a corridor) a map that remembers longer drifts less: corridor 40 s, typical, seeds 1-10,
-  /// median / p90 ATE 0.0269 / 0.0390 m with 40, 0.0237 / 0.0322 with 80, 0.0215 / 0.0325 with 160 (worst
-  /// 0.0343), 0.0229 / 0.0321 with 320; the other scenes move by -22 % to +8 %, the per-scan time by ~+5 %.
+  /// median / p90 / worst ATE 0.0269 / 0.0389 / 0.0493 m with 40, 0.0237 / 0.0326 / 0.0367 with 80, 0.0219 /
+  /// 0.0316 / 0.0474 with 100, 0.0215 / 0.0327 / 0.0343 with 160, 0.0229 / 0.0325 / 0.0363 with 320; the other
+  /// scenes move by -22 % to +8 %, the per-scan time by ~+5 %.
   int max_keyframes = 160;
   double max_distance_m = 80.0;      ///< keyframes farther than this from the newest keyframe are dropped [m]
   double edge_voxel_m = 0.2;         ///< voxel size of the map's edge cloud [m]

@@ -101,6 +101,7 @@ struct ScanReport {
   /// they stand at the predicted pose (free_space.screen_scan_features).
   size_t num_moving_scan_features = 0;
   FreeSpaceCounts map_free_space;
+  size_t map_points = 0;    ///< points in the dense map after this scan (its memory: ~24 B each plus the index)
   VisualScanReport visual;  ///< the camera path (config.visual.enabled; zeros otherwise)
   ScanTimings timings;
   Pose3 T_world_base = Pose3::Identity();  ///< at t_start_s
@@ -234,7 +235,9 @@ class Estimator {
   std::deque<CameraFrame> camera_frames_;  ///< the last second of kept frames (the loop closer's images)
   std::unique_ptr<SlidingWindow> window_;  ///< created at IMU initialisation (its gravity is in the world frame)
   Trajectory trajectory_;
-  std::deque<StampedPose> measured_poses_;  ///< the last two scans' mid-scan poses (constant-twist prediction)
+  /// Mid-scan poses for the constant-velocity prediction: the last two (with use_imu false: those of the last
+  /// lidar_only_velocity_window_s, at least two).
+  std::deque<StampedPose> measured_poses_;
   std::vector<Pose3> init_poses_imu_;      ///< T_world_imu of the LiDAR-only scans before IMU initialisation
   std::vector<Seconds> init_times_s_;
   std::vector<ScanPoint> preprocessed_;    ///< the current scan's preprocessed points (base at scan start)

@@ -23,6 +23,7 @@ EstimatorConfig ResolveFromCalib(const EstimatorConfig& config, const RigCalib& 
   if (c.initial_keyframes == kDeriveFromCalib) c.initial_keyframes = policy.initial_keyframes;
   if (c.visual.enabled) c.registration.degeneracy.weak_gate_m = c.visual.registration_weak_gate_m;
   else if (!c.use_imu) c.registration.degeneracy.weak_gate_m = c.lidar_only_weak_gate_m;
+  if (!c.use_imu) c.registration.max_correspondence_rebuilds = c.lidar_only_max_correspondence_rebuilds;
   return c;
 }
 
@@ -43,6 +44,9 @@ bool EstimatorConfig::Validate(std::string* error) const {
     return fail("lidar_point_sigma_m must be > 0");
   if (!(lidar_only_weak_gate_m > 0) || !std::isfinite(lidar_only_weak_gate_m))
     return fail("lidar_only_weak_gate_m must be finite and > 0");
+  if (!(lidar_only_velocity_window_s >= 0) || !std::isfinite(lidar_only_velocity_window_s))
+    return fail("lidar_only_velocity_window_s must be finite and >= 0");
+  if (lidar_only_max_correspondence_rebuilds < 1) return fail("lidar_only_max_correspondence_rebuilds must be >= 1");
   if (keyframe_every_scans < 0 && keyframe_every_scans != kDeriveFromCalib)
     return fail("keyframe_every_scans must be >= 0 (or -1: derived from calib)");
   if (initial_keyframes < 0 && initial_keyframes != kDeriveFromCalib)

@@ -209,6 +209,8 @@ void Visit(V& v, EstimatorConfig& c) {
   v("initial_keyframes", &c.initial_keyframes);
   v("use_imu", &c.use_imu), v("lidar_point_sigma_m", &c.lidar_point_sigma_m);
   v("lidar_only_weak_gate_m", &c.lidar_only_weak_gate_m);
+  v("lidar_only_velocity_window_s", &c.lidar_only_velocity_window_s);
+  v("lidar_only_max_correspondence_rebuilds", &c.lidar_only_max_correspondence_rebuilds);
   v("hold_static_start", &c.hold_static_start);
   v("imu_init_scans", &c.imu_init_scans), v("unconverged_information_scale", &c.unconverged_information_scale);
   v("output_map_voxel_m", &c.output_map_voxel_m), v("output_map_points_per_voxel", &c.output_map_points_per_voxel);

@@ -111,7 +111,11 @@ void Estimator::RecordMeasuredPose(Seconds t0_s, Seconds t1_s, const MotionTable
   const Pose3& T_world_start = trajectory_.back().T_ref_body;
   const Seconds t_mid = applied ? 0.5 * (t0_s + t1_s) : t0_s;
   measured_poses_.push_back({t_mid, applied ? T_world_start * MotionTablePose(*applied, t_mid) : T_world_start});
-  while (measured_poses_.size() > 2) measured_poses_.pop_front();
+  // The last two give the twist; without the IMU the poses of the velocity window are kept too (PredictConstantVelocity).
+  constexpr Seconds kStampSlackS = 0.01;  // mid-scan stamps are not exactly periodic
+  const Seconds keep_s = config_.use_imu ? 0.0 : config_.lidar_only_velocity_window_s;
+  while (measured_poses_.size() > 2 && measured_poses_.front().t_s < t_mid - keep_s - kStampSlackS)
+    measured_poses_.pop_front();
 }
 
 // Before the IMU is initialised (or without one): constant velocity from the last two measured poses; where IMU
@@ -128,8 +132,16 @@ Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t
   if (!measured_poses_.empty()) {
     const StampedPose& b = measured_poses_.back();
     if (measured_poses_.size() >= 2) {
-      const StampedPose& a = measured_poses_.front();
+      const StampedPose& a = measured_poses_[measured_poses_.size() - 2];
       if (b.t_s > a.t_s) delta_per_s = ScaleMotion(a.T_ref_body.inverse() * b.T_ref_body, 1.0 / (b.t_s - a.t_s));
+      // Without the IMU (RecordMeasuredPose kept the velocity window): the translation velocity is the mean over
+      // the window, the rotation stays the last two scans'. A rotary scan that sees only sky and ground errs by
+      // centimetres along its weak axis; the last two poses turn that into a velocity error that the next guess
+      // extrapolates, while a turn's onset needs the latest rotation rate.
+      const StampedPose& f = measured_poses_.front();
+      if (measured_poses_.size() >= 3 && b.t_s > f.t_s)
+        delta_per_s.translation() = b.T_ref_body.linear().transpose() *
+                                    (b.T_ref_body.translation() - f.T_ref_body.translation()) / (b.t_s - f.t_s);
     }
     out.T_world_base = b.T_ref_body * ScaleMotion(delta_per_s, t0_s - b.t_s);
     if (t1_s > t0_s) out.motion = ConstantTwistTable(ScaleMotion(delta_per_s, t1_s - t0_s), t0_s, t1_s);
@@ -290,6 +302,7 @@ void Estimator::UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& 
     if (loop_closer_) HandKeyframeToLoopCloser(t_s, T_world_base);
   }
   report->map_free_space = AddToDenseMap(t_s, T_world_base, false);
+  report->map_points = dense_map_.NumPoints();
   if (visual_) visual_->AddDepthPoints(t_s, T_world_base, preprocessed_);
   report->timings.map_ms = watch.ms();
 }

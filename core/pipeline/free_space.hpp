@@ -62,7 +62,8 @@ struct FreeSpaceConfig {
   /// Also drop the scan's own edge / planar features that stand where earlier scans saw free space, judged at
   /// the predicted pose, before registration matches them (a person walking towards the rig is otherwise
   /// matched against the walls it hides until its points are kept out of the map). Applies once the IMU
-  /// predicts the pose (the Estimator's sliding window runs); a constant-twist guess is too coarse for it.
+  /// predicts the pose (the Estimator's sliding window runs) or, without the IMU, with the LiDAR-only velocity
+  /// window (EstimatorConfig::lidar_only_velocity_window_s > 0); the last two scans' twist is too coarse for it.
   bool screen_scan_features = true;
   bool Validate(std::string* error) const;  ///< false with the offending field named in *error
 };

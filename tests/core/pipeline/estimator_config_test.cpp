@@ -95,5 +95,28 @@ TEST(ResolveFromCalib, LidarOnlySetsTheWeakDirectionGate) {
   EXPECT_NE(error.find("lidar_only_weak_gate_m"), std::string::npos) << error;
 }
 
+// Without the IMU a turn's onset leaves the guess degrees off: the LiDAR-only rebuild cap replaces the
+// registration's; with the IMU the registration's own stays. Bad values name their field.
+TEST(ResolveFromCalib, LidarOnlySetsTheRebuildCap) {
+  const RigCalib calib = Rotary(2.6, 600);
+  EstimatorConfig config;
+  config.registration.max_correspondence_rebuilds = 7;
+  config.lidar_only_max_correspondence_rebuilds = 25;
+  config.use_imu = false;
+  EXPECT_EQ(ResolveFromCalib(config, calib).registration.max_correspondence_rebuilds, 25);
+  config.use_imu = true;
+  EXPECT_EQ(ResolveFromCalib(config, calib).registration.max_correspondence_rebuilds, 7);
+  std::string error;
+  config.lidar_only_max_correspondence_rebuilds = 0;
+  EXPECT_FALSE(config.Validate(&error));
+  EXPECT_NE(error.find("lidar_only_max_correspondence_rebuilds"), std::string::npos) << error;
+  config.lidar_only_max_correspondence_rebuilds = 30;
+  config.lidar_only_velocity_window_s = -0.1;
+  EXPECT_FALSE(config.Validate(&error));
+  EXPECT_NE(error.find("lidar_only_velocity_window_s"), std::string::npos) << error;
+  config.lidar_only_velocity_window_s = 0.0;  // the last two scans' twist
+  EXPECT_TRUE(config.Validate(&error)) << error;
+}
+
 }  // namespace
 }  // namespace rotolidar

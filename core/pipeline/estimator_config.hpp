@@ -70,8 +70,8 @@ struct EstimatorConfig {
   /// that only a broken solve is refused (why: docs/registration.md, "The gate without an IMU"). Finite, > 0.
   double lidar_only_weak_gate_m = 3.0;
   /// With use_imu false the guess's translation velocity is the mean over the measured poses of this last span [s]
-  /// (rotation: the last two scans'); 0: the last two scans' twist. >= 0. Why 0.9 s: docs/registration.md, "The
-  /// gate without an IMU".
+  /// (rotation: the last two scans'); 0: the last two scans' twist. >= 0. Why 0.9 s: docs/registration.md, "A
+  /// LiDAR-only motion model for a rotary rig".
   double lidar_only_velocity_window_s = 0.9;
   /// With use_imu false this replaces registration.max_correspondence_rebuilds: a turn's onset leaves the
   /// constant-velocity guess degrees off, which takes more rebuilds than an IMU-propagated guess. >= 1.

@@ -242,27 +242,32 @@ void Estimator::ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_gues
                                      ScanReport* report) const {
   const bool predicted = imu_initialized() || (!config_.use_imu && config_.lidar_only_velocity_window_s > 0);
   if (!free_space_ || !config_.free_space.screen_scan_features || !predicted) return;
-  report->num_moving_scan_features = DropSeenThrough(*free_space_, t_s, T_world_base_guess, &features->edge) +
-                                     DropSeenThrough(*free_space_, t_s, T_world_base_guess, &features->planar);
+  report->num_moving_scan_features =
+      DropSeenThrough(*free_space_, t_s, T_world_base_guess, {&features->edge, &features->planar});
 }
 
 size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
-                       pcl::PointCloud<pcl::PointXYZI>* cloud) {
-  const size_t before = cloud->size();
-  Eigen::Matrix3Xf p_world(3, Eigen::Index(before));
-  for (size_t i = 0; i < before; ++i) {
-    const pcl::PointXYZI& q = (*cloud)[i];
-    p_world.col(Eigen::Index(i)) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
-  }
+                       std::initializer_list<pcl::PointCloud<pcl::PointXYZI>*> clouds) {
+  size_t total = 0;
+  for (const auto* cloud : clouds) total += cloud->size();
+  Eigen::Matrix3Xf p_world(3, Eigen::Index(total));
+  Eigen::Index col = 0;
+  for (const auto* cloud : clouds)
+    for (const pcl::PointXYZI& q : *cloud) p_world.col(col++) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
   std::vector<uint8_t> seen;
   filter.SeenThroughBefore(t_s, p_world, &seen);
-  size_t kept = 0;
-  for (size_t i = 0; i < before; ++i)
-    if (!seen[i]) cloud->points[kept++] = cloud->points[i];
-  cloud->points.resize(kept);
-  cloud->width = uint32_t(cloud->size());
-  cloud->height = 1;
-  return before - cloud->size();
+  size_t next = 0, dropped = 0;
+  for (auto* cloud : clouds) {
+    const size_t before = cloud->size();
+    size_t kept = 0;
+    for (size_t i = 0; i < before; ++i)
+      if (!seen[next++]) cloud->points[kept++] = cloud->points[i];
+    cloud->points.resize(kept);
+    cloud->width = uint32_t(kept);
+    cloud->height = 1;
+    dropped += before - kept;
+  }
+  return dropped;
 }
 
 }  // namespace rotolidar

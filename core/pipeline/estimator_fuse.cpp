@@ -291,8 +291,8 @@ void Estimator::UpdateMap(Seconds t_s, const FeatureSet& features, const Pose3& 
       FeatureSet kept;
       kept.less_sharp = features.less_sharp;
       kept.less_flat = features.less_flat;
-      report->num_dynamic_features = DropSeenThrough(*free_space_, t_s, T_world_base, &kept.less_sharp) +
-                                     DropSeenThrough(*free_space_, t_s, T_world_base, &kept.less_flat);
+      report->num_dynamic_features =
+          DropSeenThrough(*free_space_, t_s, T_world_base, {&kept.less_sharp, &kept.less_flat});
       local_map_.AddKeyframe(kept, T_world_base);
     } else {
       local_map_.AddKeyframe(features, T_world_base);

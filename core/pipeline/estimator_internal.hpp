@@ -1,6 +1,7 @@
 #pragma once
 // Private pieces shared by estimator.cpp and estimator_fuse.cpp (not part of the public API).
 #include <chrono>
+#include <initializer_list>
 #include <optional>
 #include <vector>
 
@@ -41,9 +42,10 @@ std::optional<PreintegratedImu> PreintegrateSpan(const std::vector<ImuSample>& i
                                                  const Eigen::Vector3d& bias_gyro_radps,
                                                  const Eigen::Vector3d& bias_accel_mps2, const ImuNoise& noise);
 
-/// Drops the points of `cloud` (base frame at T_world_base, world [m]) that scans before t_s saw through (the
-/// free-space test's SeenThroughBefore: they stand where space was seen empty); returns how many.
+/// Drops the points of each cloud (base frame at T_world_base, world [m]) that scans before t_s saw through (the
+/// free-space test's SeenThroughBefore: they stand where space was seen empty); returns how many in all. The
+/// clouds are judged in one pass over the earlier scans' range images.
 size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
-                       pcl::PointCloud<pcl::PointXYZI>* cloud);
+                       std::initializer_list<pcl::PointCloud<pcl::PointXYZI>*> clouds);
 
 }  // namespace rotolidar

@@ -188,7 +188,17 @@ TEST(DropSeenThrough, DropsArrivalsKeepsTheRoom) {
   }
   const size_t before = cloud.size();
   ASSERT_GT(on_b, 100u);
-  const size_t dropped = DropSeenThrough(filter, 1.0, T_world_base, &cloud);
+  // The same cloud in two pieces, judged in one pass: each piece keeps what the whole keeps, in order.
+  pcl::PointCloud<pcl::PointXYZI> first, second;
+  for (size_t i = 0; i < before; ++i) (i < before / 3 ? first : second).push_back(cloud[i]);
+  const size_t dropped_in_pieces = DropSeenThrough(filter, 1.0, T_world_base, {&first, &second});
+  const size_t dropped = DropSeenThrough(filter, 1.0, T_world_base, {&cloud});
+  EXPECT_EQ(dropped_in_pieces, dropped);
+  ASSERT_EQ(first.size() + second.size(), cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const pcl::PointXYZI& q = i < first.size() ? first[i] : second[i - first.size()];
+    EXPECT_EQ(q.x, cloud[i].x) << i;
+  }
   EXPECT_EQ(cloud.size(), before - dropped);
   size_t b_kept = 0;
   for (const pcl::PointXYZI& q : cloud) b_kept += OnBall(Eigen::Vector3d(q.x, q.y, q.z), b) ? 1 : 0;
@@ -200,7 +210,7 @@ TEST(DropSeenThrough, DropsArrivalsKeepsTheRoom) {
   Pose3 T_wrong = T_world_base;
   T_wrong.translate(Eigen::Vector3d(0.0, 1.0, 0.0));
   pcl::PointCloud<pcl::PointXYZI> again = cloud;
-  EXPECT_GT(DropSeenThrough(filter, 1.0, T_wrong, &again), 1000u);
+  EXPECT_GT(DropSeenThrough(filter, 1.0, T_wrong, {&again}), 1000u);
 }
 
 TEST(FreeSpaceConfig, ValidateNamesTheField) {

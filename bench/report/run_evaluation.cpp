@@ -224,7 +224,16 @@ Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir
     out->dynamic_note = "no dynamic share: " + out->map_note;
     return Status::Ok();
   }
-  if (Status s = LoadMapInSceneFrame(map_path, out->T_scene_slam, &out->map_points); !s) return s;
+  // map.ply is the odometry's dense map. With loop closure the trajectory above is the corrected one, and the
+  // odometry's drift would put the map off the scene under its alignment: the map takes the odometry
+  // trajectory's own (the loop-closed map is map_corrected.ply).
+  Eigen::Isometry3d T_scene_map = out->T_scene_slam;
+  if (out->has_truth && !slam.odometry_trajectory.empty() && slam.loops.keyframes_offered > 0) {
+    EvalResult odometry;
+    if (Status s = EvaluateAgainstTruth(recording_dir, slam.odometry_trajectory, &odometry); !s) return s;
+    T_scene_map = odometry.alignment.T_ref_est;
+  }
+  if (Status s = LoadMapInSceneFrame(map_path, T_scene_map, &out->map_points); !s) return s;
   out->map_in_scene_frame = out->has_truth;
   if (!out->has_truth) {
     out->map_note = "no map metrics: they need the sim's truth";

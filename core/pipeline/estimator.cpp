@@ -253,7 +253,8 @@ size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& 
   Eigen::Matrix3Xf p_world(3, Eigen::Index(total));
   Eigen::Index col = 0;
   for (const auto* cloud : clouds)
-    for (const pcl::PointXYZI& q : *cloud) p_world.col(col++) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
+    for (const pcl::PointXYZI& q : *cloud)
+      p_world.col(col++) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
   std::vector<uint8_t> seen;
   filter.SeenThroughBefore(t_s, p_world, &seen);
   size_t next = 0, dropped = 0;

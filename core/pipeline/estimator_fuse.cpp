@@ -111,15 +111,16 @@ void Estimator::RecordMeasuredPose(Seconds t0_s, Seconds t1_s, const MotionTable
   const Pose3& T_world_start = trajectory_.back().T_ref_body;
   const Seconds t_mid = applied ? 0.5 * (t0_s + t1_s) : t0_s;
   measured_poses_.push_back({t_mid, applied ? T_world_start * MotionTablePose(*applied, t_mid) : T_world_start});
-  // The last two give the twist; without the IMU the poses of the velocity window are kept too (PredictConstantVelocity).
+  // The last two give the twist; without the IMU those of the velocity window stay too (PredictConstantVelocity).
   constexpr Seconds kStampSlackS = 0.01;  // mid-scan stamps are not exactly periodic
   const Seconds keep_s = config_.use_imu ? 0.0 : config_.lidar_only_velocity_window_s;
   while (measured_poses_.size() > 2 && measured_poses_.front().t_s < t_mid - keep_s - kStampSlackS)
     measured_poses_.pop_front();
 }
 
-// Before the IMU is initialised (or without one): constant velocity from the last two measured poses; where IMU
-// samples cover the span, the rotation comes from the gyro (accelerometer unused: gravity is not known yet).
+// Before the IMU is initialised (or without one): constant velocity from the last two measured poses (without the
+// IMU, the translation velocity over lidar_only_velocity_window_s); where IMU samples cover the span, the rotation
+// comes from the gyro (accelerometer unused: gravity is not known yet).
 Estimator::Prediction Estimator::PredictConstantVelocity(Seconds t0_s, Seconds t1_s) const {
   Prediction out;
   out.motion = IdentityTable(t0_s, t1_s);

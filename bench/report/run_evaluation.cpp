@@ -61,7 +61,7 @@ Status EvaluateTrajectory(const std::string& recording_dir, const SlamRunResult&
   }
   Trajectory truth_full;
   if (Status s = ReadTrajectory(truth_path, TrajectoryFormat::kTum, &truth_full); !s) return s;
-  if (Status s = EvaluateAgainstTruth(recording_dir, slam.trajectory, &out->ape); !s) return s;
+  if (Status s = EvaluateAgainstTruth(truth_full, truth_path, slam.trajectory, &out->ape); !s) return s;
   // The same association as EvaluateAgainstTruth: truth interpolated at the estimate's stamps it covers.
   out->truth = InterpolateTrajectory(truth_full, slam.trajectory);
   Trajectory est;
@@ -69,7 +69,15 @@ Status EvaluateTrajectory(const std::string& recording_dir, const SlamRunResult&
     if (p.t_s >= truth_full.front().t_s && p.t_s <= truth_full.back().t_s) est.push_back(p);
   if (est.size() != out->truth.size()) return Status::Error(truth_path + ": truth/estimate association mismatch");
   out->estimate_aligned = ApplyAlignment(out->ape.alignment, est);
-  out->T_scene_slam = out->ape.alignment.T_ref_est;
+  out->T_scene_slam = out->T_scene_map = out->ape.alignment.T_ref_est;
+  // map.ply is the odometry's dense map. With loop closure the trajectory above is the corrected one, and the
+  // odometry's drift would put the map off the scene under its alignment: the map takes the odometry
+  // trajectory's own (the loop-closed map is map_corrected.ply).
+  if (!slam.odometry_trajectory.empty() && slam.loops.keyframes_offered > 0) {
+    EvalResult odometry;
+    if (Status s = EvaluateAgainstTruth(truth_full, truth_path, slam.odometry_trajectory, &odometry); !s) return s;
+    out->T_scene_map = odometry.alignment.T_ref_est;
+  }
   out->rpe = ComputeRpe(out->truth, est, options, &out->rpe_delta);
   out->has_truth = true;
   return Status::Ok();
@@ -224,16 +232,7 @@ Status EvaluateRun(const std::string& recording_dir, const std::string& slam_dir
     out->dynamic_note = "no dynamic share: " + out->map_note;
     return Status::Ok();
   }
-  // map.ply is the odometry's dense map. With loop closure the trajectory above is the corrected one, and the
-  // odometry's drift would put the map off the scene under its alignment: the map takes the odometry
-  // trajectory's own (the loop-closed map is map_corrected.ply).
-  Eigen::Isometry3d T_scene_map = out->T_scene_slam;
-  if (out->has_truth && !slam.odometry_trajectory.empty() && slam.loops.keyframes_offered > 0) {
-    EvalResult odometry;
-    if (Status s = EvaluateAgainstTruth(recording_dir, slam.odometry_trajectory, &odometry); !s) return s;
-    T_scene_map = odometry.alignment.T_ref_est;
-  }
-  if (Status s = LoadMapInSceneFrame(map_path, T_scene_map, &out->map_points); !s) return s;
+  if (Status s = LoadMapInSceneFrame(map_path, out->T_scene_map, &out->map_points); !s) return s;
   out->map_in_scene_frame = out->has_truth;
   if (!out->has_truth) {
     out->map_note = "no map metrics: they need the sim's truth";

@@ -52,6 +52,9 @@ struct RunEvaluation {
   Trajectory truth;             ///< T_scene_base interpolated at the estimate's stamps
   Trajectory estimate_aligned;  ///< the estimate mapped into the scene frame by the APE alignment
   Eigen::Isometry3d T_scene_slam = Eigen::Isometry3d::Identity();  ///< = ape.alignment.T_ref_est
+  /// Places map.ply in the scene: T_scene_slam, except after loop closure, where map.ply is the odometry's dense
+  /// map while the trajectory is corrected: then the odometry trajectory's own SE(3) alignment.
+  Eigen::Isometry3d T_scene_map = Eigen::Isometry3d::Identity();
 
   // Deskew error (has_deskew = truth, truth/lidar.tum, the run kept deskew data and >= 1 point was scored):
   // over the scans that kept their points, every deskew_scan_stride-th one (SlamRunResult::deskew_scan_stride).

@@ -94,8 +94,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2", "keyframe", "neighbour_searches",
                                  "dynamic_features", "moving_scan_features", "map_judged", "map_dynamic", "vis_image",
                                  "vis_image_offset_s", "vis_frames", "vis_tracked", "vis_inliers", "vis_new",
-                                 "vis_observations", "vis_lidar_depths", "vis_landmarks", "vis_factors", "vis_rejected_total",
-                                 "vis_track_ms", "vis_depth_ms", "vis_sigma_px", "vis_residual_px",
+                                 "vis_observations", "vis_lidar_depths", "vis_landmarks", "vis_factors",
+                                 "vis_rejected_total", "vis_track_ms", "vis_depth_ms", "vis_sigma_px", "vis_residual_px",
                                  "vis_time_offset_s", "rotor_offset_rad", "imu_time_offset_s", "map_points"});
       !s)
     return s;

@@ -9,6 +9,11 @@ Status EvaluateAgainstTruth(const std::string& recording_dir, const Trajectory& 
   Trajectory truth;
   const std::string path = recording_dir + "/truth/base.tum";
   if (Status s = ReadTrajectory(path, TrajectoryFormat::kTum, &truth); !s) return s;
+  return EvaluateAgainstTruth(truth, path, estimate, result);
+}
+
+Status EvaluateAgainstTruth(const Trajectory& truth, const std::string& path, const Trajectory& estimate,
+                            EvalResult* result) {
   const Trajectory ref = InterpolateTrajectory(truth, estimate);
   Trajectory est;
   for (const StampedPose& p : estimate)

@@ -191,7 +191,8 @@ class Estimator {
   /// Preprocess + features; keeps the preprocessed points in preprocessed_ (the dense map's input).
   FeatureSet ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report);
   /// Drops the scan-side edge / planar features that earlier scans saw through at the guess (moving objects),
-  /// once the IMU predicts the pose (free_space.screen_scan_features); counts them in the report.
+  /// once the IMU or, without it, the LiDAR-only velocity window predicts the pose
+  /// (free_space.screen_scan_features); counts them in the report.
   void ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, FeatureSet* features,
                             ScanReport* report) const;
   /// Scan-to-map from the guess; *information_base = the LiDAR factor's information (zero: no usable result).

@@ -96,7 +96,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "vis_image_offset_s", "vis_frames", "vis_tracked", "vis_inliers", "vis_new",
                                  "vis_observations", "vis_lidar_depths", "vis_landmarks", "vis_factors",
                                  "vis_rejected_total", "vis_track_ms", "vis_depth_ms", "vis_sigma_px", "vis_residual_px",
-                                 "vis_time_offset_s", "rotor_offset_rad", "imu_time_offset_s", "map_points"});
+                                 "vis_time_offset_s", "rotor_offset_rad", "imu_time_offset_s", "map_points",
+                                 "map_removed"});
       !s)
     return s;
   for (const ScanReport& r : scans) {
@@ -128,7 +129,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                      double(v.inliers), double(v.new_features), double(v.observations), double(v.lidar_depths),
                      double(v.landmarks), double(v.factors), double(v.rejected_total), v.track_ms, v.depth_ms,
                      v.sigma_px, v.residual_median_px, v.time_offset_s, r.rotor_offset_rad, r.imu_time_offset_s,
-                     double(r.map_points)})
+                     double(r.map_points), double(r.map_free_space.removed)})
       row.push_back(x);
     csv.Row(row);
   }

@@ -45,6 +45,8 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
   if (config_.free_space.enabled)
     free_space_ = std::make_unique<FreeSpaceFilter>(config_.free_space, SensorOrigin(calib_));
+  if (config_.free_space.enabled && config_.free_space.recheck_s > 0)
+    map_recheck_ = std::make_unique<MapRecheck>(config_.free_space);
   if (config_.loop_closure.enabled) loop_closer_ = std::make_unique<graph::LoopCloser>(config_.loop_closure);
   if (config_.visual.enabled) visual_ = std::make_unique<VisualFrontEnd>(config_.visual, calib_);
 }

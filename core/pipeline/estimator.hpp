@@ -24,6 +24,7 @@
 #include "core/pipeline/estimator_config.hpp"
 #include "core/deskew/rotary.hpp"
 #include "core/pipeline/free_space.hpp"
+#include "core/pipeline/map_recheck.hpp"
 #include "core/pipeline/voxel_map.hpp"
 #include "core/types/trajectory.hpp"
 
@@ -95,7 +96,8 @@ struct ScanReport {
   bool keyframe = false;          ///< the scan's features went into the local map (UpdateMap)
   /// Free-space test (core/pipeline/free_space.hpp): keyframe features that earlier scans saw through (kept out
   /// of the local map), and the dense-map points released at this scan (those of the scan delay_s earlier):
-  /// how many were tested and how many were dynamic (kept out of the dense map).
+  /// how many were tested and how many were dynamic (kept out of the dense map), and how many dense-map points
+  /// this scan saw through again (free_space.recheck_s; taken out of the map).
   size_t num_dynamic_features = 0;
   /// Scan-side features (edge + planar) dropped before registration because earlier scans saw through where
   /// they stand at the predicted pose (free_space.screen_scan_features).
@@ -206,6 +208,8 @@ class Estimator {
   void HandKeyframeToLoopCloser(Seconds t_s, const Pose3& T_world_base);
   /// The scan's points (or, with the free-space test, those of the scan delay_s ago) into the dense map.
   FreeSpaceCounts AddToDenseMap(Seconds t_s, const Pose3& T_world_base, bool flush);
+  /// MapRecheck's verdict of the newest image on the dense map's recent points: removes them; returns how many.
+  size_t RecheckDenseMap(Seconds t_s);
 
   /// The motion prior for a scan spanning [t0_s, t1_s].
   Prediction Predict(Seconds t0_s, Seconds t1_s) const;
@@ -231,6 +235,8 @@ class Estimator {
   LocalMap local_map_;
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
+  std::unique_ptr<MapRecheck> map_recheck_;  ///< null without free_space_ or with free_space.recheck_s 0
+  std::vector<size_t> map_kept_, map_removed_;  ///< AddToDenseMap's buffers (map indices), kept for their memory
   std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false
   std::unique_ptr<VisualFrontEnd> visual_;  ///< null when config.visual.enabled is false
   std::deque<CameraFrame> camera_frames_;  ///< the last second of kept frames (the loop closer's images)

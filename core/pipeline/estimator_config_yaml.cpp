@@ -83,6 +83,8 @@ void Visit(V& v, FreeSpaceConfig& c) {
   v("bins_per_face", &c.bins_per_face), v("margin_m", &c.margin_m), v("margin_per_m", &c.margin_per_m);
   v("min_later_through", &c.min_later_through), v("vote_every_scans", &c.vote_every_scans);
   v("min_looked_bins", &c.min_looked_bins), v("screen_scan_features", &c.screen_scan_features);
+  v("recheck_s", &c.recheck_s), v("recheck_min_through", &c.recheck_min_through);
+  v("recheck_max_range_m", &c.recheck_max_range_m);
 }
 
 }  // namespace rotolidar

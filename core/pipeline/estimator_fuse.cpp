@@ -371,28 +371,43 @@ FreeSpaceCounts Estimator::FlushMap() {
 
 // World points in stack chunks (no per-scan heap buffer; the map sees the same sequence as in one call). With the
 // free-space test, the scan waits in the filter and the points of the scan delay_s older come out, less the
-// dynamic ones (only points the map would take are tested).
+// dynamic ones (only points the map would take are tested); the new scan's image first rechecks the map's newest
+// points (MapRecheck), and what enters now is tracked for that recheck.
 FreeSpaceCounts Estimator::AddToDenseMap(Seconds t_s, const Pose3& T_world_base, bool flush) {
   constexpr size_t kChunk = 256;
   Eigen::Vector3d chunk[kChunk];
   size_t n = 0;
+  map_kept_.clear();
+  std::vector<size_t>* kept = map_recheck_ ? &map_kept_ : nullptr;
   auto accept = [&](const Eigen::Vector3d& p_world) {
     chunk[n++] = p_world;
     if (n == kChunk) {
-      dense_map_.Add(chunk, n);
+      dense_map_.Add(chunk, n, kept);
       n = 0;
     }
   };
   FreeSpaceCounts counts;
   if (free_space_) {
     if (!flush) free_space_->AddScan(t_s, T_world_base, preprocessed_, config_.output_map_max_range_m);
-    counts = free_space_->Release(flush, [&](const Eigen::Vector3d& p) { return !dense_map_.Full(p); }, accept);
+    if (map_recheck_ && !flush) counts.removed = RecheckDenseMap(t_s);
+    counts += free_space_->Release(flush, [&](const Eigen::Vector3d& p) { return !dense_map_.Full(p); }, accept);
   } else {
     for (const ScanPoint& p : preprocessed_)
       if (p.range_m <= config_.output_map_max_range_m) accept(T_world_base * p.p_base.cast<double>());
   }
-  dense_map_.Add(chunk, n);
+  dense_map_.Add(chunk, n, kept);
+  if (map_recheck_ && !flush) map_recheck_->Track(t_s, dense_map_, map_kept_);
   return counts;
+}
+
+// The newest scan's image judges the dense map's recent points again; those it and the scans before it saw
+// through in a row leave the map.
+size_t Estimator::RecheckDenseMap(Seconds t_s) {
+  map_removed_.clear();
+  map_recheck_->Vote(t_s, free_space_->Newest(), &map_removed_);
+  size_t removed = 0;
+  for (size_t index : map_removed_) removed += dense_map_.Remove(index);
+  return removed;
 }
 
 void Estimator::DropOldData(Seconds t_s) {

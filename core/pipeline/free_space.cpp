@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 
@@ -20,6 +21,11 @@ bool FreeSpaceConfig::Validate(std::string* error) const {
   if (min_later_through < 1) return fail("free_space.min_later_through must be >= 1");
   if (vote_every_scans < 1) return fail("free_space.vote_every_scans must be >= 1");
   if (min_looked_bins < 1 || min_looked_bins > 9) return fail("free_space.min_looked_bins must be in [1, 9]");
+  if (!(recheck_s >= 0.0 && recheck_s <= 600.0)) return fail("free_space.recheck_s must be in [0, 600]");
+  if (recheck_min_through < 1 || recheck_min_through > 254)
+    return fail("free_space.recheck_min_through must be in [1, 254]");
+  if (!(recheck_max_range_m > 0.0 && recheck_max_range_m <= 1000.0))
+    return fail("free_space.recheck_max_range_m must be in (0, 1000]");
   return true;
 }
 
@@ -154,34 +160,26 @@ void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std:
   scans_.push_back(std::move(scan));
 }
 
-// One image against many points: the band test for all of them first (vectorised: p -> d = R p + t, d.n, |d|^2),
-// then the bins for the few in the band.
+// One image's votes (JudgePoints) counted per point.
 void FreeSpaceFilter::Vote(const Scan& scan, const Eigen::Matrix3Xf& p_world, bool later,
                            std::vector<uint16_t>* through, std::vector<uint16_t>* later_through,
                            std::vector<uint16_t>* hits) const {
-  const float margin_m = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
-  constexpr Eigen::Index kBlock = 256;
-  Eigen::Matrix<float, 3, kBlock> d;
-  Eigen::Matrix<float, 1, kBlock> along, sq_norm;
-  for (Eigen::Index begin = 0; begin < p_world.cols(); begin += kBlock) {
-    const Eigen::Index n = std::min(kBlock, p_world.cols() - begin);
-    d.leftCols(n).noalias() = scan.R_base_world * p_world.middleCols(begin, n);
-    d.leftCols(n).colwise() += scan.t_sensor_world;
-    along.leftCols(n).noalias() = scan.image.band_axis().transpose() * d.leftCols(n);
-    sq_norm.leftCols(n) = d.leftCols(n).colwise().squaredNorm();
-    const float sin2 = scan.image.band_sin2();
-    for (Eigen::Index j = 0; j < n; ++j) {
-      if (along[j] * along[j] > sin2 * sq_norm[j]) continue;  // outside the band: unknown
-      const RangeImage::Verdict verdict = scan.image.JudgeInBand(d.col(j), margin_m, margin_per_m);
-      const size_t i = size_t(begin + j);
-      if (verdict == RangeImage::Verdict::kSeenThrough) {
-        ++(*through)[i];
-        if (later && later_through) ++(*later_through)[i];
-      } else if (verdict == RangeImage::Verdict::kHit) {
-        ++(*hits)[i];
-      }
-    }
-  }
+  const PlacedImage placed{&scan.image, scan.R_base_world, scan.t_sensor_world};
+  JudgePoints(placed, p_world, float(config_.margin_m), float(config_.margin_per_m),
+              std::numeric_limits<float>::infinity(), [&](size_t i, RangeImage::Verdict verdict) {
+                if (verdict == RangeImage::Verdict::kHit) {
+                  ++(*hits)[i];
+                  return;
+                }
+                ++(*through)[i];
+                if (later && later_through) ++(*later_through)[i];
+              });
+}
+
+PlacedImage FreeSpaceFilter::Newest() const {
+  if (scans_.empty()) return {};
+  const Scan& scan = scans_.back();
+  return PlacedImage{&scan.image, scan.R_base_world, scan.t_sensor_world};
 }
 
 // Votes of every vote_every_scans-th scan within window_s of scans_[k] (k itself excluded), one image at a time

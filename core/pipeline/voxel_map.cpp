@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/util/log.hpp"
 #include "core/util/voxel_hash.hpp"
@@ -119,17 +120,34 @@ void VoxelMap::MarkFull(const Key& voxel) {
   (*FindBlock(BlockKeyOf(voxel), true))[bit >> 6] |= uint64_t(1) << (bit & 63);
 }
 
+void VoxelMap::ClearFull(const Key& voxel) {
+  const size_t bit = BitOf(voxel);
+  if (BlockBits* bits = FindBlock(BlockKeyOf(voxel), false)) (*bits)[bit >> 6] &= ~(uint64_t(1) << (bit & 63));
+}
+
 void VoxelMap::RebuildFullBits() {
   block_table_.clear();
   blocks_.clear();
   block_cache_.fill(BlockCacheEntry{});
+  const size_t per_voxel = size_t(max_points_per_voxel_);
   for (size_t v = 0; v < num_voxels_; ++v)
-    if (CountOf(v) >= uint32_t(max_points_per_voxel_)) MarkFull(KeyOfVoxel(v));
+    if (CountOf(v) >= per_voxel && !std::isnan(points_[v * per_voxel].x())) MarkFull(KeyOfVoxel(v));
+}
+
+// A removed point becomes NaN (a tombstone): indices of the others stay valid, and nothing is moved.
+bool VoxelMap::Remove(size_t index) {
+  Eigen::Vector3d& p = points_[index];
+  if (std::isnan(p.x())) return false;
+  const Key key = max_points_per_voxel_ == 1 ? KeyOf(p) : keys_[index / size_t(max_points_per_voxel_)];
+  p.setConstant(std::numeric_limits<double>::quiet_NaN());
+  --num_points_;
+  if (max_points_per_voxel_ == 1) ClearFull(key);
+  return true;
 }
 
 // One point per voxel: a voxel exists iff it is full, so its bit is the whole index and the large voxel table is
 // never probed (a new voxel costs appends and one bit, no cache miss into table_).
-void VoxelMap::AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n) {
+void VoxelMap::AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n, std::vector<size_t>* kept) {
   constexpr size_t kBatch = 64;  // pass 1 finds (and prefetches) the words, pass 2 tests them in order
   uint64_t* words[kBatch];
   uint64_t masks[kBatch];
@@ -149,6 +167,7 @@ void VoxelMap::AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n) {
     for (size_t i = 0; i < count; ++i) {
       if (*words[i] & masks[i]) continue;  // the voxel is full
       *words[i] |= masks[i];
+      if (kept) kept->push_back(points_.size());
       points_.push_back(p_world[begin + i]);
       ++num_voxels_;
       ++num_points_;
@@ -158,8 +177,8 @@ void VoxelMap::AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n) {
 
 void VoxelMap::Add(const std::vector<Eigen::Vector3d>& p_world) { Add(p_world.data(), p_world.size()); }
 
-void VoxelMap::Add(const Eigen::Vector3d* p_world, size_t n) {
-  if (max_points_per_voxel_ == 1) return AddOnePerVoxel(p_world, n);
+void VoxelMap::Add(const Eigen::Vector3d* p_world, size_t n, std::vector<size_t>* kept) {
+  if (max_points_per_voxel_ == 1) return AddOnePerVoxel(p_world, n, kept);
   // Room for every point to open a voxel, so the table stays put during the loop.
   size_t num_slots = std::max<size_t>(table_.size(), 1024);
   while (2 * (keys_.size() + n) > num_slots) num_slots *= 2;
@@ -186,8 +205,9 @@ void VoxelMap::Add(const Eigen::Vector3d* p_world, size_t n) {
     if (count >= per_voxel) continue;
     Eigen::Vector3d* pts = &points_[v * per_voxel];  // a chunk holds whole voxels: contiguous
     bool far_enough = true;
-    for (uint32_t j = 0; j < count; ++j) far_enough = far_enough && (pts[j] - p).squaredNorm() >= min_sq;
-    if (!far_enough) continue;
+    for (uint32_t j = 0; j < count; ++j) far_enough = far_enough && !((pts[j] - p).squaredNorm() < min_sq);
+    if (!far_enough) continue;  // (a removed point, NaN, is far from everything)
+    if (kept) kept->push_back(v * per_voxel + count);
     pts[count++] = p;
     ++num_points_;
     if (count >= per_voxel) MarkFull(key);
@@ -201,13 +221,16 @@ void VoxelMap::RemoveFar(const Eigen::Vector3d& center_world, double max_distanc
   size_t kept = 0;
   num_points_ = 0;
   for (size_t v = 0; v < num_voxels_; ++v) {  // compact in place, insertion order kept
-    if (CountOf(v) == 0 || (points_[v * per_voxel] - center_world).squaredNorm() > max_sq) continue;
+    const Eigen::Vector3d* live = nullptr;  // the voxel's first point not removed decides
+    for (uint32_t j = 0; j < CountOf(v) && !live; ++j)
+      if (!std::isnan(points_[v * per_voxel + j].x())) live = &points_[v * per_voxel + j];
+    if (!live || (*live - center_world).squaredNorm() > max_sq) continue;
     if (!one) {
       keys_[kept] = keys_[v];
       counts_[kept] = counts_[v];
     }
     for (size_t j = 0; j < per_voxel; ++j) points_[kept * per_voxel + j] = points_[v * per_voxel + j];
-    num_points_ += CountOf(kept);
+    for (uint32_t j = 0; j < CountOf(kept); ++j) num_points_ += !std::isnan(points_[kept * per_voxel + j].x());
     ++kept;
   }
   num_voxels_ = kept;
@@ -225,7 +248,8 @@ std::vector<Eigen::Vector3d> VoxelMap::Points() const {
   out.reserve(num_points_);
   const size_t per_voxel = size_t(max_points_per_voxel_);
   for (size_t v = 0; v < num_voxels_; ++v)
-    for (uint32_t j = 0; j < CountOf(v); ++j) out.push_back(points_[v * per_voxel + j]);
+    for (uint32_t j = 0; j < CountOf(v); ++j)
+      if (!std::isnan(points_[v * per_voxel + j].x())) out.push_back(points_[v * per_voxel + j]);
   return out;
 }
 

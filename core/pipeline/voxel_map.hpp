@@ -24,13 +24,20 @@ class VoxelMap {
   /// voxel's points already there (uniform spread inside the voxel).
   void Add(const std::vector<Eigen::Vector3d>& p_world);
   /// The same for n points at p_world (not kept; the caller may reuse the buffer, e.g. in chunks: adding a
-  /// sequence in pieces gives the same map as adding it at once).
-  void Add(const Eigen::Vector3d* p_world, size_t n);
+  /// sequence in pieces gives the same map as adding it at once). With `kept`, appends the index (for Point /
+  /// Remove) of each point the map took, in p_world's order.
+  void Add(const Eigen::Vector3d* p_world, size_t n, std::vector<size_t>* kept = nullptr);
+  /// The point at `index` (from Add's `kept`); NaN once removed. Valid until RemoveFar.
+  const Eigen::Vector3d& Point(size_t index) const { return points_[index]; }
+  /// Takes the point at `index` out of the map (a moving object found later); false when it was removed
+  /// already. With one point per voxel the voxel may take a new point again; with more, the removed point's
+  /// place in its voxel stays used (the voxel takes no replacement). Indices of other points stay valid.
+  bool Remove(size_t index);
   /// True when p_world's voxel holds max_points_per_voxel points already (Add would turn p away).
   bool Full(const Eigen::Vector3d& p_world) const;
   /// Removes voxels whose centre is farther than max_distance_m from `center_world`.
   void RemoveFar(const Eigen::Vector3d& center_world, double max_distance_m);
-  /// All points (order unspecified but deterministic for the same insertion sequence).
+  /// All points, removed ones left out (order unspecified but deterministic for the same insertion sequence).
   std::vector<Eigen::Vector3d> Points() const;
   size_t NumPoints() const;
   bool Empty() const { return num_voxels_ == 0; }
@@ -51,7 +58,7 @@ class VoxelMap {
   size_t HomeSlot(const Key& key) const;  ///< where the key's probe starts (its hash)
   size_t SlotOf(const Key& key) const;    ///< the key's slot, or the empty slot where it would go
   void Rehash(size_t num_slots);         ///< rebuilds the table from keys_ (num_slots: a power of two)
-  void AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n);  ///< Add for max_points_per_voxel 1
+  void AddOnePerVoxel(const Eigen::Vector3d* p_world, size_t n, std::vector<size_t>* kept);  ///< one per voxel
 
   // Full-voxel filter: one bit per voxel, set once the voxel holds max_points_per_voxel points, in blocks of
   // kBlock^3 voxels found through a small table of block keys. A scan mostly revisits full voxels of surfaces seen
@@ -71,6 +78,7 @@ class VoxelMap {
   /// The block key's slot in block_table_ (non-empty), or the empty slot where it would go.
   size_t BlockSlotOf(const Key& block_key) const;
   void MarkFull(const Key& voxel);
+  void ClearFull(const Key& voxel);
   void RebuildFullBits();
 
   std::vector<BlockSlot> block_table_;              ///< linear probing, power-of-two size, at most half full

@@ -24,6 +24,33 @@ TEST(VoxelMap, CapsPointsPerVoxelAndRemovesFarVoxels) {
   EXPECT_EQ(map.NumPoints(), 4u);
 }
 
+// Removed points leave Points() and NumPoints(); the indices of the others stay valid. With one point per voxel
+// the voxel takes a new point; with more, the removed point's place stays used. RemoveFar skips removed points.
+TEST(VoxelMap, RemoveTombstonesAPointAndKeepsTheOtherIndices) {
+  for (int per_voxel : {1, 2}) {
+    SCOPED_TRACE(per_voxel);
+    VoxelMap map(1.0, per_voxel);
+    const std::vector<Eigen::Vector3d> pts = {{0.1, 0.1, 0.1}, {5.5, 0.5, 0.5}, {20.5, 0.5, 0.5}};
+    std::vector<size_t> kept;
+    map.Add(pts.data(), pts.size(), &kept);
+    ASSERT_EQ(kept.size(), 3u);
+    EXPECT_TRUE(map.Remove(kept[1]));
+    EXPECT_FALSE(map.Remove(kept[1]));  // once
+    EXPECT_EQ(map.NumPoints(), 2u);
+    EXPECT_EQ(map.Points(), (std::vector<Eigen::Vector3d>{pts[0], pts[2]}));
+    EXPECT_EQ(map.Point(kept[2]), pts[2]);
+    const Eigen::Vector3d refill(5.4, 0.6, 0.5);
+    std::vector<size_t> again;
+    map.Add(&refill, 1, &again);
+    ASSERT_EQ(again.size(), 1u);  // one per voxel: the voxel is free again; two: its second place is free
+    EXPECT_EQ(map.Point(again[0]), refill);
+    EXPECT_TRUE(map.Remove(again[0]));
+    map.RemoveFar(Eigen::Vector3d::Zero(), 10.0);  // drops the far point and the removed ones
+    EXPECT_EQ(map.Points(), (std::vector<Eigen::Vector3d>{pts[0]}));
+    EXPECT_EQ(map.NumPoints(), 1u);
+  }
+}
+
 // The reference: VoxelMap's rule (a point is kept when its voxel holds fewer than n points, all at least
 // voxel / sqrt(n) away) over a std::map, without the full-voxel bit filter.
 std::vector<Eigen::Vector3d> ReferenceVoxelMap(const std::vector<Eigen::Vector3d>& pts, double voxel, int n) {

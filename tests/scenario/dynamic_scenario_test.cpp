@@ -42,16 +42,23 @@ TEST(DynamicScenario, FreeSpaceTestKeepsWalkersOutOfTheDenseMap) {
 
   EstimatorConfig off;
   off.free_space.enabled = false;
+  EstimatorConfig no_recheck;
+  no_recheck.free_space.recheck_s = 0.0;
   const RunEvaluation without = SlamAndScore(dir + "/recording", off, dir + "/without");
+  const RunEvaluation delayed_only = SlamAndScore(dir + "/recording", no_recheck, dir + "/delayed_only");
   const RunEvaluation with = SlamAndScore(dir + "/recording", EstimatorConfig(), dir + "/with");
   ASSERT_GT(with.dynamic.voxels_seen, 10000u);  // the walkers were seen
-  // Measured, 12 s: without the test the map keeps 66.7 % of the walkers' seen voxels (seed 1). With it, over
-  // seeds 1-10 (`rotolidar sim S --scene lab_people --carrier handheld --camera off --duration 12 --seed N`,
-  // `rotolidar slam S --out O`): median 3.39 %, p90 3.63 %, worst 3.85 % (0.31-0.43 % of the map's points);
-  // ATE median 0.0104 m, p90 0.0116 m, worst 0.0132 m. Bounds: 5 % (1.3x the worst: a filter that stopped
-  // working gives ~67 %) and 0.03 m (2.3x the worst).
+  // Measured, 12 s: without the test the map keeps 66.7 % of the walkers' seen voxels (seed 1). Over seeds 1-10
+  // (`rotolidar sim S --scene lab_people --carrier handheld --camera off --duration 12 --seed N`, `rotolidar
+  // slam S --out O`, and `free_space: {recheck_s: 0}` for the delayed test alone), median / p90 / worst:
+  //   delayed test alone:        3.60 / 3.84 / 3.89 %
+  //   with the recheck (default): 2.91 / 3.17 / 3.18 %, lower on every seed (seed 1: 3.27 -> 2.60 %);
+  // ATE median 0.0073 m, p90 0.0086 m, worst 0.0093 m, the same with and without the recheck (the dense map
+  // does not feed registration). Bounds: 4 % (1.26x the worst: a filter that stopped working gives ~67 %), the
+  // recheck strictly lower than the delayed test alone on this seed, and 0.03 m (3.2x the worst ATE).
   EXPECT_GT(without.dynamic.share_of_seen, 0.5);
-  EXPECT_LT(with.dynamic.share_of_seen, 0.05);
+  EXPECT_LT(with.dynamic.share_of_seen, 0.04);
+  EXPECT_LT(with.dynamic.share_of_seen, delayed_only.dynamic.share_of_seen);
   EXPECT_LT(with.ape.stats.rmse, 0.03);
 }
 

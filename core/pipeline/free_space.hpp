@@ -19,6 +19,9 @@
 // when min_later_through later images saw through it (the object left, however long it stood), or when at
 // least one image saw through it and no more images hit it than saw through it (it passed by).
 //
+// Points already in the dense map go on being judged by later scans for a while (MapRecheck,
+// core/pipeline/map_recheck.hpp, through Newest() and JudgePoints).
+//
 // Frames: images live in the scan's base frame with their origin at the sensor origin there (RigCalib: the
 // lidar origin averaged over the rotor turn; a mount off the motor axis turns on a circle whose radius adds to
 // the margin). Points are judged in the world frame with each image's T_world_base.

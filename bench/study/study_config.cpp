@@ -195,6 +195,7 @@ const std::vector<StudyMetric>& StudyMetrics() {
       {"completeness_ceiling", "completeness, ceiling [-]", {"/map/coverage/ceiling/completeness"}},
       {"map_to_truth_median_m", "map-to-truth distance, median [m]", {"/map/map_to_truth_m/median"}},
       {"deskew_median_m", "deskew error, median [m]", {"/deskew_error_m/median"}},
+      {"dynamic_share", "moving objects' seen voxels in the map [-]", {"/dynamic/share_of_seen"}},
       {"map_points", "map points [-]", {"/slam/map_points"}},
       {"slam_median_scan_ms", "SLAM time per scan, median [ms]", {"/slam/median_scan_ms"}},
       {"slam_realtime_factor", "SLAM real-time factor [x]", {"/slam/realtime_factor"}},

@@ -199,7 +199,8 @@ TEST(StudyRunnerTest, ResumeSkipsFinishedPointsAndRecordsFailures) {
   fs::create_directories(o.out_dir + "/points/" + done.id);
   WriteFile(o.out_dir + "/points/" + done.id + "/sim_config.yaml", PointConfigText(done));
   WriteFile(o.out_dir + "/points/" + done.id + "/metrics.json",
-            "{\"ape_translation_m\": {\"rmse\": 42.0}, \"deskew_error_m\": {\"median\": 0.02}}");
+            "{\"ape_translation_m\": {\"rmse\": 42.0}, \"deskew_error_m\": {\"median\": 0.02},"
+            " \"dynamic\": {\"share_of_seen\": 0.031}}");
   // And one interrupted mid-write: not JSON, so not finished.
   const StudyPoint& torn = points[5];
   fs::create_directories(o.out_dir + "/points/" + torn.id);
@@ -219,6 +220,7 @@ TEST(StudyRunnerTest, ResumeSkipsFinishedPointsAndRecordsFailures) {
   EXPECT_EQ(r.points[4].state, PointState::kResumed);
   EXPECT_EQ(r.points[4].metrics[Index("ate_rmse_m")], 42.0);  // the earlier result, not recomputed
   EXPECT_EQ(r.points[4].metrics[Index("deskew_median_m")], 0.02);  // a nested metric (demo's deskew_error_m)
+  EXPECT_EQ(r.points[4].metrics[Index("dynamic_share")], 0.031);  // the dense map's share of moving objects
   EXPECT_EQ(r.points[7].state, PointState::kFailed);
   EXPECT_EQ(r.points[7].exit_code, 3);
   EXPECT_TRUE(std::isnan(r.points[7].metrics[Index("ate_rmse_m")]));

@@ -208,7 +208,6 @@ class FreeSpaceFilter {
   FreeSpaceCounts Release(bool flush, Wanted&& wanted, Accept&& accept);
   /// The newest scan's image, placed (image null before the first AddScan). Valid until the next AddScan.
   PlacedImage Newest() const;
-  const FreeSpaceConfig& config() const { return config_; }
 
  private:
   struct Scan {

@@ -40,7 +40,7 @@ class VoxelMap {
   /// All points, removed ones left out (order unspecified but deterministic for the same insertion sequence).
   std::vector<Eigen::Vector3d> Points() const;
   size_t NumPoints() const;
-  bool Empty() const { return num_voxels_ == 0; }
+  bool Empty() const { return num_points_ == 0; }  ///< removed points do not count
   double voxel_size_m() const { return voxel_size_m_; }
 
  private:

@@ -47,6 +47,8 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
     free_space_ = std::make_unique<FreeSpaceFilter>(config_.free_space, SensorOrigin(calib_));
   if (config_.free_space.enabled && config_.free_space.recheck_s > 0)
     map_recheck_ = std::make_unique<MapRecheck>(config_.free_space);
+  if (config_.free_space.enabled && config_.free_space.screen_scan_features && config_.free_space.vacated_radius_m > 0)
+    vacated_ = std::make_unique<VacatedScreen>(config_.free_space, SensorOrigin(calib_));
   if (config_.loop_closure.enabled) loop_closer_ = std::make_unique<graph::LoopCloser>(config_.loop_closure);
   if (config_.visual.enabled) visual_ = std::make_unique<VisualFrontEnd>(config_.visual, calib_);
 }
@@ -187,10 +189,12 @@ ScanReport Estimator::ProcessBaseFrameScan(Seconds t_s, std::vector<ScanPoint> p
 void Estimator::ProcessCloud(Seconds t_s, std::vector<ScanPoint> points, const Prediction& prediction,
                              ScanReport* report) {
   FeatureSet features = ExtractScanFeatures(t_s, std::move(points), report);
-  ScreenMovingFeatures(t_s, prediction.T_world_base, &features, report);
+  const Eigen::Matrix3Xf unscreened_base = vacated_ ? RegistrationFeatures(features) : Eigen::Matrix3Xf();
+  ScreenMovingFeatures(t_s, prediction.T_world_base, unscreened_base, &features, report);
   Matrix6d information_base = Matrix6d::Zero();
   const Pose3 T_world_base_lidar = Register(features, prediction.T_world_base, report, &information_base);
   const Pose3 T_world_base = Fuse(t_s, T_world_base_lidar, information_base, prediction, report);
+  if (vacated_) vacated_->Remember(t_s, T_world_base, unscreened_base);
   UpdateMap(t_s, features, T_world_base, report);
   DropOldData(t_s);
 }
@@ -240,11 +244,20 @@ FeatureSet Estimator::ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> po
 // the test's margin, and then the walls ahead look like free space: LiDAR-only parking 12 s, typical, seeds 1-5,
 // 0.066 / 0.175 / 0.169 / 0.062 / 0.070 m unscreened, 0.062 / 0.080 / 3.64 / 0.072 / 0.719 m screened with it.
 // With the velocity window the screen keeps the 40 s corridor's walker out (docs/registration.md).
-void Estimator::ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, FeatureSet* features,
-                                     ScanReport* report) const {
+// Objects moving with the rig are never arrivals (their earlier bodies hid their present places): the vacated
+// screen first drops the features standing near places the recent scans' features left (VacatedScreen).
+void Estimator::ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess,
+                                     const Eigen::Matrix3Xf& unscreened_base, FeatureSet* features,
+                                     ScanReport* report) {
   const bool predicted = imu_initialized() || (!config_.use_imu && config_.lidar_only_velocity_window_s > 0);
   if (!free_space_ || !config_.free_space.screen_scan_features || !predicted) return;
+  if (vacated_) {
+    std::vector<uint8_t> flagged;
+    vacated_->Flag(t_s, T_world_base_guess, preprocessed_, unscreened_base, &flagged);
+    report->num_vacated_features = DropFlagged(flagged, {&features->edge, &features->planar});
+  }
   report->num_moving_scan_features =
+      report->num_vacated_features +
       DropSeenThrough(*free_space_, t_s, T_world_base_guess, {&features->edge, &features->planar});
 }
 
@@ -259,18 +272,30 @@ size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& 
       p_world.col(col++) = (T_world_base * Eigen::Vector3d(q.x, q.y, q.z)).cast<float>();
   std::vector<uint8_t> seen;
   filter.SeenThroughBefore(t_s, p_world, &seen);
+  return DropFlagged(seen, clouds);
+}
+
+size_t DropFlagged(const std::vector<uint8_t>& drop, std::initializer_list<pcl::PointCloud<pcl::PointXYZI>*> clouds) {
   size_t next = 0, dropped = 0;
   for (auto* cloud : clouds) {
     const size_t before = cloud->size();
     size_t kept = 0;
     for (size_t i = 0; i < before; ++i)
-      if (!seen[next++]) cloud->points[kept++] = cloud->points[i];
+      if (!drop[next++]) cloud->points[kept++] = cloud->points[i];
     cloud->points.resize(kept);
     cloud->width = uint32_t(kept);
     cloud->height = 1;
     dropped += before - kept;
   }
   return dropped;
+}
+
+Eigen::Matrix3Xf RegistrationFeatures(const FeatureSet& features) {
+  Eigen::Matrix3Xf p(3, Eigen::Index(features.edge.size() + features.planar.size()));
+  Eigen::Index col = 0;
+  for (const auto* cloud : {&features.edge, &features.planar})
+    for (const pcl::PointXYZI& q : *cloud) p.col(col++) = q.getVector3fMap();
+  return p;
 }
 
 }  // namespace rotolidar

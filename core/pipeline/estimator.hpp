@@ -25,6 +25,7 @@
 #include "core/deskew/rotary.hpp"
 #include "core/pipeline/free_space.hpp"
 #include "core/pipeline/map_recheck.hpp"
+#include "core/pipeline/vacated_screen.hpp"
 #include "core/pipeline/voxel_map.hpp"
 #include "core/types/trajectory.hpp"
 
@@ -102,6 +103,9 @@ struct ScanReport {
   /// Scan-side features (edge + planar) dropped before registration because earlier scans saw through where
   /// they stand at the predicted pose (free_space.screen_scan_features).
   size_t num_moving_scan_features = 0;
+  /// Of those, the ones dropped because they stand near a place the present scan sees vacated
+  /// (free_space.vacated_radius_m: objects moving with the rig).
+  size_t num_vacated_features = 0;
   FreeSpaceCounts map_free_space;
   size_t map_points = 0;    ///< points in the dense map after this scan (its memory: ~24 B each plus the index)
   VisualScanReport visual;  ///< the camera path (config.visual.enabled; zeros otherwise)
@@ -193,10 +197,11 @@ class Estimator {
   /// Preprocess + features; keeps the preprocessed points in preprocessed_ (the dense map's input).
   FeatureSet ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report);
   /// Drops the scan-side edge / planar features that earlier scans saw through at the guess (moving objects),
-  /// once the IMU or, without it, the LiDAR-only velocity window predicts the pose
-  /// (free_space.screen_scan_features); counts them in the report.
-  void ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, FeatureSet* features,
-                            ScanReport* report) const;
+  /// and those near places the recent scans' features vacated (objects moving with the rig; unscreened_base: the
+  /// scan's features before any screen, RegistrationFeatures), once the IMU or, without it, the LiDAR-only
+  /// velocity window predicts the pose (free_space.screen_scan_features); counts them in the report.
+  void ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, const Eigen::Matrix3Xf& unscreened_base,
+                            FeatureSet* features, ScanReport* report);
   /// Scan-to-map from the guess; *information_base = the LiDAR factor's information (zero: no usable result).
   bool HoldStaticStart(ScanReport* report);
   Pose3 Register(const FeatureSet& features, const Pose3& T_world_base_guess, ScanReport* report,
@@ -236,6 +241,7 @@ class Estimator {
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
   std::unique_ptr<MapRecheck> map_recheck_;  ///< null without free_space_ or with free_space.recheck_s 0
+  std::unique_ptr<VacatedScreen> vacated_;  ///< null without free_space_ or with free_space.vacated_radius_m 0
   std::vector<size_t> map_kept_, map_removed_;  ///< AddToDenseMap's buffers (map indices), kept for their memory
   std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false
   std::unique_ptr<VisualFrontEnd> visual_;  ///< null when config.visual.enabled is false

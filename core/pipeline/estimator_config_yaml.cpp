@@ -84,7 +84,9 @@ void Visit(V& v, FreeSpaceConfig& c) {
   v("min_later_through", &c.min_later_through), v("vote_every_scans", &c.vote_every_scans);
   v("min_looked_bins", &c.min_looked_bins), v("screen_scan_features", &c.screen_scan_features);
   v("recheck_s", &c.recheck_s), v("recheck_min_through", &c.recheck_min_through);
-  v("recheck_max_range_m", &c.recheck_max_range_m);
+  v("recheck_max_range_m", &c.recheck_max_range_m), v("vacated_radius_m", &c.vacated_radius_m);
+  v("vacated_min_age_s", &c.vacated_min_age_s), v("vacated_max_age_s", &c.vacated_max_age_s);
+  v("vacated_max_share", &c.vacated_max_share);
 }
 
 }  // namespace rotolidar

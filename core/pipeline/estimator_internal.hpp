@@ -47,5 +47,10 @@ std::optional<PreintegratedImu> PreintegrateSpan(const std::vector<ImuSample>& i
 /// clouds are judged in one pass over the earlier scans' range images.
 size_t DropSeenThrough(const FreeSpaceFilter& filter, Seconds t_s, const Pose3& T_world_base,
                        std::initializer_list<pcl::PointCloud<pcl::PointXYZI>*> clouds);
+/// Drops the points i of the clouds, counted across them in order, with drop[i] != 0 (drop holds one entry per
+/// point of all clouds); returns how many in all.
+size_t DropFlagged(const std::vector<uint8_t>& drop, std::initializer_list<pcl::PointCloud<pcl::PointXYZI>*> clouds);
+/// The edge and planar features' positions (their frame, [m]), edge first, one per column.
+Eigen::Matrix3Xf RegistrationFeatures(const FeatureSet& features);
 
 }  // namespace rotolidar

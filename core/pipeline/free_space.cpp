@@ -26,6 +26,12 @@ bool FreeSpaceConfig::Validate(std::string* error) const {
     return fail("free_space.recheck_min_through must be in [1, 254]");
   if (!(recheck_max_range_m > 0.0 && recheck_max_range_m <= 1000.0))
     return fail("free_space.recheck_max_range_m must be in (0, 1000]");
+  if (!(vacated_radius_m >= 0.0 && vacated_radius_m <= 10.0))
+    return fail("free_space.vacated_radius_m must be in [0, 10]");
+  if (!(vacated_min_age_s >= 0.0 && vacated_min_age_s <= vacated_max_age_s && vacated_max_age_s <= 10.0))
+    return fail("free_space.vacated_min_age_s and vacated_max_age_s must satisfy 0 <= min <= max <= 10");
+  if (!(vacated_max_share > 0.0 && vacated_max_share <= 1.0))
+    return fail("free_space.vacated_max_share must be in (0, 1]");
   return true;
 }
 

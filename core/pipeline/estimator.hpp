@@ -196,10 +196,10 @@ class Estimator {
   std::vector<ScanPoint> Deskew(const LidarScan& scan, const Prediction& prediction, ScanReport* report);
   /// Preprocess + features; keeps the preprocessed points in preprocessed_ (the dense map's input).
   FeatureSet ExtractScanFeatures(Seconds t_s, std::vector<ScanPoint> points, ScanReport* report);
-  /// Drops the scan-side edge / planar features that earlier scans saw through at the guess (moving objects),
-  /// and those near places the recent scans' features vacated (objects moving with the rig; unscreened_base: the
-  /// scan's features before any screen, RegistrationFeatures), once the IMU or, without it, the LiDAR-only
-  /// velocity window predicts the pose (free_space.screen_scan_features); counts them in the report.
+  /// Drops the scan-side edge / planar features that earlier scans saw through at the guess (moving objects)
+  /// once the IMU or, without it, the LiDAR-only velocity window predicts the pose (free_space.screen_scan_features),
+  /// and, on the IMU's prediction only, those near places the recent scans' features vacated (objects moving with
+  /// the rig; unscreened_base: the scan's features before any screen, RegistrationFeatures); counts them.
   void ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_guess, const Eigen::Matrix3Xf& unscreened_base,
                             FeatureSet* features, ScanReport* report);
   /// Scan-to-map from the guess; *information_base = the LiDAR factor's information (zero: no usable result).

@@ -255,7 +255,8 @@ void Estimator::ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_gues
   if (!free_space_ || !config_.free_space.screen_scan_features || !predicted) return;
   if (vacated_ && imu_initialized()) {  // the LiDAR-only prediction is too coarse for it (docs/estimator.md)
     std::vector<uint8_t> flagged;
-    vacated_->Flag(t_s, T_world_base_guess, preprocessed_, unscreened_base, &flagged);
+    const RangeImage& image = free_space_->PrepareImage(preprocessed_);  // AddToDenseMap's AddScan takes it
+    vacated_->Flag(t_s, T_world_base_guess, image, unscreened_base, &flagged);
     report->num_vacated_features = DropFlagged(flagged, {&features->edge, &features->planar});
   }
   report->num_moving_scan_features =

@@ -150,20 +150,36 @@ FreeSpaceFilter::FreeSpaceFilter(const FreeSpaceConfig& config, const Eigen::Vec
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
 }
 
+void BuildRangeImage(const std::vector<ScanPoint>& points, const Eigen::Vector3f& origin_base, RangeImage* image) {
+  image->Clear();
+  for (const ScanPoint& p : points)
+    if (p.p_base.allFinite()) image->Add(p.p_base - origin_base);
+  image->Seal();
+}
+
+const RangeImage& FreeSpaceFilter::PrepareImage(const std::vector<ScanPoint>& points) {
+  if (prepared_.empty()) prepared_.push_back(TakeImage());
+  BuildRangeImage(points, origin_base_, &prepared_.front());
+  prepared_points_ = points.size();
+  has_prepared_ = true;
+  return prepared_.front();
+}
+
 void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points,
                               double max_range_m) {
+  const bool prepared = has_prepared_ && prepared_points_ == points.size();
   Scan scan{t_s, T_world_base, Eigen::Matrix3f(), Eigen::Vector3f(), TakeImage(), {}};
+  if (prepared) std::swap(scan.image, prepared_.front());
+  else BuildRangeImage(points, origin_base_, &scan.image);
   const Pose3 T_base_world = T_world_base.inverse();
   scan.R_base_world = T_base_world.linear().cast<float>();
   scan.t_sensor_world = T_base_world.translation().cast<float>() - origin_base_;
   scan.waiting_world.reserve(points.size());
-  for (const ScanPoint& p : points) {
-    if (!p.p_base.allFinite()) continue;
-    scan.image.Add(p.p_base - origin_base_);
-    if (p.range_m <= max_range_m) scan.waiting_world.push_back(T_world_base * p.p_base.cast<double>());
-  }
-  scan.image.Seal();
+  for (const ScanPoint& p : points)
+    if (p.p_base.allFinite() && p.range_m <= max_range_m)
+      scan.waiting_world.push_back(T_world_base * p.p_base.cast<double>());
   scans_.push_back(std::move(scan));
+  has_prepared_ = false;  // the next AddScan builds its own unless PrepareImage runs again
 }
 
 // One image's votes (JudgePoints) counted per point.

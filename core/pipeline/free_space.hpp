@@ -153,6 +153,9 @@ class RangeImage {
   float band_sin2_ = 2.f;    ///< band_sin_^2, or > 1 for "no bound"
 };
 
+/// Clears *image, adds the finite points of a scan (p_base - origin_base, base frame [m]) and seals it.
+void BuildRangeImage(const std::vector<ScanPoint>& points, const Eigen::Vector3f& origin_base, RangeImage* image);
+
 /// One scan's image placed in the world: a world point p is judged at d = R_base_world * p + t_sensor_world.
 struct PlacedImage {
   const RangeImage* image = nullptr;
@@ -207,7 +210,11 @@ class FreeSpaceFilter {
 
   /// A processed scan: its pose T_world_base (base frame at t_s) and its points (p_base in that frame); its
   /// image is built, and points with range_m <= max_range_m wait for the dense map.
+  /// When PrepareImage was called for these points since the last AddScan, its image is taken, not rebuilt.
   void AddScan(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points, double max_range_m);
+  /// Builds the image of the scan that the next AddScan will add (the same points, base frame) ahead of it, so
+  /// that it can judge before registration (VacatedScreen). Valid until AddScan.
+  const RangeImage& PrepareImage(const std::vector<ScanPoint>& points);
   /// True when scans before t_s (within window_s; every vote_every_scans-th, newest first) saw through p_world
   /// and no more hit it: a point arriving where space was free.
   bool SeenThroughBefore(Seconds t_s, const Eigen::Vector3d& p_world) const;
@@ -246,6 +253,9 @@ class FreeSpaceFilter {
   Eigen::Vector3f origin_base_;
   std::deque<Scan> scans_;  ///< time order
   std::vector<RangeImage> spare_images_;  ///< images of dropped scans, for reuse
+  std::vector<RangeImage> prepared_;       ///< PrepareImage's image (0 or 1), until AddScan takes it
+  size_t prepared_points_ = 0;             ///< how many points it was built from
+  bool has_prepared_ = false;              ///< PrepareImage ran since the last AddScan
   size_t released_ = 0;     ///< scans_[0, released_) have handed their points on
   // Release's buffers (kept to reuse their memory): the released scan's points to judge and their votes.
   std::vector<Eigen::Vector3d> candidates_;

@@ -10,15 +10,15 @@ namespace rotolidar {
 
 VacatedScreen::VacatedScreen(const FreeSpaceConfig& config, const Eigen::Vector3d& origin_base)
     : config_(config),
-      origin_base_(origin_base.cast<float>()),
-      image_(config.bins_per_face, config.min_looked_bins) {
+      origin_base_(origin_base.cast<float>()) {
   std::string why;
   ROTOLIDAR_CHECK(config_.Validate(&why), why);
 }
 
-void VacatedScreen::Vacated(Seconds t_s, const Pose3& T_world_base, std::vector<float>* xyz) const {
+void VacatedScreen::Vacated(Seconds t_s, const Pose3& T_world_base, const RangeImage& image,
+                            std::vector<float>* xyz) const {
   const Pose3 T_base_world = T_world_base.inverse();
-  const PlacedImage placed{&image_, T_base_world.linear().cast<float>(),
+  const PlacedImage placed{&image, T_base_world.linear().cast<float>(),
                            T_base_world.translation().cast<float>() - origin_base_};
   const float margin = float(config_.margin_m), margin_per_m = float(config_.margin_per_m);
   xyz->clear();
@@ -34,16 +34,12 @@ void VacatedScreen::Vacated(Seconds t_s, const Pose3& T_world_base, std::vector<
   }
 }
 
-VacatedResult VacatedScreen::Flag(Seconds t_s, const Pose3& T_world_base_guess, const std::vector<ScanPoint>& points,
-                                  const Eigen::Matrix3Xf& features_base, std::vector<uint8_t>* flagged) {
+VacatedResult VacatedScreen::Flag(Seconds t_s, const Pose3& T_world_base_guess, const RangeImage& image,
+                                  const Eigen::Matrix3Xf& features_base, std::vector<uint8_t>* flagged) const {
   VacatedResult result;
   flagged->assign(size_t(features_base.cols()), 0);
-  image_.Clear();
-  for (const ScanPoint& p : points)
-    if (p.p_base.allFinite()) image_.Add(p.p_base - origin_base_);
-  image_.Seal();
   std::vector<float> xyz;
-  Vacated(t_s, T_world_base_guess, &xyz);
+  Vacated(t_s, T_world_base_guess, image, &xyz);
   result.vacated = xyz.size() / 3;
   if (result.vacated == 0) return result;
   KdTree3f tree;

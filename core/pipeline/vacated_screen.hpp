@@ -29,7 +29,6 @@
 
 #include "core/pipeline/free_space.hpp"
 #include "core/types/geometry.hpp"
-#include "core/types/scan_point.hpp"
 #include "core/types/time.hpp"
 
 namespace rotolidar {
@@ -44,14 +43,14 @@ struct VacatedResult {
 class VacatedScreen {
  public:
   /// Uses config's vacated_* fields, margins, bins_per_face and min_looked_bins; config must Validate.
-  /// origin_base: the sensor origin in the base frame [m].
+  /// origin_base: the sensor origin in the base frame [m] (the images' origin).
   VacatedScreen(const FreeSpaceConfig& config, const Eigen::Vector3d& origin_base);
 
-  /// The present scan at t_s [s]: its points (base frame; the range image is built from them), its features
-  /// (3xN, same frame) and the predicted T_world_base. (*flagged)[i] = 1 for the features to drop, else 0
-  /// (resized to N; all 0 when the valve opened or nothing was vacated).
-  VacatedResult Flag(Seconds t_s, const Pose3& T_world_base_guess, const std::vector<ScanPoint>& points,
-                     const Eigen::Matrix3Xf& features_base, std::vector<uint8_t>* flagged);
+  /// The present scan at t_s [s]: its range image (FreeSpaceFilter::PrepareImage, base frame about the sensor
+  /// origin), its features (3xN, base frame) and the predicted T_world_base. (*flagged)[i] = 1 for the features
+  /// to drop, else 0 (resized to N; all 0 when the valve opened or nothing was vacated).
+  VacatedResult Flag(Seconds t_s, const Pose3& T_world_base_guess, const RangeImage& image,
+                     const Eigen::Matrix3Xf& features_base, std::vector<uint8_t>* flagged) const;
   /// The scan's features (all of them, before any screen; base frame) at its registered pose, kept for the scans
   /// of the next vacated_max_age_s. Call after Flag for the same scan.
   void Remember(Seconds t_s, const Pose3& T_world_base, const Eigen::Matrix3Xf& features_base);
@@ -62,11 +61,10 @@ class VacatedScreen {
     Eigen::Matrix3Xf p_world;  ///< one feature per column [m]
   };
   /// The recent features (aged min..max) the image placed at T_world_base sees through, as xyz triples.
-  void Vacated(Seconds t_s, const Pose3& T_world_base, std::vector<float>* xyz) const;
+  void Vacated(Seconds t_s, const Pose3& T_world_base, const RangeImage& image, std::vector<float>* xyz) const;
 
   FreeSpaceConfig config_;
   Eigen::Vector3f origin_base_;
-  RangeImage image_;         ///< the present scan's, rebuilt by each Flag
   std::deque<Recent> recent_;  ///< time order
 };
 

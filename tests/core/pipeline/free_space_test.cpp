@@ -3,6 +3,7 @@
 // room's walls, floor and the ball's own current surface are not.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <random>
@@ -137,6 +138,31 @@ TEST(FreeSpaceFilter, KeepsMovedBallOutAndRoomIn) {
 // The registration-side screen (Estimator::ScreenMovingFeatures): of a new scan's cloud, the points standing where
 // earlier scans saw free space (the ball that just arrived at B) are dropped at the cloud's pose; the room's
 // points stay. The rig stands at a pose off the world origin, so a frame mix-up would misjudge the room.
+// An image prepared ahead of AddScan (PrepareImage) is the one AddScan would build: the same verdicts; and one
+// prepared for other points is not taken.
+TEST(FreeSpaceFilter, APreparedImageGivesTheSameVerdicts) {
+  const Eigen::Vector3d a(3.0, 1.0, 0.0), b(-2.0, -2.5, 0.5);
+  FreeSpaceFilter built(FreeSpaceConfig(), Eigen::Vector3d::Zero()), prepared(FreeSpaceConfig(), Eigen::Vector3d::Zero());
+  const std::vector<ScanPoint> with_a = Scan(a), with_b = Scan(b);
+  built.AddScan(0.0, Pose3::Identity(), with_a, 40.0);
+  prepared.PrepareImage(with_a);
+  prepared.AddScan(0.0, Pose3::Identity(), with_a, 40.0);
+  std::vector<ScanPoint> other(with_a.begin(), with_a.end() - 1);
+  prepared.PrepareImage(other);  // not the points AddScan gets next (another count): it builds its own
+  built.AddScan(0.1, Pose3::Identity(), with_b, 40.0);
+  prepared.AddScan(0.1, Pose3::Identity(), with_b, 40.0);
+  Eigen::Matrix3Xf probe(3, 2 * Eigen::Index(with_a.size()));
+  for (size_t i = 0; i < with_a.size(); ++i) {
+    probe.col(Eigen::Index(i)) = 0.8f * with_a[i].p_base;  // in front of the first scan's returns
+    probe.col(Eigen::Index(with_a.size() + i)) = 0.8f * with_b[i].p_base;
+  }
+  std::vector<uint8_t> seen_built, seen_prepared;
+  built.SeenThroughBefore(0.2, probe, &seen_built);
+  prepared.SeenThroughBefore(0.2, probe, &seen_prepared);
+  EXPECT_EQ(seen_built, seen_prepared);
+  EXPECT_GT(std::count(seen_built.begin(), seen_built.end(), 1), 1000);
+}
+
 TEST(DropSeenThrough, DropsArrivalsKeepsTheRoom) {
   FreeSpaceFilter filter(FreeSpaceConfig(), Eigen::Vector3d::Zero());
   Pose3 T_world_base = Pose3::Identity();

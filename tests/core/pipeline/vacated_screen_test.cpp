@@ -30,11 +30,13 @@ struct Tally {
 template <class BallAt>
 Tally FeedScans(VacatedScreen* screen, int n, BallAt&& ball_at, const Pose3& guess, VacatedResult* last) {
   Tally tally;
+  RangeImage image(FreeSpaceConfig().bins_per_face, FreeSpaceConfig().min_looked_bins);
   for (int k = 0; k < n; ++k) {
     const std::vector<ScanPoint> points = Scan(ball_at(k));
     const Eigen::Matrix3Xf features = Features(points);
     std::vector<uint8_t> flagged;
-    *last = screen->Flag(kDt * k, k + 1 == n ? guess : Pose3::Identity(), points, features, &flagged);
+    BuildRangeImage(points, Eigen::Vector3f::Zero(), &image);
+    *last = screen->Flag(kDt * k, k + 1 == n ? guess : Pose3::Identity(), image, features, &flagged);
     screen->Remember(kDt * k, Pose3::Identity(), features);
     if (k + 1 < n) continue;
     for (Eigen::Index i = 0; i < features.cols(); ++i) {

@@ -19,18 +19,59 @@ constexpr size_t kMinOverflow = 512;  ///< small maps: rebuild at most every few
 
 void CentroidIndex::Sync(VoxelCentroidTable* table) {
   if (table->layout_version() != layout_version_) {
+    pending_.reset();  // waits for a background build: its snapshot's slot numbers are gone
     BuildMain(table);
     return;
   }
   table->TakeTouched(&touched_);
   std::sort(touched_.begin(), touched_.end());  // slot order: the table's and the index's arrays in sequence
   ApplyTouched(*table);
-  const size_t limit = std::max(kMinOverflow, main_live_ / kOverflowDivisor);
-  const size_t created = table->num_slots() - main_slots_;  // the overflow's size, counting voxels dead since
-  if (created > limit || main_dead_ > 2 * limit)
-    BuildMain(table);
-  else
-    BuildOverflow(*table);
+  if (pending_) {
+    pending_->touched.insert(pending_->touched.end(), touched_.begin(), touched_.end());
+    if (--pending_->syncs_left <= 0) InstallPending(*table);
+  } else {
+    const size_t limit = std::max(kMinOverflow, main_live_ / kOverflowDivisor);
+    const size_t created = table->num_slots() - main_slots_;  // the overflow's size, counting voxels dead since
+    if (created > limit || main_dead_ > 2 * limit) StartPending(*table);
+  }
+  BuildOverflow(*table);
+}
+
+void CentroidIndex::StartPending(const VoxelCentroidTable& table) {
+  auto pending = std::make_unique<Pending>();
+  pending->slots = table.num_slots();
+  pending->syncs_left = kSwapAfterSyncs;
+  std::vector<float> xyz;
+  xyz.reserve(3 * (main_live_ + overflow_slots_.size()));
+  for (size_t slot = 0; slot < pending->slots; ++slot) {
+    if (!table.live(slot)) continue;
+    pending->main_slot.push_back(int(slot));
+    xyz.insert(xyz.end(), slot_xyz_.begin() + long(3 * slot), slot_xyz_.begin() + long(3 * slot + 3));
+  }
+  pending->tree = std::async(std::launch::async, [xyz = std::move(xyz)] {
+    KdTree3f tree;
+    tree.Build(xyz);
+    return tree;
+  });
+  pending_ = std::move(pending);
+}
+
+void CentroidIndex::InstallPending(const VoxelCentroidTable& table) {
+  main_ = pending_->tree.get();
+  ++main_builds_;
+  ++background_builds_;
+  main_slots_ = pending_->slots;
+  main_slot_ = std::move(pending_->main_slot);
+  main_index_.assign(main_slots_, -1);
+  for (size_t i = 0; i < main_slot_.size(); ++i) main_index_[size_t(main_slot_[i])] = int(i);
+  main_live_ = main_slot_.size();
+  main_dead_ = 0;
+  hidden_.assign(main_live_, 0);
+  std::vector<uint32_t>& touched = pending_->touched;
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  ApplyToMain(table, touched);
+  pending_.reset();
 }
 
 void CentroidIndex::BuildMain(VoxelCentroidTable* table) {
@@ -68,8 +109,13 @@ void CentroidIndex::Remember(size_t slot, const VoxelCentroidTable::Mean& m) {
 void CentroidIndex::ApplyTouched(const VoxelCentroidTable& table) {
   slot_xyz_.resize(3 * table.num_slots());
   views_.resize(table.num_slots());
-  for (const uint32_t slot : touched_) {
+  for (const uint32_t slot : touched_)
     if (table.live(slot)) Remember(slot, table.MeanAt(slot));
+  ApplyToMain(table, touched_);
+}
+
+void CentroidIndex::ApplyToMain(const VoxelCentroidTable& table, const std::vector<uint32_t>& slots) {
+  for (const uint32_t slot : slots) {
     if (slot >= main_slots_) continue;  // created since the main build: in the overflow
     const int i = main_index_[slot];
     if (i < 0 || hidden_[size_t(i)]) continue;  // (a voxel never comes back to a dead slot)

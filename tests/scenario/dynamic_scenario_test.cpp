@@ -32,12 +32,17 @@ RunEvaluation SlamAndScore(const std::string& recording, const EstimatorConfig& 
   return eval;
 }
 
-TEST(DynamicScenario, FreeSpaceTestKeepsWalkersOutOfTheDenseMap) {
+/// A handheld walk through `scene` (typical realism, seed 1), simulated afresh into a temporary folder.
+std::string SimulateHandheld(const std::string& scene, double duration_s, const std::string& name) {
   sim::SimConfig sim_config = sim::PresetSimConfig(sim::Realism::kTypical);
-  sim_config.scene = "lab_people";
-  sim_config.duration_s = 12.0;
+  sim_config.scene = scene;
+  sim_config.duration_s = duration_s;
   sim_config.carrier.type = sim::CarrierType::kHandheld;
-  const std::string dir = test_util::SimulateFresh(sim_config, "rotolidar_dynamic_scenario");
+  return test_util::SimulateFresh(sim_config, name);
+}
+
+TEST(DynamicScenario, FreeSpaceTestKeepsWalkersOutOfTheDenseMap) {
+  const std::string dir = SimulateHandheld("lab_people", 12.0, "rotolidar_dynamic_scenario");
   ASSERT_FALSE(HasFailure());
 
   EstimatorConfig off;
@@ -66,11 +71,7 @@ TEST(DynamicScenario, FreeSpaceTestKeepsWalkersOutOfTheDenseMap) {
 // rig's 1.2 m/s. The one ahead is never an arrival (its earlier body hid its present place), so only the vacated
 // screen (core/pipeline/vacated_screen.hpp) keeps it out of registration.
 TEST(DynamicScenario, ACrowdWalkingWithTheRigDoesNotCarryThePoseAlong) {
-  sim::SimConfig sim_config = sim::PresetSimConfig(sim::Realism::kTypical);
-  sim_config.scene = "corridor_busy";
-  sim_config.duration_s = 20.0;
-  sim_config.carrier.type = sim::CarrierType::kHandheld;
-  const std::string dir = test_util::SimulateFresh(sim_config, "rotolidar_crowd_scenario");
+  const std::string dir = SimulateHandheld("corridor_busy", 20.0, "rotolidar_crowd_scenario");
   ASSERT_FALSE(HasFailure());
 
   EstimatorConfig unscreened;

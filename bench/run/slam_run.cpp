@@ -92,7 +92,8 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
                                  "deskew_ms", "preprocess_ms", "features_ms", "register_ms", "fuse_ms", "map_ms",
                                  "total_ms", "held_static", "vx_mps", "vy_mps", "vz_mps", "bgx_radps", "bgy_radps",
                                  "bgz_radps", "bax_mps2", "bay_mps2", "baz_mps2", "keyframe", "neighbour_searches",
-                                 "dynamic_features", "moving_scan_features", "vacated_features", "map_judged", "map_dynamic", "vis_image",
+                                 "dynamic_features", "moving_scan_features", "vacated_features", "vacated_valve",
+                                 "map_judged", "map_dynamic", "vis_image",
                                  "vis_image_offset_s", "vis_frames", "vis_tracked", "vis_inliers", "vis_new",
                                  "vis_observations", "vis_lidar_depths", "vis_landmarks", "vis_factors",
                                  "vis_rejected_total", "vis_track_ms", "vis_depth_ms", "vis_sigma_px", "vis_residual_px",
@@ -123,6 +124,7 @@ Status WriteScanTable(const std::string& path, const std::vector<ScanReport>& sc
     row.push_back(double(r.num_dynamic_features));
     row.push_back(double(r.num_moving_scan_features));
     row.push_back(double(r.num_vacated_features));
+    row.push_back(r.vacated_valve ? 1.0 : 0.0);
     row.push_back(double(r.map_free_space.judged));
     row.push_back(double(r.map_free_space.dynamic));
     const VisualScanReport& v = r.visual;

@@ -47,7 +47,8 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
     free_space_ = std::make_unique<FreeSpaceFilter>(config_.free_space, SensorOrigin(calib_));
   if (config_.free_space.enabled && config_.free_space.recheck_s > 0)
     map_recheck_ = std::make_unique<MapRecheck>(config_.free_space);
-  if (config_.free_space.enabled && config_.free_space.screen_scan_features && config_.free_space.vacated_radius_m > 0)
+  const FreeSpaceConfig& fs = config_.free_space;
+  if (fs.enabled && fs.screen_scan_features && fs.vacated_radius_m > 0)
     vacated_ = std::make_unique<VacatedScreen>(config_.free_space, SensorOrigin(calib_));
   if (config_.loop_closure.enabled) loop_closer_ = std::make_unique<graph::LoopCloser>(config_.loop_closure);
   if (config_.visual.enabled) visual_ = std::make_unique<VisualFrontEnd>(config_.visual, calib_);
@@ -256,7 +257,7 @@ void Estimator::ScreenMovingFeatures(Seconds t_s, const Pose3& T_world_base_gues
   if (vacated_ && imu_initialized()) {  // the LiDAR-only prediction is too coarse for it (docs/estimator.md)
     std::vector<uint8_t> flagged;
     const RangeImage& image = free_space_->PrepareImage(preprocessed_);  // AddToDenseMap's AddScan takes it
-    vacated_->Flag(t_s, T_world_base_guess, image, unscreened_base, &flagged);
+    report->vacated_valve = vacated_->Flag(t_s, T_world_base_guess, image, unscreened_base, &flagged).valve;
     report->num_vacated_features = DropFlagged(flagged, {&features->edge, &features->planar});
   }
   report->num_moving_scan_features =

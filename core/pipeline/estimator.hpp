@@ -106,6 +106,9 @@ struct ScanReport {
   /// Of those, the ones dropped because they stand near a place the present scan sees vacated
   /// (free_space.vacated_radius_m: objects moving with the rig).
   size_t num_vacated_features = 0;
+  /// The vacated screen would have dropped more than free_space.vacated_max_share of the features (the prediction
+  /// looked off), so it dropped none.
+  bool vacated_valve = false;
   FreeSpaceCounts map_free_space;
   size_t map_points = 0;    ///< points in the dense map after this scan (its memory: ~24 B each plus the index)
   VisualScanReport visual;  ///< the camera path (config.visual.enabled; zeros otherwise)
@@ -241,7 +244,8 @@ class Estimator {
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
   std::unique_ptr<MapRecheck> map_recheck_;  ///< null without free_space_ or with free_space.recheck_s 0
-  std::unique_ptr<VacatedScreen> vacated_;  ///< null without free_space_ or with free_space.vacated_radius_m 0
+  /// null without free_space_, with free_space.screen_scan_features false or with free_space.vacated_radius_m 0
+  std::unique_ptr<VacatedScreen> vacated_;
   std::vector<size_t> map_kept_, map_removed_;  ///< AddToDenseMap's buffers (map indices), kept for their memory
   std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false
   std::unique_ptr<VisualFrontEnd> visual_;  ///< null when config.visual.enabled is false

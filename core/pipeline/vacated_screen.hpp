@@ -9,17 +9,17 @@
 // Its trail shows the other way round: the present scan sees through the places the object's points held a few
 // scans ago. VacatedScreen judges the recent scans' features (at their registered poses) with the present scan's
 // range image (at the predicted pose); those it sees through are vacated, and the present scan's features within
-// radius_m of a vacated point are taken for the object that left it and are dropped before registration. This is
+// vacated_radius_m of a vacated point are taken for the object that left it and are dropped before registration. This is
 // the "later" half of the free-space test (Kim & Kim, "Remove, then Revert", IROS 2020) run on the last fraction
 // of a second, so that an object is caught while it is still in view; the radius spans what the object moved since
 // (walking at 1.3 m/s for 0.15-0.6 s: 0.2-0.8 m) plus its body's depth.
 //
 // Safety valve: a prediction that is off along the line of sight makes static surfaces look vacated (the same
-// failure the arrival test has). When more than max_share of the features are flagged nothing is dropped, and the
-// result says so.
+// failure the arrival test has). When more than vacated_max_share of the features are flagged nothing is dropped,
+// and the result says so.
 //
-// Frames: features and points in the base frame of their scan; poses T_world_base; world [m]. The sensor origin in
-// the base frame places the image (as FreeSpaceFilter's). Thread safety: none.
+// Frames: features in the base frame of their scan; poses T_world_base; world [m]. The image is the present scan's
+// (FreeSpaceFilter::PrepareImage), about the sensor origin in the base frame. Thread safety: none.
 #include <cstddef>
 #include <cstdint>
 #include <deque>

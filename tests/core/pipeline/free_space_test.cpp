@@ -142,7 +142,8 @@ TEST(FreeSpaceFilter, KeepsMovedBallOutAndRoomIn) {
 // prepared for other points is not taken.
 TEST(FreeSpaceFilter, APreparedImageGivesTheSameVerdicts) {
   const Eigen::Vector3d a(3.0, 1.0, 0.0), b(-2.0, -2.5, 0.5);
-  FreeSpaceFilter built(FreeSpaceConfig(), Eigen::Vector3d::Zero()), prepared(FreeSpaceConfig(), Eigen::Vector3d::Zero());
+  FreeSpaceFilter built(FreeSpaceConfig(), Eigen::Vector3d::Zero());
+  FreeSpaceFilter prepared(FreeSpaceConfig(), Eigen::Vector3d::Zero());
   const std::vector<ScanPoint> with_a = Scan(a), with_b = Scan(b);
   built.AddScan(0.0, Pose3::Identity(), with_a, 40.0);
   prepared.PrepareImage(with_a);

@@ -82,8 +82,8 @@ TEST(VacatedScreen, TheArrivalTestMissesTheBallWalkingAway) {
 TEST(VacatedScreen, AStaticRoomIsNotFlagged) {
   VacatedScreen screen(FreeSpaceConfig(), Eigen::Vector3d::Zero());
   VacatedResult last;
-  const Tally t = FeedScans(&screen, 8, [](int) { return std::optional<Eigen::Vector3d>(Eigen::Vector3d(3, 0.2, 0.1)); },
-                      Pose3::Identity(), &last);
+  const auto standing = [](int) { return std::optional<Eigen::Vector3d>(Eigen::Vector3d(3, 0.2, 0.1)); };
+  const Tally t = FeedScans(&screen, 8, standing, Pose3::Identity(), &last);
   EXPECT_EQ(last.vacated, 0u);
   EXPECT_EQ(t.ball_flagged + t.room_flagged, 0u);
 }

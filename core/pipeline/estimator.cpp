@@ -48,7 +48,7 @@ Estimator::Estimator(const RigCalib& calib, const EstimatorConfig& config)
   if (config_.free_space.enabled && config_.free_space.recheck_s > 0)
     map_recheck_ = std::make_unique<MapRecheck>(config_.free_space);
   const FreeSpaceConfig& fs = config_.free_space;
-  if (fs.enabled && fs.screen_scan_features && fs.vacated_radius_m > 0)
+  if (fs.enabled && fs.screen_scan_features && fs.vacated_radius_m > 0 && config_.use_imu)  // IMU prediction only
     vacated_ = std::make_unique<VacatedScreen>(config_.free_space, SensorOrigin(calib_));
   if (config_.loop_closure.enabled) loop_closer_ = std::make_unique<graph::LoopCloser>(config_.loop_closure);
   if (config_.visual.enabled) visual_ = std::make_unique<VisualFrontEnd>(config_.visual, calib_);

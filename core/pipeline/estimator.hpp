@@ -244,7 +244,8 @@ class Estimator {
   VoxelMap dense_map_;
   std::unique_ptr<FreeSpaceFilter> free_space_;  ///< null when config.free_space.enabled is false
   std::unique_ptr<MapRecheck> map_recheck_;  ///< null without free_space_ or with free_space.recheck_s 0
-  /// null without free_space_, with free_space.screen_scan_features false or with free_space.vacated_radius_m 0
+  /// null without free_space_, with free_space.screen_scan_features false, free_space.vacated_radius_m 0 or
+  /// use_imu false (it runs on the IMU's prediction only)
   std::unique_ptr<VacatedScreen> vacated_;
   std::vector<size_t> map_kept_, map_removed_;  ///< AddToDenseMap's buffers (map indices), kept for their memory
   std::unique_ptr<graph::LoopCloser> loop_closer_;  ///< null when config.loop_closure.enabled is false

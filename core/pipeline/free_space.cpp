@@ -158,18 +158,18 @@ void BuildRangeImage(const std::vector<ScanPoint>& points, const Eigen::Vector3f
 }
 
 const RangeImage& FreeSpaceFilter::PrepareImage(const std::vector<ScanPoint>& points) {
-  if (prepared_.empty()) prepared_.push_back(TakeImage());
-  BuildRangeImage(points, origin_base_, &prepared_.front());
+  if (!prepared_) prepared_.emplace(TakeImage());
+  BuildRangeImage(points, origin_base_, &*prepared_);
   prepared_points_ = points.size();
   has_prepared_ = true;
-  return prepared_.front();
+  return *prepared_;
 }
 
 void FreeSpaceFilter::AddScan(Seconds t_s, const Pose3& T_world_base, const std::vector<ScanPoint>& points,
                               double max_range_m) {
   const bool prepared = has_prepared_ && prepared_points_ == points.size();
   Scan scan{t_s, T_world_base, Eigen::Matrix3f(), Eigen::Vector3f(), TakeImage(), {}};
-  if (prepared) std::swap(scan.image, prepared_.front());
+  if (prepared) std::swap(scan.image, *prepared_);
   else BuildRangeImage(points, origin_base_, &scan.image);
   const Pose3 T_base_world = T_world_base.inverse();
   scan.R_base_world = T_base_world.linear().cast<float>();

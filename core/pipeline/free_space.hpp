@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -253,7 +254,7 @@ class FreeSpaceFilter {
   Eigen::Vector3f origin_base_;
   std::deque<Scan> scans_;  ///< time order
   std::vector<RangeImage> spare_images_;  ///< images of dropped scans, for reuse
-  std::vector<RangeImage> prepared_;       ///< PrepareImage's image (0 or 1), until AddScan takes it
+  std::optional<RangeImage> prepared_;     ///< PrepareImage's image (kept for its memory)
   size_t prepared_points_ = 0;             ///< how many points it was built from
   bool has_prepared_ = false;              ///< PrepareImage ran since the last AddScan
   size_t released_ = 0;     ///< scans_[0, released_) have handed their points on

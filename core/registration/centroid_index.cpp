@@ -42,12 +42,7 @@ void CentroidIndex::StartPending(const VoxelCentroidTable& table) {
   pending->slots = table.num_slots();
   pending->syncs_left = kSwapAfterSyncs;
   std::vector<float> xyz;
-  xyz.reserve(3 * (main_live_ + overflow_slots_.size()));
-  for (size_t slot = 0; slot < pending->slots; ++slot) {
-    if (!table.live(slot)) continue;
-    pending->main_slot.push_back(int(slot));
-    xyz.insert(xyz.end(), slot_xyz_.begin() + long(3 * slot), slot_xyz_.begin() + long(3 * slot + 3));
-  }
+  LiveSlots(table, pending->slots, &pending->main_slot, &xyz);
   pending->tree = std::async(std::launch::async, [xyz = std::move(xyz)] {
     KdTree3f tree;
     tree.Build(xyz);
@@ -58,15 +53,8 @@ void CentroidIndex::StartPending(const VoxelCentroidTable& table) {
 
 void CentroidIndex::InstallPending(const VoxelCentroidTable& table) {
   main_ = pending_->tree.get();
-  ++main_builds_;
   ++background_builds_;
-  main_slots_ = pending_->slots;
-  main_slot_ = std::move(pending_->main_slot);
-  main_index_.assign(main_slots_, -1);
-  for (size_t i = 0; i < main_slot_.size(); ++i) main_index_[size_t(main_slot_[i])] = int(i);
-  main_live_ = main_slot_.size();
-  main_dead_ = 0;
-  hidden_.assign(main_live_, 0);
+  AdoptMain(pending_->slots, std::move(pending_->main_slot));
   std::vector<uint32_t>& touched = pending_->touched;
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
@@ -77,25 +65,38 @@ void CentroidIndex::InstallPending(const VoxelCentroidTable& table) {
 void CentroidIndex::BuildMain(VoxelCentroidTable* table) {
   table->TakeTouched(&touched_);  // everything is read afresh
   layout_version_ = table->layout_version();
-  ++main_builds_;
-  main_slots_ = table->num_slots();
-  main_index_.assign(main_slots_, -1);
-  main_slot_.clear();
-  xyz_.clear();
-  slot_xyz_.resize(3 * main_slots_);
-  views_.resize(main_slots_);
-  for (size_t slot = 0; slot < main_slots_; ++slot) {
-    if (!table->live(slot)) continue;
-    main_index_[slot] = int(main_slot_.size());
-    main_slot_.push_back(int(slot));
-    Remember(slot, table->MeanAt(slot));
-    xyz_.insert(xyz_.end(), slot_xyz_.begin() + long(3 * slot), slot_xyz_.begin() + long(3 * slot + 3));
-  }
+  const size_t slots = table->num_slots();
+  slot_xyz_.resize(3 * slots);
+  views_.resize(slots);
+  for (size_t slot = 0; slot < slots; ++slot)
+    if (table->live(slot)) Remember(slot, table->MeanAt(slot));
+  std::vector<int> main_slot;
+  LiveSlots(*table, slots, &main_slot, &xyz_);
   main_.Build(xyz_);
+  AdoptMain(slots, std::move(main_slot));
+  BuildOverflow(*table);
+}
+
+void CentroidIndex::LiveSlots(const VoxelCentroidTable& table, size_t slots, std::vector<int>* main_slot,
+                              std::vector<float>* xyz) const {
+  main_slot->clear();
+  xyz->clear();
+  for (size_t slot = 0; slot < slots; ++slot) {
+    if (!table.live(slot)) continue;
+    main_slot->push_back(int(slot));
+    xyz->insert(xyz->end(), slot_xyz_.begin() + long(3 * slot), slot_xyz_.begin() + long(3 * slot + 3));
+  }
+}
+
+void CentroidIndex::AdoptMain(size_t slots, std::vector<int> main_slot) {
+  ++main_builds_;
+  main_slots_ = slots;
+  main_slot_ = std::move(main_slot);
+  main_index_.assign(main_slots_, -1);
+  for (size_t i = 0; i < main_slot_.size(); ++i) main_index_[size_t(main_slot_[i])] = int(i);
   main_live_ = main_slot_.size();
   main_dead_ = 0;
   hidden_.assign(main_live_, 0);
-  BuildOverflow(*table);
 }
 
 void CentroidIndex::Remember(size_t slot, const VoxelCentroidTable::Mean& m) {

@@ -66,6 +66,11 @@ class CentroidIndex {
   void StartPending(const VoxelCentroidTable& table);
   /// Makes the pending tree the main one and replays the changes since its snapshot.
   void InstallPending(const VoxelCentroidTable& table);
+  /// The live slots among [0, slots) and their remembered centroids (x, y, z), in slot order.
+  void LiveSlots(const VoxelCentroidTable& table, size_t slots, std::vector<int>* main_slot,
+                 std::vector<float>* xyz) const;
+  /// The main tree (just built over main_slot's centroids, in that order) now covers slots [0, slots).
+  void AdoptMain(size_t slots, std::vector<int> main_slot);
   void BuildMain(VoxelCentroidTable* table);
   /// Remembers the touched slots' centroids, then ApplyToMain.
   void ApplyTouched(const VoxelCentroidTable& table);

@@ -24,15 +24,20 @@ namespace rotolidar {
 struct ImuInitConfig {
   double gravity_mps2 = 9.81;  ///< magnitude of gravity [m/s^2]
 
-  // Static start. The gyro threshold is ~5x the default Kalibr white noise per 200 Hz sample (2.44e-4 * sqrt(200)
-  // = 3.5e-3 rad/s). The accelerometer's is set by the spinning rotor, not by the sensor noise (0.032 m/s^2): it
-  // lies between the rotor's shaking of a standing rig and the first steps of a walk (why: docs/backend.md,
-  // 'Initialisation'). Raise it on a rig whose motor vibrates the IMU more.
+  // Static start. Stillness is judged on the IMU low-passed by `static_block_s` block means: a rotary rig's
+  // stepper shakes the IMU at lines of 20 Hz and more (50 and 200 steps per rotor turn at 2.6 rad/s), which a
+  // 0.1 s mean removes, while a walk's or a vehicle's motion (below ~3 Hz) passes. Measured per axis over 1 s of
+  // a standing rig (lab, seed 1): accelerometer 0.21 (typical twin) and 0.40 m/s^2 (harsh: a rougher stepper)
+  // per sample, 0.02-0.05 m/s^2 as 0.1 s means; the first steps of a walk 0.3 m/s^2 within 0.45 s of setting
+  // off (why: docs/backend.md, 'Initialisation').
   double static_window_s = 1.0;              ///< the first this many seconds of samples are averaged [s]
   int static_min_samples = 20;               ///< fewer samples in the window -> failure
-  double static_max_gyro_std_radps = 0.02;   ///< max per-axis standard deviation of the gyro in the window
-  double static_max_accel_std_mps2 = 0.3;    ///< max per-axis standard deviation of the accelerometer
-  double still_max_gyro_mean_radps = 0.05;   ///< ImuIsStill only: max |mean gyro| (bias + slow turns) [rad/s]
+  double static_block_s = 0.2;               ///< block [s] whose means the spreads below are over; 0: samples
+  double static_max_gyro_std_radps = 0.02;   ///< max per-axis standard deviation of the gyro's block means
+  double static_max_accel_std_mps2 = 0.15;   ///< max per-axis standard deviation of the accelerometer's
+  /// ImuIsStill only: max |mean gyro| [rad/s] (the bias plus a slow turn): 3x the norm of a consumer gyro's
+  /// zero-rate offset at its datasheet limit on every axis (BMI055: +-1 deg/s, 0.03 rad/s as a norm).
+  double still_max_gyro_mean_radps = 0.1;
   double max_gravity_error_mps2 = 0.5;       ///< static: ||mean accel| - g|; moving: ||g_lsq| - g| above -> failure
 
   // Moving start.
@@ -69,7 +74,8 @@ struct ImuInitResult {
 ImuInitResult InitializeStatic(const std::vector<ImuSample>& samples, const ImuInitConfig& config);
 
 /// True when the samples with t_s in [t0_s, t1_s] look like a rig at rest by the static-start thresholds: at least
-/// static_min_samples of them, per-axis std of gyro and accelerometer below static_max_*_std, |mean gyro| below
+/// static_min_samples of them, per-axis std of the gyro's and accelerometer's static_block_s means below
+/// static_max_*_std, |mean gyro| below
 /// still_max_gyro_mean_radps and ||mean accel| - g| below max_gravity_error_mps2. Otherwise false, with the failed
 /// test in *why (may be null).
 bool ImuIsStill(const std::vector<ImuSample>& samples, Seconds t0_s, Seconds t1_s, const ImuInitConfig& config,

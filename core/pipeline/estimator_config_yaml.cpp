@@ -150,7 +150,8 @@ void Visit(V& v, SlidingWindowConfig& c) {
 template <class V>
 void Visit(V& v, ImuInitConfig& c) {
   v("gravity_mps2", &c.gravity_mps2), v("static_window_s", &c.static_window_s);
-  v("static_min_samples", &c.static_min_samples), v("static_max_gyro_std_radps", &c.static_max_gyro_std_radps);
+  v("static_min_samples", &c.static_min_samples), v("static_block_s", &c.static_block_s);
+  v("static_max_gyro_std_radps", &c.static_max_gyro_std_radps);
   v("static_max_accel_std_mps2", &c.static_max_accel_std_mps2);
   v("still_max_gyro_mean_radps", &c.still_max_gyro_mean_radps);
   v("max_gravity_error_mps2", &c.max_gravity_error_mps2), v("moving_min_poses", &c.moving_min_poses);

@@ -99,27 +99,68 @@ TEST(ImuInit, StaticRejectsMotionAndShortData) {
 
 TEST(ImuIsStill, AcceptsARestingVibratingRigAndRejectsMotion) {
   const Eigen::Matrix3d R = Rpy(0.05, -0.1, 0.3);
-  const Eigen::Vector3d bg(0.004, -0.003, 0.002);  // a turn-on gyro bias of a few mrad/s is still "still"
+  // A consumer gyro's turn-on bias (BMI055: up to 1 deg/s per axis) is still "still".
+  const Eigen::Vector3d bg(0.017, -0.017, 0.017);
   std::vector<ImuSample> still = StillSamples(R, bg, Eigen::Vector3d::Zero(), 2.0);
   const ImuInitConfig c;
   std::string why;
   EXPECT_TRUE(ImuIsStill(still, 0.0, 1.0, c, &why)) << why;
-  // Rotor vibration: a 0.2 m/s^2 per-axis 40 Hz shake (what the twin's imbalance gives a standing rig) is still.
-  for (ImuSample& s : still) s.accel_mps2 += 0.2 * std::sqrt(2.0) * std::sin(2 * M_PI * 40.0 * s.t_s) * Eigen::Vector3d::Ones();
-  EXPECT_TRUE(ImuIsStill(still, 0.0, 1.0, c, &why)) << why;
-  // A walk's 2 Hz, 0.6 m/s^2 bounce is not; nor a slow 0.1 rad/s turn (std small, mean large); nor a tilt away
-  // from gravity's magnitude; nor too few samples.
-  std::vector<ImuSample> bounce = StillSamples(R, bg, Eigen::Vector3d::Zero(), 2.0);
+  // Stepper vibration, as the harsh twin's stepper shakes a standing rig (0.4 m/s^2 per axis over 1 s): lines
+  // at 50 and 200 steps per rotor turn (20.7 and 82.8 Hz at 2.6 rad/s), 0.5 and 0.25 m/s^2 amplitude per axis.
+  std::vector<ImuSample> shaken = still;
+  for (ImuSample& s : shaken) {
+    const double shake = 0.5 * std::sin(2 * M_PI * 20.7 * s.t_s + 0.3) + 0.25 * std::sin(2 * M_PI * 82.8 * s.t_s);
+    s.accel_mps2 += shake * Eigen::Vector3d::Ones();
+  }
+  EXPECT_TRUE(ImuIsStill(shaken, 0.0, 1.0, c, &why)) << why;
+  // Judged per sample (no low-pass) the same shake reads as motion: the premise of static_block_s.
+  ImuInitConfig per_sample = c;
+  per_sample.static_block_s = 0.0;
+  EXPECT_FALSE(ImuIsStill(shaken, 0.0, 1.0, per_sample, &why));
+  // The first scan's window holds one block (0.1 s of samples): the samples' spread against 4x the thresholds.
+  EXPECT_TRUE(ImuIsStill(shaken, -0.9, 0.1, c, &why)) << why;
+  // A walk's 2 Hz, 0.6 m/s^2 bounce is not still, shaken or not; nor a slow 0.2 rad/s turn (std small, mean
+  // large); nor a tilt away from gravity's magnitude; nor too few samples.
+  std::vector<ImuSample> bounce = shaken;
   for (ImuSample& s : bounce) s.accel_mps2.z() += 0.85 * std::sin(2 * M_PI * 2.0 * s.t_s);
   EXPECT_FALSE(ImuIsStill(bounce, 0.0, 1.0, c, &why));
   EXPECT_NE(why.find("accel std"), std::string::npos) << why;
-  EXPECT_FALSE(ImuIsStill(StillSamples(R, Eigen::Vector3d(0.0, 0.0, 0.1), Eigen::Vector3d::Zero(), 2.0), 0.0, 1.0,
+  EXPECT_FALSE(ImuIsStill(StillSamples(R, Eigen::Vector3d(0.0, 0.0, 0.2), Eigen::Vector3d::Zero(), 2.0), 0.0, 1.0,
                           c, &why));
   EXPECT_NE(why.find("mean gyro"), std::string::npos) << why;
   EXPECT_FALSE(ImuIsStill(StillSamples(R, bg, Eigen::Vector3d(0.0, 0.0, 1.0), 2.0), 0.0, 1.0, c, &why));
   EXPECT_NE(why.find("mean accel"), std::string::npos) << why;
   EXPECT_FALSE(ImuIsStill(still, 0.0, 0.05, c, &why));  // 11 samples < static_min_samples = 20
   EXPECT_NE(why.find("static_min_samples"), std::string::npos) << why;
+}
+
+TEST(ImuIsStill, SeesTheFirstStepsWithinAFewTenthsOfASecond) {
+  // Standing, then a 1 m/s^2 push along x from t = 1 s (a walk's or a vehicle's start): the 1 s window that
+  // ends 0.15 s after the push has 0.2 s blocks of 0, 0, 0, 0 and 0.75 m/s^2, a spread of 0.3 m/s^2 > 0.15.
+  std::vector<ImuSample> start = StillSamples(Rpy(0.0, 0.0, 0.0), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 2.0);
+  for (ImuSample& s : start)
+    if (s.t_s >= 1.0) s.accel_mps2.x() += 1.0;
+  const ImuInitConfig c;
+  std::string why;
+  EXPECT_TRUE(ImuIsStill(start, 0.0, 1.0 - 1e-9, c, &why)) << why;
+  EXPECT_FALSE(ImuIsStill(start, 0.15, 1.15, c, &why));
+  EXPECT_NE(why.find("accel std"), std::string::npos) << why;
+  // A run that starts walking: its first scan (one block) is judged per sample, and a walk's spread fails.
+  std::vector<ImuSample> walk = start;
+  for (ImuSample& s : walk) s.accel_mps2.z() += 3.0 * std::sin(2 * M_PI * 2.0 * s.t_s);
+  EXPECT_FALSE(ImuIsStill(walk, -0.9, 0.1, c, &why));
+}
+
+TEST(ImuInitConfig, StaticBlockNeedsTwoBlocks) {
+  ImuInitConfig c;
+  std::string error;
+  c.static_block_s = 0.6;  // > static_window_s / 2
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("static_block_s"), std::string::npos) << error;
+  c.static_block_s = -0.1;
+  EXPECT_FALSE(c.Validate(&error));
+  c.static_block_s = 0.0;
+  EXPECT_TRUE(c.Validate(&error)) << error;
 }
 
 /// Motion for the moving start: R = Rz Ry Rx of smooth angles, p sinusoidal (|v| ~1 m/s, |a| ~1 m/s^2).

@@ -198,7 +198,7 @@ ImuInitResult InitializeStatic(const std::vector<ImuSample>& samples, const ImuI
   double gyro_std = 0.0, accel_std = 0.0;
   MeanAndMaxStd(gyro, &mean_gyro, &gyro_std);
   MeanAndMaxStd(accel, &mean_accel, &accel_std);
-  // Validate keeps two blocks in the window: the factor is 1.
+  // The window spans static_window_s >= 2 blocks (Validate), so the spreads are over block means.
   StillSpread(times, gyro, accel, config, &gyro_std, &accel_std);
   r.bias_gyro_radps = mean_gyro;
   r.gravity_residual_mps2 = std::abs(mean_accel.norm() - config.gravity_mps2);

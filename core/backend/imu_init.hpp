@@ -26,10 +26,10 @@ struct ImuInitConfig {
 
   // Static start. Stillness is judged on the IMU low-passed by `static_block_s` block means: a rotary rig's
   // stepper shakes the IMU at lines of 20 Hz and more (50 and 200 steps per rotor turn at 2.6 rad/s), which a
-  // 0.1 s mean removes, while a walk's or a vehicle's motion (below ~3 Hz) passes. Measured per axis over 1 s of
+  // 0.2 s mean removes, while a walk's or a vehicle's motion (below ~3 Hz) passes. Measured per axis over 1 s of
   // a standing rig (lab, seed 1): accelerometer 0.21 (typical twin) and 0.40 m/s^2 (harsh: a rougher stepper)
-  // per sample, 0.02-0.05 m/s^2 as 0.1 s means; the first steps of a walk 0.3 m/s^2 within 0.45 s of setting
-  // off (why: docs/backend.md, 'Initialisation').
+  // per sample, 0.01-0.07 m/s^2 as 0.2 s means (the most while the rotor spins up); a walk 1.7 m/s^2, its first
+  // steps above 0.15 m/s^2 within 0.25 s of setting off (why: docs/backend.md, 'Initialisation').
   double static_window_s = 1.0;              ///< the first this many seconds of samples are averaged [s]
   int static_min_samples = 20;               ///< fewer samples in the window -> failure
   double static_block_s = 0.2;               ///< block [s] whose means the spreads below are over; 0: samples
@@ -75,7 +75,7 @@ ImuInitResult InitializeStatic(const std::vector<ImuSample>& samples, const ImuI
 
 /// True when the samples with t_s in [t0_s, t1_s] look like a rig at rest by the static-start thresholds: at least
 /// static_min_samples of them, per-axis std of the gyro's and accelerometer's static_block_s means below
-/// static_max_*_std, |mean gyro| below
+/// static_max_*_std (a window under two blocks: the samples' std below 4x those), |mean gyro| below
 /// still_max_gyro_mean_radps and ||mean accel| - g| below max_gravity_error_mps2. Otherwise false, with the failed
 /// test in *why (may be null).
 bool ImuIsStill(const std::vector<ImuSample>& samples, Seconds t0_s, Seconds t1_s, const ImuInitConfig& config,

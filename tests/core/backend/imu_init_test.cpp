@@ -137,7 +137,8 @@ TEST(ImuIsStill, AcceptsARestingVibratingRigAndRejectsMotion) {
 TEST(ImuIsStill, SeesTheFirstStepsWithinAFewTenthsOfASecond) {
   // Standing, then a 1 m/s^2 push along x from t = 1 s (a walk's or a vehicle's start): the 1 s window that
   // ends 0.15 s after the push has 0.2 s blocks of 0, 0, 0, 0 and 0.75 m/s^2, a spread of 0.3 m/s^2 > 0.15.
-  std::vector<ImuSample> start = StillSamples(Rpy(0.0, 0.0, 0.0), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 2.0);
+  std::vector<ImuSample> start =
+      StillSamples(Rpy(0.0, 0.0, 0.0), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 2.0);
   for (ImuSample& s : start)
     if (s.t_s >= 1.0) s.accel_mps2.x() += 1.0;
   const ImuInitConfig c;

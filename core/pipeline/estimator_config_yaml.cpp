@@ -62,6 +62,8 @@ void Visit(V& v, ScanToMapConfig& c) {
   v("neighbour_reuse_m", &c.neighbour_reuse_m);
   v("min_line_eigen_ratio", &c.min_line_eigen_ratio), v("max_plane_eigen_ratio", &c.max_plane_eigen_ratio);
   v("max_plane_deviation_m", &c.max_plane_deviation_m), v("loss", &c.loss), v("loss_scale_m", &c.loss_scale_m);
+  v("plane_incidence_exponent", &c.plane_incidence_exponent);
+  v("plane_incidence_min_cos", &c.plane_incidence_min_cos);
   v("convergence_translation_m", &c.convergence_translation_m);
   v("convergence_rotation_rad", &c.convergence_rotation_rad);
   v("min_correspondences", &c.min_correspondences), v("num_threads", &c.num_threads);

@@ -56,8 +56,9 @@ class MatchProblem {
     lines_[i].Reset(p_scan, a_map, u_map);
   }
   /// Re-targets plane block i < num_planes (PointToPlaneResidual's contract: |n_map| = 1).
-  void SetPlane(size_t i, const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m) {
-    planes_[i].Reset(p_scan, n_map, d_m);
+  void SetPlane(size_t i, const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m,
+                double weight = 1.0) {
+    planes_[i].Reset(p_scan, n_map, d_m, weight);
   }
 
   /// Runs Ceres Levenberg-Marquardt on the current blocks from *T; *T becomes the solution. Returns the summary.

@@ -71,15 +71,18 @@ Eigen::Matrix<double, 3, 4> RotatedPointQuaternionJacobian(const Eigen::Quaterni
   return J;
 }
 
-PointToPlaneResidual::PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m) {
-  Reset(p_scan, n_map, d_m);
+PointToPlaneResidual::PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m,
+                                           double weight) {
+  Reset(p_scan, n_map, d_m, weight);
 }
 
-void PointToPlaneResidual::Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m) {
+void PointToPlaneResidual::Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m,
+                                 double weight) {
   ROTOLIDAR_CHECK(std::abs(n_map.norm() - 1.0) < 1e-6, "plane normal must be unit, |n| = " << n_map.norm());
+  ROTOLIDAR_CHECK(weight > 0.0 && std::isfinite(weight), "plane weight must be > 0, w = " << weight);
   p_scan_ = p_scan;
-  n_map_ = n_map;
-  d_m_ = d_m;
+  n_map_ = weight * n_map;  // r is linear in (n, d): the weight rides on them
+  d_m_ = weight * d_m;
 }
 
 bool PointToPlaneResidual::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {

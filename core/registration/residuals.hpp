@@ -49,14 +49,16 @@ Vector6d PoseBoxMinus(const Pose3& T_y, const Pose3& T_x);
 /// matters to Ceres (it multiplies the manifold's PlusJacobian), so the extension off the sphere is irrelevant.
 Eigen::Matrix<double, 3, 4> RotatedPointQuaternionJacobian(const Eigen::Quaterniond& q, const Eigen::Vector3d& p);
 
-/// Point-to-plane residual (1 row, metres): r = n . (R p_scan + t) + d, the signed distance of the transformed
-/// scan point to the map plane {x : n . x + d = 0}. `n_map` must be unit length (checked).
+/// Point-to-plane residual (1 row, metres): r = w (n . (R p_scan + t) + d), the signed distance of the transformed
+/// scan point to the map plane {x : n . x + d = 0}, times the weight w > 0 (1: the plain distance; the
+/// registration's incidence weights, scan_to_map.hpp). `n_map` must be unit length (checked). Stored as w n, w d.
 class PointToPlaneResidual final : public ceres::SizedCostFunction<1, 7> {
  public:
   static constexpr int kRows = 1;
-  PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
-  /// Becomes PointToPlaneResidual(p_scan, n_map, d_m) (same checks).
-  void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m);
+  PointToPlaneResidual(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m,
+                       double weight = 1.0);
+  /// Becomes PointToPlaneResidual(p_scan, n_map, d_m, weight) (same checks).
+  void Reset(const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map, double d_m, double weight = 1.0);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   /// Residual at pose T and (if J != nullptr) its Jacobian w.r.t. delta = [dt; dtheta]: [n^T, -n^T [R p]x]
   /// (Linearize / Residual at T's rotation and translation).

@@ -20,6 +20,7 @@ struct EdgeMatch {
 struct PlaneMatch {
   Eigen::Vector3d p_scan, n_map;
   double d_m;
+  double weight;  ///< incidence weight (PointToPlaneResidual)
 };
 struct Matches {
   std::vector<EdgeMatch> edges;
@@ -140,6 +141,17 @@ bool FitVisiblePlane(const Eigen::Vector3d& view_scan, const ScanToMapConfig& c,
   return FitPlane(same_side, c.max_plane_eigen_ratio, c.max_plane_deviation_m, &s->a_or_n, &s->d_m);
 }
 
+/// The weight of a plane match (ScanToMapConfig::plane_incidence_exponent): max(|cos incidence|, min_cos)^k, the
+/// incidence between the plane's normal and the ray from the scan frame's origin (the base at the scan start;
+/// the sensor sits within the rotor's lever arm of it) to the point.
+double IncidenceWeight(const Pose3& T_map_scan, const Eigen::Vector3d& p_scan, const Eigen::Vector3d& n_map,
+                       const ScanToMapConfig& c) {
+  if (c.plane_incidence_exponent == 0.0) return 1.0;
+  const Eigen::Vector3d ray_map = T_map_scan.linear() * p_scan;
+  const double cos_incidence = std::abs(n_map.dot(ray_map)) / std::max(ray_map.norm(), 1e-9);
+  return std::pow(std::max(cos_incidence, c.plane_incidence_min_cos), c.plane_incidence_exponent);
+}
+
 /// Correspondences of every scan edge and planar point at the pose T_map_scan (neighbour sets from *cache where
 /// still exact).
 /// For each point of one feature class: its k map neighbours (reused while the point stays within
@@ -173,7 +185,9 @@ Matches FindMatches(const FeatureSet& scan, const LocalMap& map, const Pose3& T_
   MatchClass(
       scan.planar.points, FeatureKind::kPlanar, map, T_map_scan, c, &cache->planes, &cache->searches,
       [&](NeighbourSet* s) { return FitVisiblePlane(T_map_scan.translation() - s->q_map, c, s); },
-      [&](const Eigen::Vector3d& p, const NeighbourSet& s) { m.planes.push_back({p, s.a_or_n, s.d_m}); });
+      [&](const Eigen::Vector3d& p, const NeighbourSet& s) {
+        m.planes.push_back({p, s.a_or_n, s.d_m, IncidenceWeight(T_map_scan, p, s.a_or_n, c)});
+      });
   return m;
 }
 
@@ -195,7 +209,7 @@ ceres::Solver::Summary SolveMatches(const Matches& m, MatchProblem* problem, Pos
   }
   for (size_t i = 0; i < m.planes.size(); ++i) {
     const PlaneMatch& p = m.planes[i];
-    problem->SetPlane(i, p.p_scan, p.n_map, p.d_m);
+    problem->SetPlane(i, p.p_scan, p.n_map, p.d_m, p.weight);
   }
   return problem->Solve(T);
 }
@@ -221,7 +235,7 @@ Evaluation Evaluate(const Matches& m, const Pose3& T, const ceres::LossFunction*
   Eigen::Matrix<double, 1, 6> J1;
   Eigen::Matrix<double, 2, 6> J2;
   for (const auto& p : m.planes) {
-    const double r = PointToPlaneResidual(p.p_scan, p.n_map, p.d_m).EvaluateTangent(T, &J1);
+    const double r = PointToPlaneResidual(p.p_scan, p.n_map, p.d_m, p.weight).EvaluateTangent(T, &J1);
     add(r * r, J1);
   }
   for (const auto& l : m.edges) {
@@ -250,6 +264,10 @@ bool ScanToMapConfig::Validate(std::string* error) const {
   if (!(max_plane_eigen_ratio > 0 && max_plane_eigen_ratio < 1))
     return fail("scan_to_map.max_plane_eigen_ratio must be in (0, 1)");
   if (!(max_plane_deviation_m > 0)) return fail("scan_to_map.max_plane_deviation_m must be > 0");
+  if (!(plane_incidence_exponent >= 0 && plane_incidence_exponent <= 4))
+    return fail("scan_to_map.plane_incidence_exponent must be in [0, 4]");
+  if (!(plane_incidence_min_cos > 0 && plane_incidence_min_cos <= 1))
+    return fail("scan_to_map.plane_incidence_min_cos must be in (0, 1]");
   if (loss != RobustLoss::kNone && !(loss_scale_m > 0)) return fail("scan_to_map.loss_scale_m must be > 0");
   if (!(convergence_translation_m > 0)) return fail("scan_to_map.convergence_translation_m must be > 0");
   if (!(convergence_rotation_rad > 0)) return fail("scan_to_map.convergence_rotation_rad must be > 0");

@@ -183,6 +183,22 @@ TEST(Residuals, ValuesAreSignedPlaneDistanceAndLineDistance) {
   EXPECT_NEAR(std::hypot(r_line[0], r_line[1]), distance, 1e-12);
 }
 
+TEST(Residuals, AWeightedPlaneResidualIsTheWeightTimesTheDistanceWithItsJacobian) {
+  RandomStream rng(13, "test.registration.weighted_plane");
+  for (int trial = 0; trial < 25; ++trial) {
+    const Pose3 T = RandomPose(rng);
+    const Eigen::Vector3d p = RandomVector(rng, 10.0), n = RandomVector(rng, 1.0).normalized();
+    const double d = rng.Normal(0.0, 2.0), w = 0.1 + 0.9 * rng.Uniform();
+    const PointToPlaneResidual plain(p, n, d), weighted(p, n, d, w);
+    Eigen::Matrix<double, 1, 6> Jp, Jw;
+    const double r = plain.EvaluateTangent(T, &Jp), rw = weighted.EvaluateTangent(T, &Jw);
+    EXPECT_NEAR(rw, w * r, 1e-12 * (1.0 + std::abs(r)));
+    EXPECT_LT((Jw - w * Jp).norm(), 1e-12 * (1.0 + Jp.norm()));
+    // Against central differences, as the unweighted residual (same accuracy argument).
+    EXPECT_LT((Jw - NumericTangentJacobian(weighted, T, 1e-6)).norm(), 1e-6);
+  }
+}
+
 TEST(Residuals, ResetEqualsAFreshlyConstructedResidual) {
   RandomStream rng(11);
   PointToLineResidual line{RandomVector(rng, 3.0), RandomVector(rng, 3.0), RandomVector(rng, 1.0).normalized()};

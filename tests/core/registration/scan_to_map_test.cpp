@@ -307,6 +307,14 @@ TEST(Config, ValidateNamesTheField) {
   EXPECT_FALSE(c.Validate(&error));
   EXPECT_NE(error.find("scan_to_map.loss_scale_m"), std::string::npos) << error;
   c = ScanToMapConfig();
+  c.plane_incidence_exponent = -0.5;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("scan_to_map.plane_incidence_exponent"), std::string::npos) << error;
+  c = ScanToMapConfig();
+  c.plane_incidence_min_cos = 0.0;
+  EXPECT_FALSE(c.Validate(&error));
+  EXPECT_NE(error.find("scan_to_map.plane_incidence_min_cos"), std::string::npos) << error;
+  c = ScanToMapConfig();
   c.degeneracy.min_eigenvalue = -0.1;
   EXPECT_FALSE(c.Validate(&error));
   EXPECT_NE(error.find("degeneracy.min_eigenvalue"), std::string::npos) << error;

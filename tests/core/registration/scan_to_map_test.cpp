@@ -298,26 +298,18 @@ TEST(Config, ValidateNamesTheField) {
   std::string error;
   EXPECT_TRUE(ScanToMapConfig().Validate(&error));
   EXPECT_TRUE(LocalMapConfig().Validate(&error));
-  ScanToMapConfig c;
-  c.num_neighbours = 2;
-  EXPECT_FALSE(c.Validate(&error));
-  EXPECT_NE(error.find("scan_to_map.num_neighbours"), std::string::npos) << error;
-  c = ScanToMapConfig();
-  c.loss_scale_m = 0.0;
-  EXPECT_FALSE(c.Validate(&error));
-  EXPECT_NE(error.find("scan_to_map.loss_scale_m"), std::string::npos) << error;
-  c = ScanToMapConfig();
-  c.plane_incidence_exponent = -0.5;
-  EXPECT_FALSE(c.Validate(&error));
-  EXPECT_NE(error.find("scan_to_map.plane_incidence_exponent"), std::string::npos) << error;
-  c = ScanToMapConfig();
-  c.plane_incidence_min_cos = 0.0;
-  EXPECT_FALSE(c.Validate(&error));
-  EXPECT_NE(error.find("scan_to_map.plane_incidence_min_cos"), std::string::npos) << error;
-  c = ScanToMapConfig();
-  c.degeneracy.min_eigenvalue = -0.1;
-  EXPECT_FALSE(c.Validate(&error));
-  EXPECT_NE(error.find("degeneracy.min_eigenvalue"), std::string::npos) << error;
+  // Each bad value, on an otherwise default config, fails with its field named.
+  const auto expect_named = [&](void (*spoil)(ScanToMapConfig*), const std::string& field) {
+    ScanToMapConfig c;
+    spoil(&c);
+    EXPECT_FALSE(c.Validate(&error)) << field;
+    EXPECT_NE(error.find(field), std::string::npos) << error;
+  };
+  expect_named([](ScanToMapConfig* c) { c->num_neighbours = 2; }, "scan_to_map.num_neighbours");
+  expect_named([](ScanToMapConfig* c) { c->loss_scale_m = 0.0; }, "scan_to_map.loss_scale_m");
+  expect_named([](ScanToMapConfig* c) { c->plane_incidence_exponent = -0.5; }, "scan_to_map.plane_incidence_exponent");
+  expect_named([](ScanToMapConfig* c) { c->plane_incidence_min_cos = 0.0; }, "scan_to_map.plane_incidence_min_cos");
+  expect_named([](ScanToMapConfig* c) { c->degeneracy.min_eigenvalue = -0.1; }, "degeneracy.min_eigenvalue");
   LocalMapConfig m;
   m.max_keyframes = 0;
   EXPECT_FALSE(m.Validate(&error));
